@@ -1,0 +1,154 @@
+// Reconstruction of the transmittance T(z) in front of a warped depth z from N power
+// moments, the core of MBOIT (Münstermann et al. 2018, "Moment-Based Order-Independent
+// Transparency", I3D, Sec. 3 and its supplementary code). APC (Huang, Usher et al.,
+// "Approximate Puzzlepiece Compositing", arXiv 2501.12581) evaluates it from the globally
+// all-reduced moments, so every rank weights its own samples consistently.
+//
+// Method, for N = 2m moments: normalise b_k / b0, bias b <- (1-eps) b + eps v so that the
+// (m+1)x(m+1) Hankel matrix B = [b_{i+j}] is safely positive definite, factorise B = L D L^T
+// once per pixel. Per query z0: solve B c = (1, z0, ..., z0^m); the m real roots of
+// sum c_k z^k together with z0 are the support points of the canonical distribution that
+// matches the moments. The expectation of the step function (beta at z0, [z_i < z0]
+// elsewhere) under that distribution is the normalised absorbance A in front of z0;
+// T = exp(-b0 A). beta = 0 gives the largest transmittance consistent with the moments,
+// beta = 1 the smallest. MBOIT evaluates the expectation through Newton divided differences
+// of the interpolating polynomial; here it is summed from the canonical weights (Christoffel
+// function values), which is the same quantity without the cancellation (see the .cpp).
+//
+// Guards (T is always finite and in [0,1]):
+// - b0 < kEmptyPixelAbsorbance (total opacity below 0.1%, also b0 <= 0): the pixel is
+//   empty and T = 1 for every z. MBOIT discards such pixels; T = 1 keeps their faint
+//   samples at full weight, which the resolve then normalises.
+// - Degenerate pixel: b0 = +inf/NaN, a non-finite normalised moment, or a non-positive or
+//   non-finite LDL^T pivot. Every query returns the fallback exp(-beta b0), i.e. "all
+//   absorbance sits at the query depth" (0 for b0 = +inf and beta > 0, 1 for beta = 0 or
+//   NaN b0).
+// - Degenerate query: NaN z, fewer real roots than the kernel polynomial's degree (a
+//   discriminant clearly below zero; slightly negative ones are clamped to a double root),
+//   non-finite roots or a non-finite absorbance. (A leading coefficient that is exactly 0
+//   is not a failure: that support point lies at infinity with weight 0.) The query returns the
+//   same fallback and reports it in TransmittanceQuery::Fallback.
+// - z is clamped to [-1,1], the warp's range.
+#ifndef apcMomentTransmittance_h
+#define apcMomentTransmittance_h
+
+#include "apcPowerMoments.h"
+
+#include <array>
+
+namespace apc
+{
+
+// -ln(0.999): MBOIT's threshold below which a pixel holds nothing worth reconstructing.
+constexpr double kEmptyPixelAbsorbance = 1.00050033e-3;
+
+// The APC paper's overestimation; MBOIT's own implementations mostly use 0.25.
+constexpr double kDefaultOverestimation = 0.3;
+
+// The paper's fp32 bias constants. They suffice in double precision as well, where the
+// accumulation and the solve are far more accurate than the fp32 they were tuned for.
+template <int N>
+constexpr double DefaultMomentBias()
+{
+  static_assert(N == 4 || N == 6 || N == 8, "APC supports 4, 6 or 8 power moments");
+  if constexpr (N == 4)
+  {
+    return 5e-7;
+  }
+  else if constexpr (N == 6)
+  {
+    return 5e-6;
+  }
+  else
+  {
+    return 5e-5;
+  }
+}
+
+// Moments (b1..bN) the bias pulls towards; their Hankel matrices are well conditioned.
+template <int N>
+constexpr std::array<double, N> DefaultBiasVector()
+{
+  static_assert(N == 4 || N == 6 || N == 8, "APC supports 4, 6 or 8 power moments");
+  if constexpr (N == 4)
+  {
+    return { 0.0, 0.375, 0.0, 0.375 };
+  }
+  else if constexpr (N == 6)
+  {
+    return { 0.0, 0.48, 0.0, 0.451, 0.0, 0.45 };
+  }
+  else
+  {
+    return { 0.0, 0.75, 0.0, 0.676667, 0.0, 0.63, 0.0, 0.600303 };
+  }
+}
+
+template <int N>
+struct MomentSettings
+{
+  // beta in [0,1]; out-of-range values are clamped, NaN means the default.
+  double Overestimation = kDefaultOverestimation;
+  // epsilon in [0,1]; out-of-range values are clamped, NaN means the default.
+  double Bias = DefaultMomentBias<N>();
+  std::array<double, N> BiasVector = DefaultBiasVector<N>();
+};
+
+struct TransmittanceQuery
+{
+  double Transmittance = 1.0;
+  bool Fallback = false; // the documented fallback was used instead of the reconstruction
+};
+
+// Built once per pixel from its (global) unnormalised moment sums; cheap to query many
+// times. Queries are const and touch no shared state, so one object may serve many threads.
+template <int N>
+class MomentTransmittance
+{
+public:
+  static_assert(N == 4 || N == 6 || N == 8, "APC supports 4, 6 or 8 power moments");
+
+  // sums: N+1 unnormalised values (b0, b1, ..., bN).
+  explicit MomentTransmittance(const double* sums, const MomentSettings<N>& settings = {});
+  explicit MomentTransmittance(
+    const PowerMoments<N>& moments, const MomentSettings<N>& settings = {})
+    : MomentTransmittance(moments.Data(), settings)
+  {
+  }
+
+  TransmittanceQuery Query(double z) const;
+  double operator()(double z) const { return this->Query(z).Transmittance; }
+
+  bool IsEmpty() const { return this->State == PixelState::Empty; }
+  bool IsDegenerate() const { return this->State == PixelState::Degenerate; }
+  double TotalAbsorbance() const { return this->B0; }
+  double FallbackTransmittance() const { return this->Fallback; }
+  double Overestimation() const { return this->Beta; }
+
+private:
+  static constexpr int M = N / 2;
+  double ChristoffelKernel(double x) const;
+
+  enum class PixelState
+  {
+    Empty,
+    Valid,
+    Degenerate
+  };
+
+  PixelState State = PixelState::Valid;
+  double B0 = 0.0;
+  double Beta = kDefaultOverestimation;
+  double Fallback = 1.0;
+  std::array<double, N + 1> Moments{};       // normalised and biased, Moments[0] = 1
+  std::array<double, (M + 1) * (M + 1)> L{}; // unit lower triangular, row major
+  std::array<double, M + 1> D{};
+};
+
+extern template class MomentTransmittance<4>;
+extern template class MomentTransmittance<6>;
+extern template class MomentTransmittance<8>;
+
+} // namespace apc
+
+#endif

@@ -1,0 +1,71 @@
+#include "apcResolve.h"
+
+#include <cmath>
+
+namespace apc
+{
+
+void ColourSums::Add(double weight, const RGB& colour)
+{
+  if (!(weight > 0.0))
+  {
+    return;
+  }
+  for (int k = 0; k < 3; ++k)
+  {
+    this->Sums[k] += weight * colour[k];
+  }
+  this->Sums[3] += weight;
+}
+
+ColourSums& ColourSums::operator+=(const ColourSums& other)
+{
+  for (int k = 0; k < 4; ++k)
+  {
+    this->Sums[k] += other.Sums[k];
+  }
+  return *this;
+}
+
+RGBA Resolve(ResolveMode mode, const ColourSums& sums, double b0)
+{
+  const double w = sums.Sums[3];
+  RGBA out{ 0.0, 0.0, 0.0, 0.0 };
+  if (mode == ResolveMode::PaperSum)
+  {
+    if (!(w > 0.0) || !std::isfinite(w))
+    {
+      return out;
+    }
+    const double scale = w > 1.0 ? 1.0 / w : 1.0;
+    for (int k = 0; k < 3; ++k)
+    {
+      out[k] = sums.Sums[k] * scale;
+    }
+    out[3] = w > 1.0 ? 1.0 : w;
+    return out;
+  }
+
+  // -expm1 keeps the relative precision of faint pixels; NaN b0 means no opacity at all.
+  const double alpha = std::isnan(b0) || !(b0 > 0.0) ? 0.0 : -std::expm1(-b0);
+  out[3] = alpha;
+  if (!(w > kMinResolveWeight) || !std::isfinite(w))
+  {
+    return out;
+  }
+  const double scale = alpha / w;
+  for (int k = 0; k < 3; ++k)
+  {
+    out[k] = sums.Sums[k] * scale;
+  }
+  return out;
+}
+
+RGB BlendOverBackground(const RGBA& premultiplied, const RGB& background)
+{
+  const double behind = 1.0 - premultiplied[3];
+  return { premultiplied[0] + behind * background[0], premultiplied[1] + behind * background[1],
+    premultiplied[2] + behind * background[2] };
+}
+
+} // namespace apc
