@@ -1,0 +1,510 @@
+#include "apcCellInterpolation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace apc
+{
+
+namespace
+{
+
+// Relative size of the non-linear coefficients below which the closed-form inverse is used.
+// Rounding in the corner differences alone reaches ~1e-15 of the coordinates' magnitude,
+// so an exactly affine cell far from the origin still qualifies; the closed form then errs
+// by at most this much in parametric units, well inside kNewtonTolerance.
+constexpr double kAffineTolerance = 1e-12;
+
+// |det J| below this fraction of the product of the column lengths (the Hadamard bound) is
+// treated as singular: the columns are then coplanar to ~1e-12 rad and the Newton update
+// would be dominated by rounding.
+constexpr double kSingularRatio = 1e-12;
+
+// A residual this small, relative to the cell size, is accepted even where the Jacobian is
+// singular (a pyramid's apex maps from the whole plane t = 1).
+constexpr double kResidualTolerance = 1e-12;
+
+// Newton iterates are kept in this box around the reference cell so that a wild step (bad
+// guess, badly distorted cell) cannot overflow; a genuine solution lies in [0,1]^3.
+constexpr double kBoxLow = -1.0;
+constexpr double kBoxHigh = 2.0;
+
+inline double Dot(const double a[3], const double b[3])
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+inline void Cross(const double a[3], const double b[3], double c[3])
+{
+  c[0] = a[1] * b[2] - a[2] * b[1];
+  c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+inline double MaxAbs(const double a[3])
+{
+  return std::max(std::abs(a[0]), std::max(std::abs(a[1]), std::abs(a[2])));
+}
+
+// NaN-safe: !(det^2 > ...) is true for NaN as well.
+inline bool IsSingular(double det, const double c0[3], const double c1[3], const double c2[3])
+{
+  const double bound = Dot(c0, c0) * Dot(c1, c1) * Dot(c2, c2);
+  return !(det * det > kSingularRatio * kSingularRatio * bound);
+}
+
+inline bool IsFinite(const double p[3])
+{
+  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+}
+
+const std::array<std::array<double, 3>, 8> kTetraCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+} };
+const std::array<std::array<double, 3>, 8> kPyramidCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 1, 1, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+} };
+const std::array<std::array<double, 3>, 8> kWedgeCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+  { 1, 0, 1 },
+  { 0, 1, 1 },
+} };
+const std::array<std::array<double, 3>, 8> kHexahedronCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 1, 1, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+  { 1, 0, 1 },
+  { 1, 1, 1 },
+  { 0, 1, 1 },
+} };
+
+// Monomial coefficients of the map, by expanding VTK's shape functions; see the header.
+void MapCoefficients(const CellCorners& cell, double c[8][3])
+{
+  const auto& X = cell.X;
+  for (int d = 0; d < 3; ++d)
+  {
+    for (int k = 0; k < 8; ++k)
+    {
+      c[k][d] = 0.0;
+    }
+    c[0][d] = X[0][d];
+    switch (cell.Shape)
+    {
+      case CellShape::Tetra:
+        c[1][d] = X[1][d] - X[0][d];
+        c[2][d] = X[2][d] - X[0][d];
+        c[3][d] = X[3][d] - X[0][d];
+        break;
+      case CellShape::Pyramid:
+      {
+        // x = (1-t) B(r,s) + t X4 with B bilinear over the base.
+        const double br = X[1][d] - X[0][d];
+        const double bs = X[3][d] - X[0][d];
+        const double brs = X[2][d] - X[1][d] - X[3][d] + X[0][d];
+        c[1][d] = br;
+        c[2][d] = bs;
+        c[3][d] = X[4][d] - X[0][d];
+        c[4][d] = brs;
+        c[5][d] = -br;
+        c[6][d] = -bs;
+        c[7][d] = -brs;
+        break;
+      }
+      case CellShape::Wedge:
+        c[1][d] = X[1][d] - X[0][d];
+        c[2][d] = X[2][d] - X[0][d];
+        c[3][d] = X[3][d] - X[0][d];
+        c[5][d] = X[4][d] - X[1][d] - X[3][d] + X[0][d];
+        c[6][d] = X[5][d] - X[2][d] - X[3][d] + X[0][d];
+        break;
+      case CellShape::Hexahedron:
+        c[1][d] = X[1][d] - X[0][d];
+        c[2][d] = X[3][d] - X[0][d];
+        c[3][d] = X[4][d] - X[0][d];
+        c[4][d] = X[2][d] - X[1][d] - X[3][d] + X[0][d];
+        c[5][d] = X[5][d] - X[1][d] - X[4][d] + X[0][d];
+        c[6][d] = X[7][d] - X[3][d] - X[4][d] + X[0][d];
+        c[7][d] = X[6][d] - X[2][d] - X[5][d] - X[7][d] + X[1][d] + X[3][d] + X[4][d] - X[0][d];
+        break;
+    }
+  }
+}
+
+// Largest linear coefficient and largest non-linear one (max norm).
+void CoefficientSizes(const double c[8][3], double& linear, double& nonlinear)
+{
+  linear = std::max(MaxAbs(c[1]), std::max(MaxAbs(c[2]), MaxAbs(c[3])));
+  nonlinear = 0.0;
+  for (int k = 4; k < 8; ++k)
+  {
+    nonlinear = std::max(nonlinear, MaxAbs(c[k]));
+  }
+}
+
+} // namespace
+
+const std::array<std::array<double, 3>, 8>& ReferenceCorners(CellShape shape)
+{
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      return kTetraCorners;
+    case CellShape::Pyramid:
+      return kPyramidCorners;
+    case CellShape::Wedge:
+      return kWedgeCorners;
+    case CellShape::Hexahedron:
+      break;
+  }
+  return kHexahedronCorners;
+}
+
+void ParametricCenter(CellShape shape, double pcoords[3])
+{
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      pcoords[0] = pcoords[1] = pcoords[2] = 0.25;
+      return;
+    case CellShape::Pyramid:
+      pcoords[0] = pcoords[1] = 0.4;
+      pcoords[2] = 0.2;
+      return;
+    case CellShape::Wedge:
+      // VTK uses 0.333333; the exact third keeps the point symmetric.
+      pcoords[0] = pcoords[1] = 1.0 / 3.0;
+      pcoords[2] = 0.5;
+      return;
+    case CellShape::Hexahedron:
+      break;
+  }
+  pcoords[0] = pcoords[1] = pcoords[2] = 0.5;
+}
+
+void ShapeFunctions(CellShape shape, const double p[3], double w[8])
+{
+  const double r = p[0], s = p[1], t = p[2];
+  const double rm = 1.0 - r, sm = 1.0 - s, tm = 1.0 - t;
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      w[0] = 1.0 - r - s - t;
+      w[1] = r;
+      w[2] = s;
+      w[3] = t;
+      return;
+    case CellShape::Pyramid:
+      w[0] = rm * sm * tm;
+      w[1] = r * sm * tm;
+      w[2] = r * s * tm;
+      w[3] = rm * s * tm;
+      w[4] = t;
+      return;
+    case CellShape::Wedge:
+    {
+      const double u = 1.0 - r - s;
+      w[0] = u * tm;
+      w[1] = r * tm;
+      w[2] = s * tm;
+      w[3] = u * t;
+      w[4] = r * t;
+      w[5] = s * t;
+      return;
+    }
+    case CellShape::Hexahedron:
+      break;
+  }
+  w[0] = rm * sm * tm;
+  w[1] = r * sm * tm;
+  w[2] = r * s * tm;
+  w[3] = rm * s * tm;
+  w[4] = rm * sm * t;
+  w[5] = r * sm * t;
+  w[6] = r * s * t;
+  w[7] = rm * s * t;
+}
+
+void ClampToReferenceCell(CellShape shape, double p[3])
+{
+  for (int i = 0; i < 3; ++i)
+  {
+    // Written so that NaN lands on 0.
+    p[i] = p[i] > 0.0 ? std::min(p[i], 1.0) : 0.0;
+  }
+  double sum = 0.0;
+  if (shape == CellShape::Tetra)
+  {
+    sum = p[0] + p[1] + p[2];
+  }
+  else if (shape == CellShape::Wedge)
+  {
+    sum = p[0] + p[1];
+  }
+  if (sum > 1.0)
+  {
+    p[0] /= sum;
+    p[1] /= sum;
+    if (shape == CellShape::Tetra)
+    {
+      p[2] /= sum;
+    }
+  }
+}
+
+void CellInterpolator::Set(const CellCorners& cell)
+{
+  this->CellType = cell.Shape;
+  const int n = NumberOfCorners(cell.Shape);
+  for (int i = 0; i < 8; ++i)
+  {
+    this->S[i] = i < n ? cell.S[i] : 0.0;
+  }
+  MapCoefficients(cell, this->C);
+
+  double nonlinear = 0.0;
+  CoefficientSizes(this->C, this->Size, nonlinear);
+  this->Affine = nonlinear <= kAffineTolerance * this->Size;
+
+  double center[3];
+  ParametricCenter(cell.Shape, center);
+  double offset[3], J[3][3];
+  this->Evaluate(center, offset, J);
+  double cr[3], cs[3], ct[3];
+  Cross(J[1], J[2], cr);
+  Cross(J[2], J[0], cs);
+  Cross(J[0], J[1], ct);
+  const double det = Dot(J[0], cr);
+  this->Degenerate = !(this->Size > 0.0) || !std::isfinite(this->Size) ||
+    !std::isfinite(nonlinear) || IsSingular(det, J[0], J[1], J[2]);
+  if (this->Degenerate)
+  {
+    this->Affine = false;
+    return;
+  }
+  if (this->Affine)
+  {
+    // Rows of the inverse of [J0 J1 J2] are the cross products over the determinant.
+    for (int d = 0; d < 3; ++d)
+    {
+      this->Inverse[0][d] = cr[d] / det;
+      this->Inverse[1][d] = cs[d] / det;
+      this->Inverse[2][d] = ct[d] / det;
+    }
+  }
+}
+
+void CellInterpolator::Evaluate(const double p[3], double offset[3], double J[3][3]) const
+{
+  const double r = p[0], s = p[1], t = p[2];
+  const double rs = r * s, rt = r * t, st = s * t;
+  const auto& c = this->C;
+  for (int d = 0; d < 3; ++d)
+  {
+    offset[d] = r * c[1][d] + s * c[2][d] + t * c[3][d] + rs * c[4][d] + rt * c[5][d] +
+      st * c[6][d] + rs * t * c[7][d];
+    J[0][d] = c[1][d] + s * c[4][d] + t * c[5][d] + st * c[7][d];
+    J[1][d] = c[2][d] + r * c[4][d] + t * c[6][d] + rt * c[7][d];
+    J[2][d] = c[3][d] + r * c[5][d] + s * c[6][d] + rs * c[7][d];
+  }
+}
+
+bool CellInterpolator::ParametricCoordinates(
+  const double x[3], double pcoords[3], int* iterations, double tolerance) const
+{
+  if (iterations)
+  {
+    *iterations = 0;
+  }
+  if (!IsFinite(pcoords))
+  {
+    ParametricCenter(this->CellType, pcoords);
+  }
+  if (this->Degenerate)
+  {
+    ClampToReferenceCell(this->CellType, pcoords);
+    return false;
+  }
+
+  const double y[3] = { x[0] - this->C[0][0], x[1] - this->C[0][1], x[2] - this->C[0][2] };
+  if (this->Affine)
+  {
+    const double p[3] = { Dot(this->Inverse[0], y), Dot(this->Inverse[1], y),
+      Dot(this->Inverse[2], y) };
+    if (IsFinite(p))
+    {
+      pcoords[0] = p[0];
+      pcoords[1] = p[1];
+      pcoords[2] = p[2];
+      return true;
+    }
+    ClampToReferenceCell(this->CellType, pcoords);
+    return false;
+  }
+
+  const bool pyramid = this->CellType == CellShape::Pyramid;
+  double p[3] = { pcoords[0], pcoords[1], pcoords[2] };
+  double best[3] = { p[0], p[1], p[2] };
+  double bestResidual = std::numeric_limits<double>::infinity();
+  bool restarted = false;
+  int steps = 0;
+  while (steps < kMaxNewtonIterations)
+  {
+    double offset[3], J[3][3];
+    this->Evaluate(p, offset, J);
+    const double F[3] = { offset[0] - y[0], offset[1] - y[1], offset[2] - y[2] };
+    const double residual = MaxAbs(F);
+    if (residual < bestResidual)
+    {
+      bestResidual = residual;
+      best[0] = p[0];
+      best[1] = p[1];
+      best[2] = p[2];
+    }
+
+    double cr[3], cs[3], ct[3];
+    Cross(J[1], J[2], cr);
+    Cross(J[2], J[0], cs);
+    Cross(J[0], J[1], ct);
+    const double det = Dot(J[0], cr);
+    if (IsSingular(det, J[0], J[1], J[2]))
+    {
+      if (residual <= kResidualTolerance * this->Size)
+      {
+        // On the solution already (e.g. a pyramid's apex, t = 1).
+        pcoords[0] = p[0];
+        pcoords[1] = p[1];
+        pcoords[2] = p[2];
+        if (iterations)
+        {
+          *iterations = steps;
+        }
+        return true;
+      }
+      if (restarted)
+      {
+        break;
+      }
+      // A bad guess or an iterate on a singular spot of a valid cell: retry from the center.
+      restarted = true;
+      ParametricCenter(this->CellType, p);
+      continue;
+    }
+
+    const double invDet = 1.0 / det;
+    const double d[3] = { Dot(F, cr) * invDet, Dot(F, cs) * invDet, Dot(F, ct) * invDet };
+    p[0] -= d[0];
+    p[1] -= d[1];
+    p[2] -= d[2];
+    ++steps;
+    if (!IsFinite(p))
+    {
+      break;
+    }
+    double change = std::abs(d[2]);
+    if (pyramid)
+    {
+      const double section = std::abs(1.0 - p[2]);
+      change = std::max(change, section * std::max(std::abs(d[0]), std::abs(d[1])));
+    }
+    else
+    {
+      change = std::max(change, std::max(std::abs(d[0]), std::abs(d[1])));
+    }
+    if (change < tolerance)
+    {
+      pcoords[0] = p[0];
+      pcoords[1] = p[1];
+      pcoords[2] = p[2];
+      if (iterations)
+      {
+        *iterations = steps;
+      }
+      return true;
+    }
+    for (int i = 0; i < 3; ++i)
+    {
+      p[i] = std::min(std::max(p[i], kBoxLow), kBoxHigh);
+    }
+  }
+
+  if (iterations)
+  {
+    *iterations = steps;
+  }
+  pcoords[0] = best[0];
+  pcoords[1] = best[1];
+  pcoords[2] = best[2];
+  ClampToReferenceCell(this->CellType, pcoords);
+  return false;
+}
+
+double CellInterpolator::InterpolateScalar(const double pcoords[3]) const
+{
+  double w[8];
+  ShapeFunctions(this->CellType, pcoords, w);
+  const int n = NumberOfCorners(this->CellType);
+  double value = 0.0;
+  for (int i = 0; i < n; ++i)
+  {
+    value += w[i] * this->S[i];
+  }
+  return value;
+}
+
+void CellInterpolator::WorldPosition(const double pcoords[3], double x[3]) const
+{
+  double offset[3], J[3][3];
+  this->Evaluate(pcoords, offset, J);
+  for (int d = 0; d < 3; ++d)
+  {
+    x[d] = this->C[0][d] + offset[d];
+  }
+}
+
+bool ParametricCoordinates(
+  const CellCorners& cell, const double x[3], double pcoords[3], int* iterations)
+{
+  return CellInterpolator(cell).ParametricCoordinates(x, pcoords, iterations);
+}
+
+double InterpolateScalar(const CellCorners& cell, const double pcoords[3])
+{
+  double w[8];
+  ShapeFunctions(cell.Shape, pcoords, w);
+  double value = 0.0;
+  for (int i = 0; i < NumberOfCorners(cell.Shape); ++i)
+  {
+    value += w[i] * cell.S[i];
+  }
+  return value;
+}
+
+void WorldPosition(const CellCorners& cell, const double pcoords[3], double x[3])
+{
+  CellInterpolator(cell).WorldPosition(pcoords, x);
+}
+
+bool IsAffine(const CellCorners& cell, double relTol)
+{
+  double c[8][3];
+  MapCoefficients(cell, c);
+  double linear = 0.0, nonlinear = 0.0;
+  CoefficientSizes(c, linear, nonlinear);
+  return linear > 0.0 && nonlinear <= relTol * linear;
+}
+
+} // namespace apc

@@ -1,0 +1,203 @@
+#include "apcCellMesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace apc
+{
+namespace
+{
+struct FaceList
+{
+  int Count;
+  int Size[6];
+  int Corner[6][4];
+};
+
+// Faces in VTK's corner numbering; their orientation does not matter (fixed by the centroid).
+const FaceList& FacesOf(CellShape shape)
+{
+  static const FaceList tetra = { 4, { 3, 3, 3, 3 },
+    { { 0, 1, 3 }, { 1, 2, 3 }, { 2, 0, 3 }, { 0, 2, 1 } } };
+  static const FaceList pyramid = { 5, { 4, 3, 3, 3, 3 },
+    { { 0, 3, 2, 1 }, { 0, 1, 4 }, { 1, 2, 4 }, { 2, 3, 4 }, { 3, 0, 4 } } };
+  static const FaceList wedge = { 5, { 3, 3, 4, 4, 4 },
+    { { 0, 1, 2 }, { 3, 5, 4 }, { 0, 3, 4, 1 }, { 1, 4, 5, 2 }, { 2, 5, 3, 0 } } };
+  static const FaceList hexahedron = { 6, { 4, 4, 4, 4, 4, 4 },
+    { { 0, 4, 7, 3 }, { 1, 2, 6, 5 }, { 0, 1, 5, 4 }, { 3, 7, 6, 2 }, { 0, 3, 2, 1 },
+      { 4, 5, 6, 7 } } };
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      return tetra;
+    case CellShape::Pyramid:
+      return pyramid;
+    case CellShape::Wedge:
+      return wedge;
+    default:
+      return hexahedron;
+  }
+}
+
+// The plane of a face computed from its points in canonical order, so that both cells
+// sharing the face get the same numbers (see the header). Returns false for a face with no
+// area (collapsed corners), which then constrains nothing.
+bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int64_t* ids, int size,
+  double normal[3], double& offset)
+{
+  int first = 0;
+  for (int i = 1; i < size; ++i)
+  {
+    if (ids[i] < ids[first])
+    {
+      first = i;
+    }
+  }
+  const int step = ids[(first + 1) % size] < ids[(first + size - 1) % size] ? 1 : size - 1;
+  int64_t ordered[4];
+  for (int i = 0; i < size; ++i)
+  {
+    ordered[i] = ids[(first + i * step) % size];
+  }
+  double n[3] = { 0, 0, 0 };
+  double c[3] = { 0, 0, 0 };
+  for (int i = 0; i < size; ++i)
+  {
+    const auto& p = points[ordered[i]];
+    const auto& q = points[ordered[(i + 1) % size]];
+    n[0] += (p[1] - q[1]) * (p[2] + q[2]);
+    n[1] += (p[2] - q[2]) * (p[0] + q[0]);
+    n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+    for (int d = 0; d < 3; ++d)
+    {
+      c[d] += p[d];
+    }
+  }
+  const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(length > 0) || !std::isfinite(length))
+  {
+    return false;
+  }
+  // Unit normals keep t = (offset - n.o)/(n.d) well scaled whatever the cell size.
+  for (int d = 0; d < 3; ++d)
+  {
+    normal[d] = n[d] / length;
+  }
+  offset = (normal[0] * c[0] + normal[1] * c[1] + normal[2] * c[2]) / size;
+  return true;
+}
+}
+
+//------------------------------------------------------------------------------
+int64_t CellMesh::AddCell(CellShape shape, const int64_t* pointIds)
+{
+  const int corners = static_cast<int>(shape);
+  this->Shapes.push_back(shape);
+  this->Connectivity.insert(this->Connectivity.end(), pointIds, pointIds + corners);
+  this->Offsets.push_back(static_cast<int64_t>(this->Connectivity.size()));
+  return static_cast<int64_t>(this->Shapes.size()) - 1;
+}
+
+//------------------------------------------------------------------------------
+bool CellMesh::Finalize(std::string* error)
+{
+  auto fail = [error](const std::string& message)
+  {
+    if (error)
+    {
+      *error = message;
+    }
+    return false;
+  };
+  const int64_t numCells = this->GetNumberOfCells();
+  const int64_t numPoints = static_cast<int64_t>(this->Points.size());
+  if (!this->CellScalars.empty() && static_cast<int64_t>(this->CellScalars.size()) != numCells)
+  {
+    return fail("cell scalars do not match the number of cells");
+  }
+  if (this->CellScalars.empty() && static_cast<int64_t>(this->PointScalars.size()) != numPoints)
+  {
+    return fail("point scalars do not match the number of points");
+  }
+  for (int64_t id : this->Connectivity)
+  {
+    if (id < 0 || id >= numPoints)
+    {
+      return fail("a cell refers to a point that does not exist");
+    }
+  }
+
+  this->Planes.clear();
+  this->PlaneOffsets.assign(1, 0);
+  this->Bounds.resize(numCells);
+  const double inf = std::numeric_limits<double>::infinity();
+  this->MeshBounds = { inf, -inf, inf, -inf, inf, -inf };
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const int64_t* ids = this->GetCellPoints(cell);
+    const int corners = static_cast<int>(this->Shapes[cell]);
+    std::array<double, 6>& b = this->Bounds[cell];
+    b = { inf, -inf, inf, -inf, inf, -inf };
+    double centroid[3] = { 0, 0, 0 };
+    for (int i = 0; i < corners; ++i)
+    {
+      const auto& p = this->Points[ids[i]];
+      for (int d = 0; d < 3; ++d)
+      {
+        b[2 * d] = std::min(b[2 * d], p[d]);
+        b[2 * d + 1] = std::max(b[2 * d + 1], p[d]);
+        centroid[d] += p[d] / corners;
+      }
+    }
+    for (int d = 0; d < 3; ++d)
+    {
+      this->MeshBounds[2 * d] = std::min(this->MeshBounds[2 * d], b[2 * d]);
+      this->MeshBounds[2 * d + 1] = std::max(this->MeshBounds[2 * d + 1], b[2 * d + 1]);
+    }
+
+    const FaceList& faces = FacesOf(this->Shapes[cell]);
+    for (int f = 0; f < faces.Count; ++f)
+    {
+      int64_t faceIds[4];
+      for (int i = 0; i < faces.Size[f]; ++i)
+      {
+        faceIds[i] = ids[faces.Corner[f][i]];
+      }
+      double n[3];
+      double offset;
+      if (!CanonicalPlane(this->Points, faceIds, faces.Size[f], n, offset))
+      {
+        continue;
+      }
+      // Flipping the sign is exact, so the neighbour's copy stays bit-identical.
+      const double side = n[0] * centroid[0] + n[1] * centroid[1] + n[2] * centroid[2] - offset;
+      const double sign = side > 0 ? -1.0 : 1.0;
+      this->Planes.push_back({ { static_cast<float>(sign * n[0]), static_cast<float>(sign * n[1]),
+                                 static_cast<float>(sign * n[2]) },
+        static_cast<float>(sign * offset) });
+    }
+    this->PlaneOffsets.push_back(static_cast<int64_t>(this->Planes.size()));
+  }
+  if (numCells == 0)
+  {
+    this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::GetCorners(int64_t cell, CellCorners& corners) const
+{
+  const int64_t* ids = this->GetCellPoints(cell);
+  corners.Shape = this->Shapes[cell];
+  const int n = static_cast<int>(corners.Shape);
+  const bool cellScalars = this->HasCellScalars();
+  for (int i = 0; i < n; ++i)
+  {
+    corners.X[i] = this->Points[ids[i]];
+    corners.S[i] = cellScalars ? this->CellScalars[cell] : this->PointScalars[ids[i]];
+  }
+}
+
+} // namespace apc

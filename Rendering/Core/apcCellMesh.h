@@ -1,0 +1,82 @@
+// The ray marcher's own copy of a rank's cells: corner coordinates, scalars and, derived
+// once per data change, every cell's bounding box and face planes.
+//
+// Exact ray entry and exit come from clipping the ray against the cell's face planes, which
+// is exact for cells with planar faces (tetrahedra, and the usual hexahedra, wedges and
+// pyramids of CFD meshes). A non-planar quad face is replaced by one plane (Newell normal
+// through the face centroid). What makes the cells tile space without gaps or double counting
+// is that two cells sharing a face compute that face's plane bit for bit identically: the
+// plane is computed from the face's points in a canonical order (starting at the smallest
+// point id, walking towards the smaller neighbour), and only its sign differs between the two
+// cells. Together with half-open sample intervals [t_in, t_out) every lattice sample of a ray
+// then lands in exactly one cell, whichever rank owns it.
+#ifndef apcCellMesh_h
+#define apcCellMesh_h
+
+#include "apcCellInterpolation.h"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace apc
+{
+
+struct FacePlane
+{
+  // Inside the cell: Normal . x - Offset <= 0 (Normal points out; not unit length).
+  std::array<float, 3> Normal;
+  float Offset;
+};
+
+class CellMesh
+{
+public:
+  // Points and scalars. Exactly one of PointScalars (one per point) or CellScalars (one per
+  // cell) is filled. NaN scalars are allowed: such samples are skipped.
+  std::vector<std::array<double, 3>> Points;
+  std::vector<float> PointScalars;
+  std::vector<float> CellScalars;
+
+  // Appends a cell given its corner point ids in VTK's order for the shape (a voxel must be
+  // reordered to hexahedron order by the caller). Returns the cell's index.
+  int64_t AddCell(CellShape shape, const int64_t* pointIds);
+
+  // Derives bounds and face planes; call after the last AddCell and before rendering.
+  // Returns false, with a message, if the mesh is unusable (ids out of range, scalars missing).
+  bool Finalize(std::string* error = nullptr);
+
+  int64_t GetNumberOfCells() const { return static_cast<int64_t>(this->Shapes.size()); }
+  bool HasCellScalars() const { return !this->CellScalars.empty(); }
+  CellShape GetShape(int64_t cell) const { return this->Shapes[cell]; }
+  const int64_t* GetCellPoints(int64_t cell) const
+  {
+    return this->Connectivity.data() + this->Offsets[cell];
+  }
+  const FacePlane* GetPlanes(int64_t cell, int& count) const
+  {
+    count = static_cast<int>(this->PlaneOffsets[cell + 1] - this->PlaneOffsets[cell]);
+    return this->Planes.data() + this->PlaneOffsets[cell];
+  }
+  // xmin, xmax, ymin, ymax, zmin, zmax of one cell / of the whole mesh.
+  const std::array<double, 6>& GetCellBounds(int64_t cell) const { return this->Bounds[cell]; }
+  const std::array<double, 6>& GetBounds() const { return this->MeshBounds; }
+
+  // Corners and scalars of one cell, ready for interpolation.
+  void GetCorners(int64_t cell, CellCorners& corners) const;
+
+private:
+  std::vector<CellShape> Shapes;
+  std::vector<int64_t> Offsets{ 0 };
+  std::vector<int64_t> Connectivity;
+
+  std::vector<FacePlane> Planes;
+  std::vector<int64_t> PlaneOffsets;
+  std::vector<std::array<double, 6>> Bounds;
+  std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
+};
+
+} // namespace apc
+
+#endif

@@ -1,0 +1,68 @@
+// Primary rays of a pinhole (perspective) or parallel camera, one through each pixel centre,
+// with the same conventions as VTK's camera (vertical view angle, image row 0 at the bottom),
+// so that images and depth buffers line up with what VTK draws.
+//
+// t is the world-space distance along a ray from its origin: the eye for a perspective camera,
+// the plane through the eye perpendicular to the view direction for a parallel one. The
+// ray marcher samples at t_k = k * spacing, the global sample lattice that every rank shares.
+#ifndef apcRayCamera_h
+#define apcRayCamera_h
+
+#include <array>
+
+namespace apc
+{
+
+struct Ray
+{
+  std::array<double, 3> Origin;
+  std::array<double, 3> Direction; // unit length
+};
+
+class RayCamera
+{
+public:
+  // viewAngle: full vertical angle in degrees (perspective). parallelScale: half the view
+  // height in world units (parallel). near/far: the clipping range, for depth conversion.
+  RayCamera(const std::array<double, 3>& position, const std::array<double, 3>& focalPoint,
+    const std::array<double, 3>& viewUp, double viewAngle, bool parallel, double parallelScale,
+    int width, int height, double nearClip, double farClip);
+
+  int GetWidth() const { return this->Width; }
+  int GetHeight() const { return this->Height; }
+  bool IsParallel() const { return this->Parallel; }
+  const std::array<double, 3>& GetPosition() const { return this->Position; }
+  const std::array<double, 3>& GetViewDirection() const { return this->Forward; }
+
+  // The ray through the centre of pixel (i, j).
+  Ray PixelRay(int i, int j) const;
+
+  // Continuous pixel coordinates of a world point (pixel centres at integers). False when
+  // the point is not in front of the eye, where a perspective projection is meaningless.
+  bool Project(const std::array<double, 3>& x, double& px, double& py) const;
+
+  // Distance along pixel (i, j)'s ray to the surface whose OpenGL depth-buffer value (in
+  // [0,1]) is depth; +inf for the cleared value 1.
+  double DistanceFromDepth(int i, int j, double depth) const;
+
+  // Smallest and largest t at which a ray may meet the box (xmin,xmax,ymin,ymax,zmin,zmax):
+  // the range the depth warp must cover, the same on every rank given the same box.
+  void DistanceRange(const std::array<double, 6>& bounds, double& tmin, double& tmax) const;
+
+private:
+  std::array<double, 3> Position;
+  std::array<double, 3> Forward;
+  std::array<double, 3> Right;
+  std::array<double, 3> Up;
+  bool Parallel;
+  double HalfHeight; // tan(angle/2) for perspective, parallel scale for parallel
+  double Aspect;
+  int Width;
+  int Height;
+  double Near;
+  double Far;
+};
+
+} // namespace apc
+
+#endif

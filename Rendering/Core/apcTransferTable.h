@@ -1,0 +1,67 @@
+// A 1D transfer function sampled into a table: colour and per-sample absorbance over a
+// scalar range, linearly interpolated between entries.
+//
+// Opacity is stored in absorbance form, already corrected for the sample spacing:
+// a = -ln(1 - alpha_tf) * spacing / unitDistance, where alpha_tf is the opacity the transfer
+// function gives per unitDistance of travel (VTK's scalar opacity unit distance). Absorbances
+// add, so the correction is exact for any spacing, and it is what the moments sum.
+#ifndef apcTransferTable_h
+#define apcTransferTable_h
+
+#include <array>
+#include <vector>
+
+namespace apc
+{
+
+struct TransferSample
+{
+  std::array<float, 3> Colour;
+  float Absorbance; // per sample, in [0, kAbsorbanceMax]
+};
+
+class TransferTable
+{
+public:
+  // colours: rgb per entry; opacities: alpha_tf per entry; both sampled uniformly over
+  // [scalarMin, scalarMax] (at least 2 entries). Scalars outside the range clamp to the end
+  // entries, as VTK's transfer functions do by default.
+  TransferTable(double scalarMin, double scalarMax,
+    const std::vector<std::array<float, 3>>& colours, const std::vector<double>& opacities,
+    double sampleSpacing, double unitDistance);
+
+  // NaN scalars give a fully transparent sample.
+  TransferSample Lookup(double scalar) const
+  {
+    if (!(scalar == scalar))
+    {
+      return { { 0.f, 0.f, 0.f }, 0.f };
+    }
+    double x = (scalar - this->Min) * this->Scale;
+    x = x < 0 ? 0 : (x > this->Last ? this->Last : x);
+    const int i = static_cast<int>(x);
+    const int j = i + 1 < static_cast<int>(this->Entries.size()) ? i + 1 : i;
+    const float f = static_cast<float>(x - i);
+    const TransferSample& a = this->Entries[i];
+    const TransferSample& b = this->Entries[j];
+    return { { a.Colour[0] + f * (b.Colour[0] - a.Colour[0]),
+               a.Colour[1] + f * (b.Colour[1] - a.Colour[1]),
+               a.Colour[2] + f * (b.Colour[2] - a.Colour[2]) },
+      a.Absorbance + f * (b.Absorbance - a.Absorbance) };
+  }
+
+  double GetSampleSpacing() const { return this->Spacing; }
+  // True if no entry can make a sample visible: nothing to render.
+  bool IsTransparent() const;
+
+private:
+  double Min;
+  double Scale;
+  double Last;
+  double Spacing;
+  std::vector<TransferSample> Entries;
+};
+
+} // namespace apc
+
+#endif

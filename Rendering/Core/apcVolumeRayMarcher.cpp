@@ -1,0 +1,600 @@
+#include "apcVolumeRayMarcher.h"
+
+#include "apcPowerMoments.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace apc
+{
+
+// Cells per screen tile for the current view.
+struct VolumeRayMarcher::Bins
+{
+  int TilesX = 0;
+  int TilesY = 0;
+  std::vector<std::array<int, 4>> Rects; // per cell: i0, j0, i1, j1 (inclusive); empty if i0 > i1
+  std::vector<int64_t> Start;            // per tile, into Cells
+  std::vector<int64_t> Cells;
+};
+
+namespace
+{
+struct TileRect
+{
+  int I0, J0, I1, J1; // exclusive ends
+  int Width() const { return this->I1 - this->I0; }
+  int Pixels() const { return (this->I1 - this->I0) * (this->J1 - this->J0); }
+};
+
+struct RaySetup
+{
+  double O[3];
+  double D[3];
+  double End;
+};
+
+struct SampleRecord
+{
+  int64_t K;
+  float Absorbance;
+  std::array<float, 3> Colour;
+};
+
+// Exact mode: each pixel's samples, sorted by lattice index and blended front to back.
+struct ExactVisitor
+{
+  static constexpr bool WantsSegments = false;
+  static constexpr bool WantsSamples = true;
+  float* Output;
+  int Width;
+  std::vector<std::vector<SampleRecord>> Pixels;
+
+  void BeginTile(const TileRect& tile)
+  {
+    this->Pixels.resize(tile.Pixels());
+    for (auto& p : this->Pixels)
+    {
+      p.clear();
+    }
+  }
+  void Segment(int, double, double) {}
+  void Sample(int pixel, int64_t k, double, const TransferSample& s)
+  {
+    this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      auto& samples = this->Pixels[p];
+      if (samples.empty())
+      {
+        continue;
+      }
+      std::sort(samples.begin(), samples.end(),
+        [](const SampleRecord& a, const SampleRecord& b) { return a.K < b.K; });
+      double transmittance = 1.0;
+      double rgb[3] = { 0, 0, 0 };
+      for (const SampleRecord& s : samples)
+      {
+        const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
+        for (int c = 0; c < 3; ++c)
+        {
+          rgb[c] += transmittance * alpha * s.Colour[c];
+        }
+        transmittance *= 1.0 - alpha;
+      }
+      const int i = tile.I0 + p % tile.Width();
+      const int j = tile.J0 + p / tile.Width();
+      float* out = this->Output + 4 * (static_cast<int64_t>(j) * this->Width + i);
+      for (int c = 0; c < 3; ++c)
+      {
+        out[c] += static_cast<float>(rgb[c]);
+      }
+      out[3] += static_cast<float>(1.0 - transmittance);
+    }
+  }
+};
+
+template <int N>
+struct MomentVisitor
+{
+  static constexpr bool WantsSegments = false;
+  static constexpr bool WantsSamples = true;
+  double* Output;
+  int Width;
+  const LogDepthWarp* Warp;
+  std::vector<double> Sums;
+
+  void BeginTile(const TileRect& tile) { this->Sums.assign(tile.Pixels() * (N + 1), 0.0); }
+  void Segment(int, double, double) {}
+  void Sample(int pixel, int64_t, double t, const TransferSample& s)
+  {
+    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), (*this->Warp)(t), s.Absorbance);
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      const int i = tile.I0 + p % tile.Width();
+      const int j = tile.J0 + p / tile.Width();
+      AddPowerMoments<N>(this->Output + (N + 1) * (static_cast<int64_t>(j) * this->Width + i),
+        this->Sums.data() + p * (N + 1));
+    }
+  }
+};
+
+template <int N>
+struct ColourVisitor
+{
+  static constexpr bool WantsSegments = false;
+  static constexpr bool WantsSamples = true;
+  double* Output;
+  int Width;
+  const LogDepthWarp* Warp;
+  const double* Moments;
+  const MomentSettings<N>* Settings;
+  std::vector<MomentTransmittance<N>> Transmittance;
+  std::vector<std::array<double, 4>> Sums;
+
+  void BeginTile(const TileRect& tile)
+  {
+    this->Transmittance.clear();
+    this->Transmittance.reserve(tile.Pixels());
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      const int i = tile.I0 + p % tile.Width();
+      const int j = tile.J0 + p / tile.Width();
+      this->Transmittance.emplace_back(
+        this->Moments + (N + 1) * (static_cast<int64_t>(j) * this->Width + i), *this->Settings);
+    }
+    this->Sums.assign(tile.Pixels(), { 0.0, 0.0, 0.0, 0.0 });
+  }
+  void Segment(int, double, double) {}
+  void Sample(int pixel, int64_t, double t, const TransferSample& s)
+  {
+    const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
+    const double w = alpha * this->Transmittance[pixel]((*this->Warp)(t));
+    auto& sum = this->Sums[pixel];
+    sum[0] += w * s.Colour[0];
+    sum[1] += w * s.Colour[1];
+    sum[2] += w * s.Colour[2];
+    sum[3] += w;
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      const int i = tile.I0 + p % tile.Width();
+      const int j = tile.J0 + p / tile.Width();
+      double* out = this->Output + 4 * (static_cast<int64_t>(j) * this->Width + i);
+      for (int c = 0; c < 4; ++c)
+      {
+        out[c] += this->Sums[p][c];
+      }
+    }
+  }
+};
+
+struct SegmentVisitor
+{
+  static constexpr bool WantsSegments = true;
+  static constexpr bool WantsSamples = false;
+  int32_t* Output;
+  int Width;
+  double Tolerance;
+  std::vector<std::vector<std::pair<double, double>>> Pixels;
+
+  void BeginTile(const TileRect& tile)
+  {
+    this->Pixels.resize(tile.Pixels());
+    for (auto& p : this->Pixels)
+    {
+      p.clear();
+    }
+  }
+  void Segment(int pixel, double tin, double tout) { this->Pixels[pixel].emplace_back(tin, tout); }
+  void Sample(int, int64_t, double, const TransferSample&) {}
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      auto& intervals = this->Pixels[p];
+      std::sort(intervals.begin(), intervals.end());
+      int32_t count = 0;
+      double end = -std::numeric_limits<double>::infinity();
+      for (const auto& interval : intervals)
+      {
+        // Neighbouring cells share their face planes exactly, so a gap below a tiny fraction
+        // of the mesh size is rounding, not empty space.
+        if (interval.first > end + this->Tolerance)
+        {
+          ++count;
+        }
+        end = std::max(end, interval.second);
+      }
+      const int i = tile.I0 + p % tile.Width();
+      const int j = tile.J0 + p / tile.Width();
+      this->Output[static_cast<int64_t>(j) * this->Width + i] += count;
+    }
+  }
+};
+
+// Clips a ray against a cell's face planes: [tin, tout) is the part inside the cell. Every
+// cell evaluates a shared face with the same numbers (up to an exact sign flip), so the
+// intervals of neighbours meet exactly.
+inline void ClipRay(
+  const RaySetup& ray, const FacePlane* planes, int count, double& tin, double& tout)
+{
+  for (int p = 0; p < count && tin < tout; ++p)
+  {
+    const double nx = planes[p].Normal[0];
+    const double ny = planes[p].Normal[1];
+    const double nz = planes[p].Normal[2];
+    const double denom = nx * ray.D[0] + ny * ray.D[1] + nz * ray.D[2];
+    const double num = planes[p].Offset - (nx * ray.O[0] + ny * ray.O[1] + nz * ray.O[2]);
+    if (denom < 0)
+    {
+      tin = std::max(tin, num / denom);
+    }
+    else if (denom > 0)
+    {
+      tout = std::min(tout, num / denom);
+    }
+    else if (num < 0)
+    {
+      tout = -std::numeric_limits<double>::infinity();
+    }
+  }
+}
+}
+
+//------------------------------------------------------------------------------
+// Marches one tile: all its cells against all its pixels.
+struct VolumeRayMarcher::Walker
+{
+  template <class Visitor>
+  static int64_t Tile(const CellMesh& mesh, const Bins& bins, const std::vector<RaySetup>& rays,
+    const TileRect& tile, int64_t tileIndex, const TransferTable& table, Visitor& visitor)
+  {
+    const double spacing = table.GetSampleSpacing();
+    const bool cellScalars = mesh.HasCellScalars();
+    int64_t samples = 0;
+    CellCorners corners;
+    CellInterpolator interpolator;
+    visitor.BeginTile(tile);
+    for (int64_t b = bins.Start[tileIndex]; b < bins.Start[tileIndex + 1]; ++b)
+    {
+      const int64_t cell = bins.Cells[b];
+      const auto& r = bins.Rects[cell];
+      const int i0 = std::max(r[0], tile.I0);
+      const int i1 = std::min(r[2], tile.I1 - 1);
+      const int j0 = std::max(r[1], tile.J0);
+      const int j1 = std::min(r[3], tile.J1 - 1);
+      TransferSample cellSample{};
+      if (cellScalars)
+      {
+        cellSample = table.Lookup(mesh.CellScalars[cell]);
+        if (!(cellSample.Absorbance > 0) && !Visitor::WantsSegments)
+        {
+          continue; // an invisible cell
+        }
+      }
+      int planeCount = 0;
+      const FacePlane* planes = mesh.GetPlanes(cell, planeCount);
+      bool haveCorners = false;
+      double pcoords[3] = { 0, 0, 0 };
+      for (int j = j0; j <= j1; ++j)
+      {
+        for (int i = i0; i <= i1; ++i)
+        {
+          const int local = (j - tile.J0) * tile.Width() + (i - tile.I0);
+          const RaySetup& ray = rays[local];
+          double tin = 0.0;
+          double tout = ray.End;
+          ClipRay(ray, planes, planeCount, tin, tout);
+          if (!(tin < tout))
+          {
+            continue;
+          }
+          visitor.Segment(local, tin, tout);
+          if (!Visitor::WantsSamples)
+          {
+            continue;
+          }
+          // Lattice samples in [tin, tout): t_k = k * spacing, the same points on every rank.
+          int64_t k = static_cast<int64_t>(std::ceil(tin / spacing));
+          if (static_cast<double>(k) * spacing < tin)
+          {
+            ++k;
+          }
+          for (double t = static_cast<double>(k) * spacing; t < tout;
+               ++k, t = static_cast<double>(k) * spacing)
+          {
+            TransferSample s = cellSample;
+            if (!cellScalars)
+            {
+              if (!haveCorners)
+              {
+                // Set up lazily: most binned cells miss most of their rectangle's rays.
+                mesh.GetCorners(cell, corners);
+                interpolator.Set(corners);
+                ParametricCenter(corners.Shape, pcoords);
+                haveCorners = true;
+              }
+              const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
+                ray.O[2] + t * ray.D[2] };
+              // The previous sample's coordinates are a close first guess for Newton.
+              interpolator.ParametricCoordinates(x, pcoords);
+              s = table.Lookup(interpolator.InterpolateScalar(pcoords));
+            }
+            ++samples;
+            if (s.Absorbance > 0)
+            {
+              visitor.Sample(local, k, t, s);
+            }
+          }
+        }
+      }
+    }
+    visitor.EndTile(tile);
+    return samples;
+  }
+};
+
+//------------------------------------------------------------------------------
+VolumeRayMarcher::VolumeRayMarcher()
+  : TileBins(new Bins)
+{
+}
+
+VolumeRayMarcher::~VolumeRayMarcher() = default;
+
+//------------------------------------------------------------------------------
+void VolumeRayMarcher::SetMesh(const CellMesh* mesh)
+{
+  this->Mesh = mesh;
+}
+
+//------------------------------------------------------------------------------
+void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
+{
+  this->Camera.reset(new RayCamera(camera));
+  const int w = camera.GetWidth();
+  const int h = camera.GetHeight();
+  this->RayEnds.assign(static_cast<size_t>(w) * h, std::numeric_limits<float>::infinity());
+  if (rayEnds)
+  {
+    std::copy(rayEnds, rayEnds + this->RayEnds.size(), this->RayEnds.begin());
+  }
+
+  Bins& bins = *this->TileBins;
+  bins.TilesX = (w + this->TileSize - 1) / this->TileSize;
+  bins.TilesY = (h + this->TileSize - 1) / this->TileSize;
+  const int64_t tiles = static_cast<int64_t>(bins.TilesX) * bins.TilesY;
+  const int64_t numCells = this->Mesh ? this->Mesh->GetNumberOfCells() : 0;
+  bins.Rects.resize(numCells);
+
+  // Screen rectangle of each cell's projected corners; a cell reaching behind the eye
+  // gets the whole screen (conservative), one wholly behind it none.
+  tbb::task_arena arena(this->Threads > 0 ? this->Threads : tbb::task_arena::automatic);
+  arena.execute(
+    [&]
+    {
+      tbb::parallel_for(tbb::blocked_range<int64_t>(0, numCells, 4096),
+        [&](const tbb::blocked_range<int64_t>& range)
+        {
+          for (int64_t cell = range.begin(); cell < range.end(); ++cell)
+          {
+            const int64_t* ids = this->Mesh->GetCellPoints(cell);
+            const int corners = static_cast<int>(this->Mesh->GetShape(cell));
+            double x0 = std::numeric_limits<double>::infinity();
+            double y0 = x0;
+            double x1 = -x0;
+            double y1 = -x0;
+            int behind = 0;
+            for (int c = 0; c < corners; ++c)
+            {
+              double px, py;
+              if (camera.Project(this->Mesh->Points[ids[c]], px, py))
+              {
+                x0 = std::min(x0, px);
+                x1 = std::max(x1, px);
+                y0 = std::min(y0, py);
+                y1 = std::max(y1, py);
+              }
+              else
+              {
+                ++behind;
+              }
+            }
+            std::array<int, 4>& r = bins.Rects[cell];
+            if (behind == corners)
+            {
+              r = { 1, 1, 0, 0 };
+              continue;
+            }
+            if (behind > 0)
+            {
+              x0 = y0 = -1.0;
+              x1 = w;
+              y1 = h;
+            }
+            // Pixel centres sit at integers: the covered ones are ceil(x0) .. floor(x1).
+            r[0] = static_cast<int>(std::max(0.0, std::ceil(x0)));
+            r[1] = static_cast<int>(std::max(0.0, std::ceil(y0)));
+            r[2] = static_cast<int>(std::min(w - 1.0, std::floor(x1)));
+            r[3] = static_cast<int>(std::min(h - 1.0, std::floor(y1)));
+          }
+        });
+    });
+
+  bins.Start.assign(tiles + 1, 0);
+  auto tileRange = [&](const std::array<int, 4>& r, int& tx0, int& ty0, int& tx1, int& ty1)
+  {
+    tx0 = r[0] / this->TileSize;
+    ty0 = r[1] / this->TileSize;
+    tx1 = r[2] / this->TileSize;
+    ty1 = r[3] / this->TileSize;
+  };
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const auto& r = bins.Rects[cell];
+    if (r[0] > r[2] || r[1] > r[3])
+    {
+      continue;
+    }
+    int tx0, ty0, tx1, ty1;
+    tileRange(r, tx0, ty0, tx1, ty1);
+    for (int ty = ty0; ty <= ty1; ++ty)
+    {
+      for (int tx = tx0; tx <= tx1; ++tx)
+      {
+        ++bins.Start[static_cast<int64_t>(ty) * bins.TilesX + tx + 1];
+      }
+    }
+  }
+  for (int64_t t = 0; t < tiles; ++t)
+  {
+    bins.Start[t + 1] += bins.Start[t];
+  }
+  bins.Cells.resize(bins.Start[tiles]);
+  std::vector<int64_t> fill(bins.Start.begin(), bins.Start.end() - 1);
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const auto& r = bins.Rects[cell];
+    if (r[0] > r[2] || r[1] > r[3])
+    {
+      continue;
+    }
+    int tx0, ty0, tx1, ty1;
+    tileRange(r, tx0, ty0, tx1, ty1);
+    for (int ty = ty0; ty <= ty1; ++ty)
+    {
+      for (int tx = tx0; tx <= tx1; ++tx)
+      {
+        bins.Cells[fill[static_cast<int64_t>(ty) * bins.TilesX + tx]++] = cell;
+      }
+    }
+  }
+}
+
+//------------------------------------------------------------------------------
+template <class Visitor>
+void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
+{
+  this->LastSamples = 0;
+  if (!this->Mesh || !this->Camera || this->Mesh->GetNumberOfCells() == 0)
+  {
+    return;
+  }
+  const Bins& bins = *this->TileBins;
+  const int w = this->Camera->GetWidth();
+  const int h = this->Camera->GetHeight();
+  const int64_t tiles = static_cast<int64_t>(bins.TilesX) * bins.TilesY;
+  tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
+  tbb::combinable<int64_t> samples([] { return int64_t(0); });
+  tbb::combinable<std::vector<RaySetup>> rayBuffers;
+
+  tbb::task_arena arena(this->Threads > 0 ? this->Threads : tbb::task_arena::automatic);
+  arena.execute(
+    [&]
+    {
+      tbb::parallel_for(tbb::blocked_range<int64_t>(0, tiles, 1),
+        [&](const tbb::blocked_range<int64_t>& range)
+        {
+          Visitor& visitor = visitors.local();
+          std::vector<RaySetup>& rays = rayBuffers.local();
+          for (int64_t t = range.begin(); t < range.end(); ++t)
+          {
+            if (bins.Start[t] == bins.Start[t + 1])
+            {
+              continue;
+            }
+            const int tx = static_cast<int>(t % bins.TilesX);
+            const int ty = static_cast<int>(t / bins.TilesX);
+            const TileRect tile = { tx * this->TileSize, ty * this->TileSize,
+              std::min(w, (tx + 1) * this->TileSize), std::min(h, (ty + 1) * this->TileSize) };
+            rays.resize(tile.Pixels());
+            for (int j = tile.J0; j < tile.J1; ++j)
+            {
+              for (int i = tile.I0; i < tile.I1; ++i)
+              {
+                const Ray ray = this->Camera->PixelRay(i, j);
+                RaySetup& r = rays[(j - tile.J0) * tile.Width() + (i - tile.I0)];
+                std::copy(ray.Origin.begin(), ray.Origin.end(), r.O);
+                std::copy(ray.Direction.begin(), ray.Direction.end(), r.D);
+                r.End = this->RayEnds[static_cast<int64_t>(j) * w + i];
+              }
+            }
+            samples.local() += Walker::Tile(*this->Mesh, bins, rays, tile, t, table, visitor);
+          }
+        });
+    });
+  this->LastSamples = samples.combine(std::plus<int64_t>());
+}
+
+//------------------------------------------------------------------------------
+void VolumeRayMarcher::RenderExact(const TransferTable& table, float* rgba)
+{
+  ExactVisitor visitor{ rgba, this->Camera ? this->Camera->GetWidth() : 0, {} };
+  this->March(visitor, table);
+}
+
+//------------------------------------------------------------------------------
+template <int N>
+void VolumeRayMarcher::AccumulateMoments(
+  const TransferTable& table, const LogDepthWarp& warp, double* moments)
+{
+  MomentVisitor<N> visitor{ moments, this->Camera ? this->Camera->GetWidth() : 0, &warp, {} };
+  this->March(visitor, table);
+}
+
+//------------------------------------------------------------------------------
+template <int N>
+void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDepthWarp& warp,
+  const double* moments, const MomentSettings<N>& settings, double* colourSums)
+{
+  ColourVisitor<N> visitor{ colourSums, this->Camera ? this->Camera->GetWidth() : 0, &warp, moments,
+    &settings, {}, {} };
+  this->March(visitor, table);
+}
+
+//------------------------------------------------------------------------------
+void VolumeRayMarcher::CountSegments(int32_t* counts)
+{
+  // Segments take no samples, so the transfer function is never read.
+  static const TransferTable none(0.0, 1.0, {}, {}, 1.0, 1.0);
+  double diagonal = 1.0;
+  if (this->Mesh && this->Mesh->GetNumberOfCells() > 0)
+  {
+    const auto& b = this->Mesh->GetBounds();
+    diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
+      (b[5] - b[4]) * (b[5] - b[4]));
+  }
+  SegmentVisitor visitor{ counts, this->Camera ? this->Camera->GetWidth() : 0, 1e-9 * diagonal,
+    {} };
+  this->March(visitor, none);
+}
+
+template void VolumeRayMarcher::AccumulateMoments<4>(
+  const TransferTable&, const LogDepthWarp&, double*);
+template void VolumeRayMarcher::AccumulateMoments<6>(
+  const TransferTable&, const LogDepthWarp&, double*);
+template void VolumeRayMarcher::AccumulateMoments<8>(
+  const TransferTable&, const LogDepthWarp&, double*);
+template void VolumeRayMarcher::AccumulateColour<4>(
+  const TransferTable&, const LogDepthWarp&, const double*, const MomentSettings<4>&, double*);
+template void VolumeRayMarcher::AccumulateColour<6>(
+  const TransferTable&, const LogDepthWarp&, const double*, const MomentSettings<6>&, double*);
+template void VolumeRayMarcher::AccumulateColour<8>(
+  const TransferTable&, const LogDepthWarp&, const double*, const MomentSettings<8>&, double*);
+
+} // namespace apc
