@@ -26,6 +26,7 @@
 #include "vtkVolumeProperty.h"
 
 #include "apcCellMesh.h"
+#include "apcCellMeshFromVTK.h"
 #include "apcDepthWarp.h"
 #include "apcMomentTransmittance.h"
 #include "apcRayCamera.h"
@@ -34,6 +35,7 @@
 #include "apcVolumeRayMarcher.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -49,56 +51,34 @@ namespace
 // the opacity ramps of typical volume renderings.
 constexpr int kTableSize = 1024;
 
-bool ShapeOf(int vtkType, apc::CellShape& shape)
+// Wall-clock seconds of the stages of one frame, in the order they ran.
+class StageClock
 {
-  switch (vtkType)
+public:
+  void Lap(const std::string& stage)
   {
-    case VTK_TETRA:
-      shape = apc::CellShape::Tetra;
-      return true;
-    case VTK_PYRAMID:
-      shape = apc::CellShape::Pyramid;
-      return true;
-    case VTK_WEDGE:
-      shape = apc::CellShape::Wedge;
-      return true;
-    case VTK_HEXAHEDRON:
-    case VTK_VOXEL:
-      shape = apc::CellShape::Hexahedron;
-      return true;
-    default:
-      return false;
+    const auto now = std::chrono::steady_clock::now();
+    this->Seconds.emplace_back(stage, std::chrono::duration<double>(now - this->Last).count());
+    this->Last = now;
   }
-}
+  std::vector<std::pair<std::string, double>> Seconds;
 
-double ScalarValue(vtkDataArray* array, vtkIdType tuple)
-{
-  const int components = array->GetNumberOfComponents();
-  if (components == 1)
-  {
-    return array->GetComponent(tuple, 0);
-  }
-  // Multi-component arrays render their magnitude, ParaView's default for vectors.
-  double sum = 0;
-  for (int c = 0; c < components; ++c)
-  {
-    const double v = array->GetComponent(tuple, c);
-    sum += v * v;
-  }
-  return std::sqrt(sum);
-}
+private:
+  std::chrono::steady_clock::time_point Last = std::chrono::steady_clock::now();
+};
 
 template <int N>
 void RenderMBOIT(apc::VolumeRayMarcher& marcher, const apc::TransferTable& table,
   const apc::LogDepthWarp& warp, double overestimation, double bias, int resolveMode,
   std::vector<double>& moments, std::vector<double>& colourSums, std::vector<float>& rgba,
-  int64_t& samples)
+  int64_t& samples, StageClock& clock)
 {
   const size_t pixels = rgba.size() / 4;
   moments.assign(pixels * (N + 1), 0.0);
   colourSums.assign(pixels * 4, 0.0);
   marcher.AccumulateMoments<N>(table, warp, moments.data());
   samples = marcher.GetLastSampleCount();
+  clock.Lap("moments");
   apc::MomentSettings<N> settings;
   settings.Overestimation = overestimation;
   if (bias >= 0)
@@ -106,6 +86,7 @@ void RenderMBOIT(apc::VolumeRayMarcher& marcher, const apc::TransferTable& table
     settings.Bias = bias;
   }
   marcher.AccumulateColour<N>(table, warp, moments.data(), settings, colourSums.data());
+  clock.Lap("colour");
   const apc::ResolveMode mode = resolveMode == vtkAPCVolumeMapper::PAPER_SUM
     ? apc::ResolveMode::PaperSum
     : apc::ResolveMode::Renormalised;
@@ -119,6 +100,7 @@ void RenderMBOIT(apc::VolumeRayMarcher& marcher, const apc::TransferTable& table
       rgba[4 * p + c] = static_cast<float>(out[c]);
     }
   }
+  clock.Lap("resolve");
 }
 }
 
@@ -131,6 +113,7 @@ struct vtkAPCVolumeMapper::Internals
   apc::VolumeRayMarcher Marcher;
   vtkNew<vtkImageData> Image;
   double LastSpacing = 0.0;
+  StageClock Clock;
 };
 
 //------------------------------------------------------------------------------
@@ -207,12 +190,15 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       << (this->ArrayName ? this->ArrayName : "<none>") << ").");
     return;
   }
+  internal.Clock = StageClock();
   std::ostringstream key;
   key << scalars << ' ' << scalars->GetMTime() << ' ' << cellFlag;
   if (!internal.MeshValid || internal.MeshInputTime < input->GetMTime() ||
     internal.MeshScalarKey != key.str())
   {
-    if (!this->BuildMesh(input, scalars, cellFlag == 1))
+    const bool built = this->BuildMesh(input, scalars, cellFlag == 1);
+    internal.Clock.Lap("mesh");
+    if (!built)
     {
       return;
     }
@@ -227,81 +213,31 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
 }
 
 //------------------------------------------------------------------------------
+double vtkAPCVolumeMapper::GetLastStageSeconds(const char* stage) const
+{
+  double seconds = 0.0;
+  for (const auto& entry : this->Internal->Clock.Seconds)
+  {
+    if (!stage || entry.first == stage)
+    {
+      seconds += entry.second;
+    }
+  }
+  return seconds;
+}
+
+//------------------------------------------------------------------------------
 bool vtkAPCVolumeMapper::BuildMesh(
   vtkUnstructuredGridBase* input, vtkDataArray* scalars, bool cellData)
 {
   Internals& internal = *this->Internal;
-  internal.MeshValid = false;
-  internal.Mesh = apc::CellMesh();
-  apc::CellMesh& mesh = internal.Mesh;
-
-  const vtkIdType numPoints = input->GetNumberOfPoints();
-  mesh.Points.resize(numPoints);
-  for (vtkIdType p = 0; p < numPoints; ++p)
+  std::string message;
+  internal.MeshValid = apc::CellMeshFromVTK(input, scalars, cellData, internal.Mesh, message);
+  if (!message.empty())
   {
-    input->GetPoint(p, mesh.Points[p].data());
+    vtkErrorMacro(<< message);
   }
-  if (!cellData)
-  {
-    mesh.PointScalars.resize(numPoints);
-    for (vtkIdType p = 0; p < numPoints; ++p)
-    {
-      mesh.PointScalars[p] = static_cast<float>(ScalarValue(scalars, p));
-    }
-  }
-
-  vtkUnsignedCharArray* ghosts = input->GetCellGhostArray();
-  const unsigned char skipMask =
-    vtkDataSetAttributes::DUPLICATECELL | vtkDataSetAttributes::HIDDENCELL;
-  std::map<int, vtkIdType> unsupported;
-  vtkNew<vtkIdList> cellPoints;
-  const vtkIdType numCells = input->GetNumberOfCells();
-  for (vtkIdType c = 0; c < numCells; ++c)
-  {
-    if (ghosts && (ghosts->GetValue(c) & skipMask))
-    {
-      continue;
-    }
-    const int type = input->GetCellType(c);
-    apc::CellShape shape;
-    if (!ShapeOf(type, shape))
-    {
-      ++unsupported[type];
-      continue;
-    }
-    input->GetCellPoints(c, cellPoints);
-    const vtkIdType* ids = cellPoints->GetPointer(0);
-    int64_t corners[8];
-    for (int i = 0; i < static_cast<int>(shape); ++i)
-    {
-      corners[i] = type == VTK_VOXEL ? ids[apc::kVoxelToHexahedron[i]] : ids[i];
-    }
-    mesh.AddCell(shape, corners);
-    if (cellData)
-    {
-      mesh.CellScalars.push_back(static_cast<float>(ScalarValue(scalars, c)));
-    }
-  }
-  if (!unsupported.empty())
-  {
-    std::ostringstream message;
-    message << "Skipped cells of types the APC mapper does not support (it renders tetrahedra, "
-               "pyramids, wedges, hexahedra and voxels; decompose polyhedra and quadratic "
-               "cells first, e.g. the OpenFOAM reader's Decompose polyhedra):";
-    for (const auto& entry : unsupported)
-    {
-      message << ' ' << vtkCellTypes::GetClassNameFromTypeId(entry.first) << " x" << entry.second;
-    }
-    vtkErrorMacro(<< message.str());
-  }
-  std::string error;
-  if (!mesh.Finalize(&error))
-  {
-    vtkErrorMacro("Unusable input mesh: " << error);
-    return false;
-  }
-  internal.MeshValid = true;
-  return true;
+  return internal.MeshValid;
 }
 
 //------------------------------------------------------------------------------
@@ -393,6 +329,8 @@ void vtkAPCVolumeMapper::RenderFrame(
   marcher.SetNumberOfThreads(this->NumberOfThreads);
   marcher.SetMesh(&internal.Mesh);
   marcher.SetView(camera, rayEnds.data());
+  StageClock& clock = internal.Clock;
+  clock.Lap("setup");
 
   std::vector<float> rgba(4 * pixels, 0.0f);
   std::vector<double> moments;
@@ -402,6 +340,7 @@ void vtkAPCVolumeMapper::RenderFrame(
   {
     marcher.RenderExact(table, rgba.data());
     samples = marcher.GetLastSampleCount();
+    clock.Lap("exact");
   }
   else
   {
@@ -413,15 +352,15 @@ void vtkAPCVolumeMapper::RenderFrame(
     {
       case 6:
         RenderMBOIT<6>(marcher, table, warp, this->Overestimation, this->MomentBias,
-          this->ResolveMode, moments, colourSums, rgba, samples);
+          this->ResolveMode, moments, colourSums, rgba, samples, clock);
         break;
       case 8:
         RenderMBOIT<8>(marcher, table, warp, this->Overestimation, this->MomentBias,
-          this->ResolveMode, moments, colourSums, rgba, samples);
+          this->ResolveMode, moments, colourSums, rgba, samples, clock);
         break;
       default:
         RenderMBOIT<4>(marcher, table, warp, this->Overestimation, this->MomentBias,
-          this->ResolveMode, moments, colourSums, rgba, samples);
+          this->ResolveMode, moments, colourSums, rgba, samples, clock);
     }
   }
 
@@ -452,6 +391,10 @@ void vtkAPCVolumeMapper::RenderFrame(
     array->SetNumberOfTuples(static_cast<vtkIdType>(pixels));
     std::copy(counts.begin(), counts.end(), array->GetPointer(0));
     image->GetPointData()->AddArray(array);
+  }
+  if (this->ComputeSegmentCount)
+  {
+    clock.Lap("segments");
   }
   vtkNew<vtkDoubleArray> sampleCount;
   sampleCount->SetName("SampleCount");

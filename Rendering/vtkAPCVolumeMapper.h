@@ -149,6 +149,14 @@ public:
   ///@}
 
   /**
+   * Wall-clock seconds the last frame spent in a stage: "mesh" (copying the input, only when
+   * it changed), "setup" (transfer function, camera, depth buffer, binning cells to tiles),
+   * "exact", "moments" (MBOIT pass 1), "colour" (pass 2), "resolve", "segments", "blend";
+   * null gives the total.
+   */
+  double GetLastStageSeconds(const char* stage) const;
+
+  /**
    * The effective sample distance of the last frame.
    */
   double GetLastSampleDistance() const;
