@@ -168,7 +168,9 @@ inline Frame Render(vtkDataSet* grid, const std::function<void(vtkAPCVolumeMappe
   camera->SetParallelProjection(view.Parallel);
   camera->SetParallelScale(view.ParallelScale);
   camera->SetViewAngle(view.ViewAngle);
-  renderer->ResetCameraClippingRange(-2, 2, -2, 2, -2, 2);
+  double bounds[6];
+  grid->GetBounds(bounds);
+  renderer->ResetCameraClippingRange(bounds);
   window->Render();
 
   Frame frame;
