@@ -436,30 +436,26 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
         });
     });
 
-  bins.Start.assign(tiles + 1, 0);
-  auto tileRange = [&](const std::array<int, 4>& r, int& tx0, int& ty0, int& tx1, int& ty1)
-  {
-    tx0 = r[0] / this->TileSize;
-    ty0 = r[1] / this->TileSize;
-    tx1 = r[2] / this->TileSize;
-    ty1 = r[3] / this->TileSize;
-  };
-  for (int64_t cell = 0; cell < numCells; ++cell)
+  // Counting sort of (tile, cell) pairs: one pass counts, the second fills.
+  auto forEachTileOf = [&](int64_t cell, auto&& visit)
   {
     const auto& r = bins.Rects[cell];
     if (r[0] > r[2] || r[1] > r[3])
     {
-      continue;
+      return;
     }
-    int tx0, ty0, tx1, ty1;
-    tileRange(r, tx0, ty0, tx1, ty1);
-    for (int ty = ty0; ty <= ty1; ++ty)
+    for (int ty = r[1] / this->TileSize; ty <= r[3] / this->TileSize; ++ty)
     {
-      for (int tx = tx0; tx <= tx1; ++tx)
+      for (int tx = r[0] / this->TileSize; tx <= r[2] / this->TileSize; ++tx)
       {
-        ++bins.Start[static_cast<int64_t>(ty) * bins.TilesX + tx + 1];
+        visit(static_cast<int64_t>(ty) * bins.TilesX + tx);
       }
     }
+  };
+  bins.Start.assign(tiles + 1, 0);
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    forEachTileOf(cell, [&](int64_t tile) { ++bins.Start[tile + 1]; });
   }
   for (int64_t t = 0; t < tiles; ++t)
   {
@@ -469,20 +465,7 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
   std::vector<int64_t> fill(bins.Start.begin(), bins.Start.end() - 1);
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
-    const auto& r = bins.Rects[cell];
-    if (r[0] > r[2] || r[1] > r[3])
-    {
-      continue;
-    }
-    int tx0, ty0, tx1, ty1;
-    tileRange(r, tx0, ty0, tx1, ty1);
-    for (int ty = ty0; ty <= ty1; ++ty)
-    {
-      for (int tx = tx0; tx <= tx1; ++tx)
-      {
-        bins.Cells[fill[static_cast<int64_t>(ty) * bins.TilesX + tx]++] = cell;
-      }
-    }
+    forEachTileOf(cell, [&](int64_t tile) { bins.Cells[fill[tile]++] = cell; });
   }
 }
 
