@@ -2,25 +2,19 @@
 #include "vtkAPCVolumeMapper.h"
 
 #include "vtkCamera.h"
-#include "vtkCellType.h"
-#include "vtkCellTypes.h"
 #include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
-#include "vtkDataSetAttributes.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkFloatArray.h"
-#include "vtkIdList.h"
 #include "vtkImageData.h"
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
-#include "vtkPoints.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
-#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
@@ -38,7 +32,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -68,39 +61,76 @@ private:
 };
 
 template <int N>
-void RenderMBOIT(apc::VolumeRayMarcher& marcher, const apc::TransferTable& table,
-  const apc::LogDepthWarp& warp, double overestimation, double bias, int resolveMode,
-  std::vector<double>& moments, std::vector<double>& colourSums, std::vector<float>& rgba,
-  int64_t& samples, StageClock& clock)
+apc::MomentSettings<N> Settings(double overestimation, double bias)
 {
-  const size_t pixels = rgba.size() / 4;
-  moments.assign(pixels * (N + 1), 0.0);
-  colourSums.assign(pixels * 4, 0.0);
-  marcher.AccumulateMoments<N>(table, warp, moments.data());
-  samples = marcher.GetLastSampleCount();
-  clock.Lap("moments");
   apc::MomentSettings<N> settings;
   settings.Overestimation = overestimation;
   if (bias >= 0)
   {
     settings.Bias = bias;
   }
-  marcher.AccumulateColour<N>(table, warp, moments.data(), settings, colourSums.data());
-  clock.Lap("colour");
-  const apc::ResolveMode mode = resolveMode == vtkAPCVolumeMapper::PAPER_SUM
-    ? apc::ResolveMode::PaperSum
-    : apc::ResolveMode::Renormalised;
-  for (size_t p = 0; p < pixels; ++p)
+  return settings;
+}
+
+std::unique_ptr<apc::TransferTable> MakeTable(vtkVolumeProperty* property, double spacing)
+{
+  // Tables over the union of the colour and opacity ranges.
+  vtkPiecewiseFunction* opacity = property->GetScalarOpacity(0);
+  double range[2];
+  opacity->GetRange(range);
+  std::vector<double> rgb(3 * kTableSize);
+  if (property->GetColorChannels(0) == 1)
   {
-    apc::ColourSums sums;
-    std::copy(colourSums.begin() + 4 * p, colourSums.begin() + 4 * p + 4, sums.Data());
-    const apc::RGBA out = apc::Resolve(mode, sums, moments[p * (N + 1)]);
-    for (int c = 0; c < 4; ++c)
+    vtkPiecewiseFunction* gray = property->GetGrayTransferFunction(0);
+    double grayRange[2];
+    gray->GetRange(grayRange);
+    range[0] = std::min(range[0], grayRange[0]);
+    range[1] = std::max(range[1], grayRange[1]);
+    std::vector<double> g(kTableSize);
+    gray->GetTable(range[0], range[1], kTableSize, g.data());
+    for (int i = 0; i < kTableSize; ++i)
     {
-      rgba[4 * p + c] = static_cast<float>(out[c]);
+      rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = g[i];
     }
   }
-  clock.Lap("resolve");
+  else
+  {
+    vtkColorTransferFunction* colour = property->GetRGBTransferFunction(0);
+    const double* colourRange = colour->GetRange();
+    range[0] = std::min(range[0], colourRange[0]);
+    range[1] = std::max(range[1], colourRange[1]);
+    colour->GetTable(range[0], range[1], kTableSize, rgb.data());
+  }
+  std::vector<std::array<float, 3>> colours(kTableSize);
+  for (int i = 0; i < kTableSize; ++i)
+  {
+    colours[i] = { static_cast<float>(rgb[3 * i]), static_cast<float>(rgb[3 * i + 1]),
+      static_cast<float>(rgb[3 * i + 2]) };
+  }
+  std::vector<double> alphas(kTableSize);
+  opacity->GetTable(range[0], range[1], kTableSize, alphas.data());
+  return std::unique_ptr<apc::TransferTable>(new apc::TransferTable(
+    range[0], range[1], colours, alphas, spacing, property->GetScalarOpacityUnitDistance(0)));
+}
+
+std::unique_ptr<apc::RayCamera> MakeCamera(vtkRenderer* ren, int width, int height)
+{
+  vtkCamera* cam = ren->GetActiveCamera();
+  double clip[2];
+  cam->GetClippingRange(clip);
+  double viewAngle = cam->GetViewAngle();
+  if (cam->GetUseHorizontalViewAngle())
+  {
+    const double pi = 3.14159265358979323846;
+    viewAngle =
+      2.0 * std::atan(std::tan(0.5 * viewAngle * pi / 180.0) * height / width) * 180.0 / pi;
+  }
+  const double* p = cam->GetPosition();
+  const double* f = cam->GetFocalPoint();
+  const double* u = cam->GetViewUp();
+  return std::unique_ptr<apc::RayCamera>(
+    new apc::RayCamera({ p[0], p[1], p[2] }, { f[0], f[1], f[2] }, { u[0], u[1], u[2] }, viewAngle,
+      cam->GetParallelProjection() != 0, cam->GetParallelScale(), width, height, clip[0], clip[1]));
 }
 }
 
@@ -111,9 +141,24 @@ struct vtkAPCVolumeMapper::Internals
   vtkMTimeType MeshInputTime = 0;
   std::string MeshScalarKey;
   apc::VolumeRayMarcher Marcher;
+
+  // The prepared frame.
+  bool FrameReady = false;
+  int Width = 0;
+  int Height = 0;
+  int X0 = 0;
+  int Y0 = 0;
+  double Spacing = 0.0;
+  double DepthRange[2] = { 0.0, 0.0 };
+  std::unique_ptr<apc::TransferTable> Table;
+  std::unique_ptr<apc::RayCamera> Camera;
+  std::unique_ptr<apc::LogDepthWarp> Warp;
+  int64_t Samples = 0;
+
   vtkNew<vtkImageData> Image;
-  double LastSpacing = 0.0;
   StageClock Clock;
+
+  size_t Pixels() const { return static_cast<size_t>(this->Width) * this->Height; }
 };
 
 //------------------------------------------------------------------------------
@@ -147,69 +192,17 @@ vtkImageData* vtkAPCVolumeMapper::GetLastImage()
 
 double vtkAPCVolumeMapper::GetLastSampleDistance() const
 {
-  return this->Internal->LastSpacing;
+  return this->Internal->Spacing;
 }
 
-//------------------------------------------------------------------------------
-void vtkAPCVolumeMapper::ReleaseGraphicsResources(vtkWindow*) {}
-
-//------------------------------------------------------------------------------
-void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
+int vtkAPCVolumeMapper::GetFrameWidth() const
 {
-  Internals& internal = *this->Internal;
-  int width = 0;
-  int height = 0;
-  int x0 = 0;
-  int y0 = 0;
-  ren->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
-  internal.Image->Initialize();
-  if (width < 1 || height < 1)
-  {
-    return;
-  }
+  return this->Internal->Width;
+}
 
-  vtkUnstructuredGridBase* input = this->GetInput();
-  if (!input)
-  {
-    vtkErrorMacro("No vtkUnstructuredGrid input: nothing to render.");
-    return;
-  }
-  if (input->GetNumberOfCells() == 0)
-  {
-    return; // an empty piece renders nothing, silently
-  }
-
-  // Rebuild the ray marcher's mesh only when the data or the scalar selection changed.
-  int cellFlag = 0;
-  vtkDataArray* scalars = vtkAbstractMapper::GetScalars(
-    input, this->ScalarMode, this->ArrayAccessMode, this->ArrayId, this->ArrayName, cellFlag);
-  if (!scalars)
-  {
-    vtkErrorMacro("The input has no scalars to render (ScalarMode "
-      << this->GetScalarModeAsString() << ", array "
-      << (this->ArrayName ? this->ArrayName : "<none>") << ").");
-    return;
-  }
-  internal.Clock = StageClock();
-  std::ostringstream key;
-  key << scalars << ' ' << scalars->GetMTime() << ' ' << cellFlag;
-  if (!internal.MeshValid || internal.MeshInputTime < input->GetMTime() ||
-    internal.MeshScalarKey != key.str())
-  {
-    const bool built = this->BuildMesh(input, scalars, cellFlag == 1);
-    internal.Clock.Lap("mesh");
-    if (!built)
-    {
-      return;
-    }
-    internal.MeshInputTime = input->GetMTime();
-    internal.MeshScalarKey = key.str();
-  }
-  if (internal.Mesh.GetNumberOfCells() == 0)
-  {
-    return;
-  }
-  this->RenderFrame(ren, vol, width, height, x0, y0);
+int vtkAPCVolumeMapper::GetFrameHeight() const
+{
+  return this->Internal->Height;
 }
 
 //------------------------------------------------------------------------------
@@ -227,181 +220,241 @@ double vtkAPCVolumeMapper::GetLastStageSeconds(const char* stage) const
 }
 
 //------------------------------------------------------------------------------
-bool vtkAPCVolumeMapper::BuildMesh(
-  vtkUnstructuredGridBase* input, vtkDataArray* scalars, bool cellData)
+void vtkAPCVolumeMapper::ReleaseGraphicsResources(vtkWindow*) {}
+
+//------------------------------------------------------------------------------
+bool vtkAPCVolumeMapper::UpdateMesh()
 {
   Internals& internal = *this->Internal;
+  vtkUnstructuredGridBase* input = this->GetInput();
+  if (!input || input->GetNumberOfCells() == 0)
+  {
+    // An empty piece renders nothing, silently: in parallel that is a normal rank.
+    internal.Mesh = apc::CellMesh();
+    internal.Mesh.Finalize();
+    internal.MeshValid = true;
+    internal.MeshScalarKey.clear();
+    return true;
+  }
+  int cellFlag = 0;
+  vtkDataArray* scalars = vtkAbstractMapper::GetScalars(
+    input, this->ScalarMode, this->ArrayAccessMode, this->ArrayId, this->ArrayName, cellFlag);
+  if (!scalars)
+  {
+    vtkErrorMacro("The input has no scalars to render (ScalarMode "
+      << this->GetScalarModeAsString() << ", array "
+      << (this->ArrayName ? this->ArrayName : "<none>") << ").");
+    internal.MeshValid = false;
+    return false;
+  }
+  // Rebuild the ray marcher's mesh only when the data or the scalar selection changed.
+  std::ostringstream key;
+  key << scalars << ' ' << scalars->GetMTime() << ' ' << cellFlag;
+  if (internal.MeshValid && internal.MeshInputTime >= input->GetMTime() &&
+    internal.MeshScalarKey == key.str())
+  {
+    return true;
+  }
   std::string message;
-  internal.MeshValid = apc::CellMeshFromVTK(input, scalars, cellData, internal.Mesh, message);
+  internal.MeshValid = apc::CellMeshFromVTK(input, scalars, cellFlag == 1, internal.Mesh, message);
   if (!message.empty())
   {
     vtkErrorMacro(<< message);
   }
+  internal.MeshInputTime = input->GetMTime();
+  internal.MeshScalarKey = key.str();
+  internal.Clock.Lap("mesh");
   return internal.MeshValid;
 }
 
 //------------------------------------------------------------------------------
-void vtkAPCVolumeMapper::RenderFrame(
-  vtkRenderer* ren, vtkVolume* vol, int width, int height, int x0, int y0)
+bool vtkAPCVolumeMapper::GetLocalBounds(double bounds[6])
+{
+  if (!this->UpdateMesh() || this->Internal->Mesh.GetNumberOfCells() == 0)
+  {
+    return false;
+  }
+  const auto& b = this->Internal->Mesh.GetBounds();
+  std::copy(b.begin(), b.end(), bounds);
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool vtkAPCVolumeMapper::PrepareFrame(vtkRenderer* ren, vtkVolume* vol, const double* globalBounds,
+  const float* depthBuffer, double globalSampleDistance)
 {
   Internals& internal = *this->Internal;
-  const std::array<double, 6>& bounds = internal.Mesh.GetBounds();
+  internal.Clock = StageClock();
+  internal.FrameReady = false;
+  internal.Image->Initialize();
+  ren->GetTiledSizeAndOrigin(&internal.Width, &internal.Height, &internal.X0, &internal.Y0);
+  if (internal.Width < 1 || internal.Height < 1 || !this->UpdateMesh())
+  {
+    return false;
+  }
+
+  // Everything that must agree between processes comes from the global bounds: the sample
+  // spacing (the lattice) and the depth range of the warp (the moments' axis).
+  std::array<double, 6> bounds = internal.Mesh.GetBounds();
+  if (globalBounds)
+  {
+    std::copy(globalBounds, globalBounds + 6, bounds.begin());
+  }
+  if (!(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
+  {
+    return false; // no cells anywhere
+  }
   const double diagonal = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
     (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
     (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
-  const double spacing = this->SampleDistance > 0 ? this->SampleDistance : diagonal / 256.0;
-  internal.LastSpacing = spacing;
-  if (!(spacing > 0))
+  internal.Spacing = globalSampleDistance > 0
+    ? globalSampleDistance
+    : (this->SampleDistance > 0 ? this->SampleDistance : diagonal / 256.0);
+  if (!(internal.Spacing > 0))
   {
-    return; // a mesh with no extent
+    return false; // a mesh with no extent
   }
-
-  // Transfer function tables over the union of the colour and opacity ranges.
-  vtkVolumeProperty* property = vol->GetProperty();
-  vtkPiecewiseFunction* opacity = property->GetScalarOpacity(0);
-  double range[2];
-  opacity->GetRange(range);
-  std::vector<std::array<float, 3>> colours(kTableSize);
-  std::vector<double> rgb(3 * kTableSize);
-  if (property->GetColorChannels(0) == 1)
-  {
-    vtkPiecewiseFunction* gray = property->GetGrayTransferFunction(0);
-    double grayRange[2];
-    gray->GetRange(grayRange);
-    range[0] = std::min(range[0], grayRange[0]);
-    range[1] = std::max(range[1], grayRange[1]);
-    std::vector<double> g(kTableSize);
-    gray->GetTable(range[0], range[1], kTableSize, g.data());
-    for (int i = 0; i < kTableSize; ++i)
-    {
-      rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = g[i];
-    }
-  }
-  else
-  {
-    vtkColorTransferFunction* colour = property->GetRGBTransferFunction(0);
-    const double* colourRange = colour->GetRange();
-    range[0] = std::min(range[0], colourRange[0]);
-    range[1] = std::max(range[1], colourRange[1]);
-    colour->GetTable(range[0], range[1], kTableSize, rgb.data());
-  }
-  for (int i = 0; i < kTableSize; ++i)
-  {
-    colours[i] = { static_cast<float>(rgb[3 * i]), static_cast<float>(rgb[3 * i + 1]),
-      static_cast<float>(rgb[3 * i + 2]) };
-  }
-  std::vector<double> alphas(kTableSize);
-  opacity->GetTable(range[0], range[1], kTableSize, alphas.data());
-  const apc::TransferTable table(
-    range[0], range[1], colours, alphas, spacing, property->GetScalarOpacityUnitDistance(0));
-
-  // The camera as VTK sees it, and the opaque depth: rays end where geometry is.
-  vtkCamera* cam = ren->GetActiveCamera();
+  internal.Table = MakeTable(vol->GetProperty(), internal.Spacing);
+  internal.Camera = MakeCamera(ren, internal.Width, internal.Height);
   double clip[2];
-  cam->GetClippingRange(clip);
-  double viewAngle = cam->GetViewAngle();
-  if (cam->GetUseHorizontalViewAngle())
+  ren->GetActiveCamera()->GetClippingRange(clip);
+  double tmin = 0;
+  double tmax = 0;
+  internal.Camera->DistanceRange(bounds, tmin, tmax);
+  internal.DepthRange[0] = std::max(tmin, clip[0]);
+  internal.DepthRange[1] = tmax;
+  internal.Warp.reset(new apc::LogDepthWarp(internal.DepthRange[0], internal.DepthRange[1]));
+
+  // Rays end at the opaque geometry: the given depth buffer, or this window's.
+  const size_t pixels = internal.Pixels();
+  std::vector<float> depth;
+  if (!depthBuffer)
   {
-    const double pi = 3.14159265358979323846;
-    viewAngle =
-      2.0 * std::atan(std::tan(0.5 * viewAngle * pi / 180.0) * height / width) * 180.0 / pi;
+    depth.assign(pixels, 1.0f);
+    ren->GetRenderWindow()->GetZbufferData(internal.X0, internal.Y0,
+      internal.X0 + internal.Width - 1, internal.Y0 + internal.Height - 1, depth.data());
+    depthBuffer = depth.data();
   }
-  const apc::RayCamera camera(
-    { cam->GetPosition()[0], cam->GetPosition()[1], cam->GetPosition()[2] },
-    { cam->GetFocalPoint()[0], cam->GetFocalPoint()[1], cam->GetFocalPoint()[2] },
-    { cam->GetViewUp()[0], cam->GetViewUp()[1], cam->GetViewUp()[2] }, viewAngle,
-    cam->GetParallelProjection() != 0, cam->GetParallelScale(), width, height, clip[0], clip[1]);
-  const size_t pixels = static_cast<size_t>(width) * height;
-  std::vector<float> depth(pixels, 1.0f);
-  vtkRenderWindow* window = ren->GetRenderWindow();
-  window->GetZbufferData(x0, y0, x0 + width - 1, y0 + height - 1, depth.data());
   std::vector<float> rayEnds(pixels);
-  for (int j = 0; j < height; ++j)
+  for (int j = 0; j < internal.Height; ++j)
   {
-    for (int i = 0; i < width; ++i)
+    for (int i = 0; i < internal.Width; ++i)
     {
-      const size_t p = static_cast<size_t>(j) * width + i;
-      rayEnds[p] = static_cast<float>(camera.DistanceFromDepth(i, j, depth[p]));
+      const size_t p = static_cast<size_t>(j) * internal.Width + i;
+      rayEnds[p] = static_cast<float>(internal.Camera->DistanceFromDepth(i, j, depthBuffer[p]));
     }
   }
+  internal.Marcher.SetNumberOfThreads(this->NumberOfThreads);
+  internal.Marcher.SetMesh(&internal.Mesh);
+  internal.Marcher.SetView(*internal.Camera, rayEnds.data());
+  internal.Samples = 0;
+  internal.FrameReady = true;
+  internal.Clock.Lap("setup");
+  return true;
+}
 
-  apc::VolumeRayMarcher& marcher = internal.Marcher;
-  marcher.SetNumberOfThreads(this->NumberOfThreads);
-  marcher.SetMesh(&internal.Mesh);
-  marcher.SetView(camera, rayEnds.data());
-  StageClock& clock = internal.Clock;
-  clock.Lap("setup");
-
-  std::vector<float> rgba(4 * pixels, 0.0f);
-  std::vector<double> moments;
-  std::vector<double> colourSums;
-  int64_t samples = 0;
-  if (this->Mode == EXACT)
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::RenderMoments(double* moments)
+{
+  Internals& internal = *this->Internal;
+  if (!internal.FrameReady)
   {
-    marcher.RenderExact(table, rgba.data());
-    samples = marcher.GetLastSampleCount();
-    clock.Lap("exact");
+    return;
   }
-  else
+  switch (this->NumberOfMoments)
   {
-    double tmin = 0;
-    double tmax = 0;
-    camera.DistanceRange(bounds, tmin, tmax);
-    const apc::LogDepthWarp warp(std::max(tmin, clip[0]), tmax);
-    switch (this->NumberOfMoments)
+    case 6:
+      internal.Marcher.AccumulateMoments<6>(*internal.Table, *internal.Warp, moments);
+      break;
+    case 8:
+      internal.Marcher.AccumulateMoments<8>(*internal.Table, *internal.Warp, moments);
+      break;
+    default:
+      internal.Marcher.AccumulateMoments<4>(*internal.Table, *internal.Warp, moments);
+  }
+  internal.Samples = internal.Marcher.GetLastSampleCount();
+  internal.Clock.Lap("moments");
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::RenderColour(const double* moments, double* colourSums)
+{
+  Internals& internal = *this->Internal;
+  if (!internal.FrameReady)
+  {
+    return;
+  }
+  const double beta = this->Overestimation;
+  const double bias = this->MomentBias;
+  switch (this->NumberOfMoments)
+  {
+    case 6:
+      internal.Marcher.AccumulateColour<6>(
+        *internal.Table, *internal.Warp, moments, Settings<6>(beta, bias), colourSums);
+      break;
+    case 8:
+      internal.Marcher.AccumulateColour<8>(
+        *internal.Table, *internal.Warp, moments, Settings<8>(beta, bias), colourSums);
+      break;
+    default:
+      internal.Marcher.AccumulateColour<4>(
+        *internal.Table, *internal.Warp, moments, Settings<4>(beta, bias), colourSums);
+  }
+  internal.Clock.Lap("colour");
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::RenderExactImage(float* rgba)
+{
+  Internals& internal = *this->Internal;
+  if (!internal.FrameReady)
+  {
+    return;
+  }
+  internal.Marcher.RenderExact(*internal.Table, rgba);
+  internal.Samples = internal.Marcher.GetLastSampleCount();
+  internal.Clock.Lap("exact");
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::CountSegments(int* counts)
+{
+  Internals& internal = *this->Internal;
+  if (!internal.FrameReady)
+  {
+    return;
+  }
+  internal.Marcher.CountSegments(counts);
+  internal.Clock.Lap("segments");
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::ResolveImage(
+  const double* moments, const double* colourSums, float* rgba) const
+{
+  const size_t pixels = this->Internal->Pixels();
+  const int stride = this->NumberOfMoments + 1;
+  const apc::ResolveMode mode =
+    this->ResolveMode == PAPER_SUM ? apc::ResolveMode::PaperSum : apc::ResolveMode::Renormalised;
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    apc::ColourSums sums;
+    std::copy(colourSums + 4 * p, colourSums + 4 * p + 4, sums.Data());
+    const apc::RGBA out = apc::Resolve(mode, sums, moments[p * stride]);
+    for (int c = 0; c < 4; ++c)
     {
-      case 6:
-        RenderMBOIT<6>(marcher, table, warp, this->Overestimation, this->MomentBias,
-          this->ResolveMode, moments, colourSums, rgba, samples, clock);
-        break;
-      case 8:
-        RenderMBOIT<8>(marcher, table, warp, this->Overestimation, this->MomentBias,
-          this->ResolveMode, moments, colourSums, rgba, samples, clock);
-        break;
-      default:
-        RenderMBOIT<4>(marcher, table, warp, this->Overestimation, this->MomentBias,
-          this->ResolveMode, moments, colourSums, rgba, samples, clock);
+      rgba[4 * p + c] = static_cast<float>(out[c]);
     }
   }
+  this->Internal->Clock.Lap("resolve");
+}
 
-  // Float images of this frame.
-  vtkImageData* image = internal.Image;
-  image->SetDimensions(width, height, 1);
-  auto addArray = [&](const char* name, int components, auto begin, auto end)
-  {
-    vtkNew<vtkFloatArray> array;
-    array->SetName(name);
-    array->SetNumberOfComponents(components);
-    array->SetNumberOfTuples(static_cast<vtkIdType>(pixels));
-    std::copy(begin, end, array->GetPointer(0));
-    image->GetPointData()->AddArray(array);
-  };
-  addArray("RGBA", 4, rgba.begin(), rgba.end());
-  if (!moments.empty())
-  {
-    addArray("Moments", this->NumberOfMoments + 1, moments.begin(), moments.end());
-    addArray("ColourSums", 4, colourSums.begin(), colourSums.end());
-  }
-  if (this->ComputeSegmentCount)
-  {
-    std::vector<int32_t> counts(pixels, 0);
-    marcher.CountSegments(counts.data());
-    vtkNew<vtkIntArray> array;
-    array->SetName("SegmentCount");
-    array->SetNumberOfTuples(static_cast<vtkIdType>(pixels));
-    std::copy(counts.begin(), counts.end(), array->GetPointer(0));
-    image->GetPointData()->AddArray(array);
-  }
-  if (this->ComputeSegmentCount)
-  {
-    clock.Lap("segments");
-  }
-  vtkNew<vtkDoubleArray> sampleCount;
-  sampleCount->SetName("SampleCount");
-  sampleCount->InsertNextValue(static_cast<double>(samples));
-  image->GetFieldData()->AddArray(sampleCount);
-
-  // Blend over the opaque image. VTK blends straight (non-premultiplied) colour.
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::BlendIntoWindow(vtkRenderer* ren, const float* rgba)
+{
+  Internals& internal = *this->Internal;
+  // VTK blends straight (non-premultiplied) colour.
+  const size_t pixels = internal.Pixels();
   std::vector<float> straight(4 * pixels);
   for (size_t p = 0; p < pixels; ++p)
   {
@@ -413,8 +466,76 @@ void vtkAPCVolumeMapper::RenderFrame(
     }
     straight[4 * p + 3] = std::min(1.0f, std::max(0.0f, a));
   }
-  window->SetRGBAPixelData(
-    x0, y0, x0 + width - 1, y0 + height - 1, straight.data(), window->GetDoubleBuffer() ? 0 : 1, 1);
+  vtkRenderWindow* window = ren->GetRenderWindow();
+  window->SetRGBAPixelData(internal.X0, internal.Y0, internal.X0 + internal.Width - 1,
+    internal.Y0 + internal.Height - 1, straight.data(), window->GetDoubleBuffer() ? 0 : 1, 1);
+  internal.Clock.Lap("blend");
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::StoreImages(
+  const float* rgba, const double* moments, const double* colourSums, const int* segments)
+{
+  Internals& internal = *this->Internal;
+  vtkImageData* image = internal.Image;
+  image->Initialize();
+  image->SetDimensions(internal.Width, internal.Height, 1);
+  const vtkIdType pixels = static_cast<vtkIdType>(internal.Pixels());
+  auto add = [&](auto array, const char* name, int components, const auto* values)
+  {
+    if (!values)
+    {
+      return;
+    }
+    array->SetName(name);
+    array->SetNumberOfComponents(components);
+    array->SetNumberOfTuples(pixels);
+    std::copy(values, values + components * pixels, array->GetPointer(0));
+    image->GetPointData()->AddArray(array);
+  };
+  add(vtkNew<vtkFloatArray>().Get(), "RGBA", 4, rgba);
+  add(vtkNew<vtkFloatArray>().Get(), "Moments", this->NumberOfMoments + 1, moments);
+  add(vtkNew<vtkFloatArray>().Get(), "ColourSums", 4, colourSums);
+  add(vtkNew<vtkIntArray>().Get(), "SegmentCount", 1, segments);
+  vtkNew<vtkDoubleArray> sampleCount;
+  sampleCount->SetName("SampleCount");
+  sampleCount->InsertNextValue(static_cast<double>(internal.Samples));
+  image->GetFieldData()->AddArray(sampleCount);
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
+{
+  if (!this->PrepareFrame(ren, vol, nullptr, nullptr, 0.0) ||
+    this->Internal->Mesh.GetNumberOfCells() == 0)
+  {
+    return;
+  }
+  const size_t pixels = this->Internal->Pixels();
+  std::vector<float> rgba(4 * pixels, 0.0f);
+  std::vector<double> moments;
+  std::vector<double> colourSums;
+  std::vector<int> segments;
+  if (this->Mode == EXACT)
+  {
+    this->RenderExactImage(rgba.data());
+  }
+  else
+  {
+    moments.assign(pixels * (this->NumberOfMoments + 1), 0.0);
+    colourSums.assign(pixels * 4, 0.0);
+    this->RenderMoments(moments.data());
+    this->RenderColour(moments.data(), colourSums.data());
+    this->ResolveImage(moments.data(), colourSums.data(), rgba.data());
+  }
+  if (this->ComputeSegmentCount)
+  {
+    segments.assign(pixels, 0);
+    this->CountSegments(segments.data());
+  }
+  this->StoreImages(rgba.data(), moments.empty() ? nullptr : moments.data(),
+    colourSums.empty() ? nullptr : colourSums.data(), segments.empty() ? nullptr : segments.data());
+  this->BlendIntoWindow(ren, rgba.data());
 }
 
 //------------------------------------------------------------------------------

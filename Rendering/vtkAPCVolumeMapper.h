@@ -164,6 +164,47 @@ public:
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
   void ReleaseGraphicsResources(vtkWindow*) override;
 
+  ///@{
+  /**
+   * The frame stage by stage, for a compositing pass that sums the moment and colour
+   * images across processes (vtkAPCCompositePass) between the stages. Render() is
+   * PrepareFrame, then RenderExactImage or RenderMoments + RenderColour + ResolveImage, then
+   * BlendIntoWindow.
+   *
+   * PrepareFrame copies the input if it changed, samples the transfer function and sets up
+   * the rays of ren's viewport. globalBounds (xmin..zmax of all processes' cells) fixes the
+   * depth warp and the default sample spacing, globalSampleDistance (> 0) the spacing, so
+   * that every process uses the same ones; null / 0 use this process's data. depthBuffer
+   * (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays; null reads
+   * ren's window. Returns false, with an error where the input is at fault, if there is
+   * nothing this process can render; the buffers of the other stages are then left alone,
+   * so an empty process still takes part in the sums with zeros.
+   *
+   * Buffers are W*H pixels (GetFrameWidth/Height), row 0 at the bottom; moments hold
+   * NumberOfMoments+1 doubles per pixel, colour sums 4, images 4 floats (premultiplied
+   * RGBA). Moment and colour buffers are accumulated into (+=).
+   */
+  bool PrepareFrame(vtkRenderer* ren, vtkVolume* vol, const double* globalBounds,
+    const float* depthBuffer, double globalSampleDistance);
+  int GetFrameWidth() const;
+  int GetFrameHeight() const;
+  void RenderMoments(double* moments);
+  void RenderColour(const double* moments, double* colourSums);
+  void RenderExactImage(float* rgba);
+  void CountSegments(int* counts);
+  void ResolveImage(const double* moments, const double* colourSums, float* rgba) const;
+  void BlendIntoWindow(vtkRenderer* ren, const float* rgba);
+  /// Keeps the given buffers (any may be null) as GetLastImage()'s arrays.
+  void StoreImages(
+    const float* rgba, const double* moments, const double* colourSums, const int* segments);
+  ///@}
+
+  /**
+   * Bounds of this process's renderable cells (after ghost and type filtering); false if
+   * there are none or the input is unusable.
+   */
+  bool GetLocalBounds(double bounds[6]);
+
 protected:
   vtkAPCVolumeMapper();
   ~vtkAPCVolumeMapper() override;
@@ -181,8 +222,7 @@ private:
   vtkAPCVolumeMapper(const vtkAPCVolumeMapper&) = delete;
   void operator=(const vtkAPCVolumeMapper&) = delete;
 
-  bool BuildMesh(vtkUnstructuredGridBase* input, vtkDataArray* scalars, bool cellData);
-  void RenderFrame(vtkRenderer* ren, vtkVolume* vol, int width, int height, int x0, int y0);
+  bool UpdateMesh();
 
   struct Internals;
   std::unique_ptr<Internals> Internal;
