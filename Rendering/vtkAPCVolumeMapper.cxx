@@ -223,7 +223,7 @@ double vtkAPCVolumeMapper::GetLastStageSeconds(const char* stage) const
 void vtkAPCVolumeMapper::ReleaseGraphicsResources(vtkWindow*) {}
 
 //------------------------------------------------------------------------------
-bool vtkAPCVolumeMapper::UpdateMesh()
+bool vtkAPCVolumeMapper::UpdateInput()
 {
   Internals& internal = *this->Internal;
   vtkUnstructuredGridBase* input = this->GetInput();
@@ -268,9 +268,9 @@ bool vtkAPCVolumeMapper::UpdateMesh()
 }
 
 //------------------------------------------------------------------------------
-bool vtkAPCVolumeMapper::GetLocalBounds(double bounds[6])
+bool vtkAPCVolumeMapper::GetLocalBounds(double bounds[6]) const
 {
-  if (!this->UpdateMesh() || this->Internal->Mesh.GetNumberOfCells() == 0)
+  if (!this->Internal->MeshValid || this->Internal->Mesh.GetNumberOfCells() == 0)
   {
     return false;
   }
@@ -288,7 +288,7 @@ bool vtkAPCVolumeMapper::PrepareFrame(vtkRenderer* ren, vtkVolume* vol, const do
   internal.FrameReady = false;
   internal.Image->Initialize();
   ren->GetTiledSizeAndOrigin(&internal.Width, &internal.Height, &internal.X0, &internal.Y0);
-  if (internal.Width < 1 || internal.Height < 1 || !this->UpdateMesh())
+  if (internal.Width < 1 || internal.Height < 1 || !this->UpdateInput())
   {
     return false;
   }

@@ -200,10 +200,17 @@ public:
   ///@}
 
   /**
-   * Bounds of this process's renderable cells (after ghost and type filtering); false if
-   * there are none or the input is unusable.
+   * Copies the input for the ray marcher if it changed. False, with an error, if the input is
+   * unusable (cells but no scalars to render, a broken mesh); an empty or missing input is
+   * usable and renders nothing.
    */
-  bool GetLocalBounds(double bounds[6]);
+  bool UpdateInput();
+
+  /**
+   * Bounds of this process's renderable cells (after ghost and type filtering, as of the last
+   * UpdateInput or PrepareFrame); false if there are none.
+   */
+  bool GetLocalBounds(double bounds[6]) const;
 
 protected:
   vtkAPCVolumeMapper();
@@ -221,8 +228,6 @@ protected:
 private:
   vtkAPCVolumeMapper(const vtkAPCVolumeMapper&) = delete;
   void operator=(const vtkAPCVolumeMapper&) = delete;
-
-  bool UpdateMesh();
 
   struct Internals;
   std::unique_ptr<Internals> Internal;

@@ -1,0 +1,328 @@
+// Run under mpirun -np N. Each rank renders only its own cells through vtkAPCCompositePass;
+// the display rank's final float image must equal the one-process MBOIT image of the whole
+// data set to rounding, cells never move, and bad cases (an empty rank, a rank without the
+// scalar array, a 1x1 window) end the frame on every rank instead of hanging.
+
+#include "vtkAPCCompositePass.h"
+#include "vtkAPCPuzzleSource.h"
+#include "vtkAPCVolumeMapper.h"
+
+#include "vtkActor.h"
+#include "vtkAppendFilter.h"
+#include "vtkCamera.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkMPIController.h"
+#include "vtkNew.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkPlaneSource.h"
+#include "vtkPointData.h"
+#include "vtkPolyDataMapper.h"
+#include "vtkProperty.h"
+#include "vtkRenderStepsPass.h"
+#include "vtkRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkSmartPointer.h"
+#include "vtkUnstructuredGrid.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+#include "vtkXMLUnstructuredGridReader.h"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace
+{
+int failures = 0;
+
+void Check(bool ok, int rank, const std::string& what)
+{
+  if (!ok)
+  {
+    std::fprintf(stderr, "rank %d: FAILED: %s\n", rank, what.c_str());
+    ++failures;
+  }
+}
+
+struct Scene
+{
+  vtkSmartPointer<vtkUnstructuredGrid> Grid;
+  double Min, Max; // scalar range of the transfer function
+  double Unit;     // opacity unit distance
+  double Spacing;  // sample distance
+  double Position[3];
+  double FocalPoint[3];
+  double ViewUp[3];
+};
+
+void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const Scene& scene)
+{
+  vtkNew<vtkColorTransferFunction> colour;
+  colour->AddRGBPoint(scene.Min, 0.2, 0.3, 1.0);
+  colour->AddRGBPoint(0.5 * (scene.Min + scene.Max), 0.9, 0.9, 0.9);
+  colour->AddRGBPoint(scene.Max, 1.0, 0.2, 0.1);
+  vtkNew<vtkPiecewiseFunction> opacity;
+  opacity->AddPoint(scene.Min, 0.05);
+  opacity->AddPoint(scene.Max, 0.6);
+  vtkNew<vtkVolumeProperty> property;
+  property->SetColor(colour);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(scene.Unit);
+  mapper->SetSampleDistance(scene.Spacing);
+  volume->SetMapper(mapper);
+  volume->SetProperty(property);
+}
+
+void SetCamera(vtkRenderer* renderer, const Scene& scene, const double bounds[6])
+{
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->SetPosition(scene.Position);
+  camera->SetFocalPoint(scene.FocalPoint);
+  camera->SetViewUp(scene.ViewUp);
+  renderer->ResetCameraClippingRange(bounds);
+}
+
+// The display rank's float RGBA of the distributed render of each rank's piece.
+std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& scene,
+  vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
+  vtkAPCCompositePass* pass)
+{
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->SetSize(size, size);
+  vtkNew<vtkRenderer> renderer;
+  window->AddRenderer(renderer);
+  vtkNew<vtkRenderStepsPass> opaque;
+  pass->SetDelegatePass(opaque);
+  pass->SetController(controller);
+  renderer->SetPass(pass);
+  vtkNew<vtkAPCVolumeMapper> mapper;
+  mapper->SetInputData(piece);
+  vtkNew<vtkVolume> volume;
+  ConfigureVolume(volume, mapper, scene);
+  pass->RemoveAllVolumes();
+  pass->AddVolume(volume);
+  vtkNew<vtkPlaneSource> source;
+  vtkNew<vtkPolyDataMapper> planeMapper;
+  vtkNew<vtkActor> actor;
+  if (plane && controller->GetLocalProcessId() == 0)
+  {
+    // Opaque geometry through the middle of the data, on the display rank only (as after an
+    // IceT composite).
+    source->SetOrigin(globalBounds[0], globalBounds[2], 0.5 * (globalBounds[4] + globalBounds[5]));
+    source->SetPoint1(globalBounds[1], globalBounds[2], 0.5 * (globalBounds[4] + globalBounds[5]));
+    source->SetPoint2(globalBounds[0], 0.5 * (globalBounds[2] + globalBounds[3]),
+      0.5 * (globalBounds[4] + globalBounds[5]));
+    planeMapper->SetInputConnection(source->GetOutputPort());
+    actor->SetMapper(planeMapper);
+    renderer->AddActor(actor);
+  }
+  SetCamera(renderer, scene, globalBounds);
+  window->Render();
+  std::vector<float> rgba;
+  vtkDataArray* array = pass->GetLastImage()->GetPointData()->GetArray("RGBA");
+  if (array)
+  {
+    rgba.resize(array->GetNumberOfTuples() * 4);
+    for (vtkIdType v = 0; v < array->GetNumberOfTuples() * 4; ++v)
+    {
+      rgba[v] = static_cast<float>(array->GetComponent(v / 4, v % 4));
+    }
+  }
+  return rgba;
+}
+
+// The one-process MBOIT image of the whole grid (the reference).
+std::vector<float> RenderWhole(const Scene& scene, int size, bool plane)
+{
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->SetSize(size, size);
+  vtkNew<vtkRenderer> renderer;
+  window->AddRenderer(renderer);
+  vtkNew<vtkAPCVolumeMapper> mapper;
+  mapper->SetInputData(scene.Grid);
+  vtkNew<vtkVolume> volume;
+  ConfigureVolume(volume, mapper, scene);
+  renderer->AddVolume(volume);
+  double b[6];
+  scene.Grid->GetBounds(b);
+  vtkNew<vtkPlaneSource> source;
+  vtkNew<vtkPolyDataMapper> planeMapper;
+  vtkNew<vtkActor> actor;
+  if (plane)
+  {
+    source->SetOrigin(b[0], b[2], 0.5 * (b[4] + b[5]));
+    source->SetPoint1(b[1], b[2], 0.5 * (b[4] + b[5]));
+    source->SetPoint2(b[0], 0.5 * (b[2] + b[3]), 0.5 * (b[4] + b[5]));
+    planeMapper->SetInputConnection(source->GetOutputPort());
+    actor->SetMapper(planeMapper);
+    renderer->AddActor(actor);
+  }
+  SetCamera(renderer, scene, b);
+  window->Render();
+  vtkDataArray* array = mapper->GetLastImage()->GetPointData()->GetArray("RGBA");
+  std::vector<float> rgba(array->GetNumberOfTuples() * 4);
+  for (vtkIdType v = 0; v < array->GetNumberOfTuples() * 4; ++v)
+  {
+    rgba[v] = static_cast<float>(array->GetComponent(v / 4, v % 4));
+  }
+  return rgba;
+}
+
+void GlobalBounds(vtkMPIController* controller, vtkUnstructuredGrid* piece, double bounds[6])
+{
+  double local[6] = { 1e300, -1e300, 1e300, -1e300, 1e300, -1e300 };
+  if (piece->GetNumberOfCells() > 0)
+  {
+    piece->GetBounds(local);
+  }
+  double mins[3] = { local[0], local[2], local[4] };
+  double maxs[3] = { local[1], local[3], local[5] };
+  double gmins[3];
+  double gmaxs[3];
+  controller->AllReduce(mins, gmins, 3, vtkCommunicator::MIN_OP);
+  controller->AllReduce(maxs, gmaxs, 3, vtkCommunicator::MAX_OP);
+  for (int d = 0; d < 3; ++d)
+  {
+    bounds[2 * d] = gmins[d];
+    bounds[2 * d + 1] = gmaxs[d];
+  }
+}
+
+void CompareWithWhole(vtkMPIController* controller, const char* name, const Scene& scene,
+  vtkUnstructuredGrid* piece, int size, bool plane)
+{
+  const int rank = controller->GetLocalProcessId();
+  const vtkIdType cellsBefore = piece->GetNumberOfCells();
+  double bounds[6];
+  GlobalBounds(controller, piece, bounds);
+  vtkNew<vtkAPCCompositePass> pass;
+  const std::vector<float> distributed =
+    RenderDistributed(controller, scene, piece, bounds, size, plane, pass);
+  Check(piece->GetNumberOfCells() == cellsBefore, rank, std::string(name) + ": cells unchanged");
+  Check(!pass->GetLastFrameFailed(), rank, std::string(name) + ": frame rendered");
+  if (rank == 0)
+  {
+    const std::vector<float> whole = RenderWhole(scene, size, plane);
+    double maxDiff = 0;
+    double maxAlpha = 0;
+    Check(distributed.size() == whole.size(), 0, std::string(name) + ": image sizes");
+    for (size_t v = 0; v < std::min(distributed.size(), whole.size()); ++v)
+    {
+      maxDiff = std::max(maxDiff, static_cast<double>(std::abs(distributed[v] - whole[v])));
+      maxAlpha = v % 4 == 3 ? std::max(maxAlpha, static_cast<double>(whole[v])) : maxAlpha;
+    }
+    std::printf("%s on %d ranks: max |distributed - one process| = %.3g (max alpha %.3f), "
+                "%lld pixels composited, %.0f bytes sent by the display rank, "
+                "pass1 %.4f s, allreduce %.4f s, pass2 %.4f s, reduce %.4f s\n",
+      name, controller->GetNumberOfProcesses(), maxDiff, maxAlpha,
+      static_cast<long long>(pass->GetLastCompositedPixels()), pass->GetLastBytesSent(),
+      pass->GetLastStageSeconds("pass1"), pass->GetLastStageSeconds("allreduce"),
+      pass->GetLastStageSeconds("pass2"), pass->GetLastStageSeconds("reduce"));
+    // Float images of double sums taken in another order: 1e-4 leaves room for the one
+    // float rounding of the result and the moment solve's sensitivity.
+    Check(maxDiff <= 1e-4, 0, std::string(name) + ": distributed equals one process");
+    Check(maxAlpha > 0.2, 0, std::string(name) + ": something visible");
+  }
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> PuzzlePiece(int piece, int pieces, int puzzlePieces)
+{
+  vtkNew<vtkAPCPuzzleSource> source;
+  source->SetNumberOfPuzzlePieces(puzzlePieces);
+  source->SetResolution(12);
+  source->SetField(vtkAPCPuzzleSource::SPHERES);
+  source->UpdatePiece(piece, pieces, 0);
+  return source->GetOutput();
+}
+
+vtkSmartPointer<vtkUnstructuredGrid> WindPieces(int rank, int ranks)
+{
+  // The 8 Scotch pieces dealt round robin: rank r owns pieces r, r + N, ...
+  vtkNew<vtkAppendFilter> append;
+  for (int p = rank; p < 8; p += ranks)
+  {
+    vtkNew<vtkXMLUnstructuredGridReader> reader;
+    reader->SetFileName(
+      (std::string(APC_DATA_DIR) + "/windAroundBuildings/wind_" + std::to_string(p) + ".vtu")
+        .c_str());
+    reader->Update();
+    append->AddInputData(reader->GetOutput());
+  }
+  vtkSmartPointer<vtkUnstructuredGrid> grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  if (append->GetNumberOfInputConnections(0) > 0)
+  {
+    append->Update();
+    grid->ShallowCopy(append->GetOutput());
+    grid->GetPointData()->SetActiveScalars("U_mag");
+  }
+  return grid;
+}
+}
+
+int main(int argc, char* argv[])
+{
+  vtkNew<vtkMPIController> controller;
+  controller->Initialize(&argc, &argv);
+  vtkMultiProcessController::SetGlobalController(controller);
+  const int rank = controller->GetLocalProcessId();
+  const int ranks = controller->GetNumberOfProcesses();
+
+  // The gear-teeth puzzle: every rank's bounds overlap every other's.
+  Scene puzzle{ nullptr, 0.0, 1.0, 0.2, 0.02, { 2.5, 1.7, 3.1 }, { 0, 0, 0 }, { 0, 1, 0 } };
+  puzzle.Grid = PuzzlePiece(0, 1, ranks);
+  CompareWithWhole(controller, "puzzle", puzzle, PuzzlePiece(rank, ranks, ranks), 96, false);
+  CompareWithWhole(controller, "puzzle+plane", puzzle, PuzzlePiece(rank, ranks, ranks), 96, true);
+
+  // Fewer pieces than ranks: a rank with no cells at all.
+  if (ranks > 1)
+  {
+    Scene sparse = puzzle;
+    sparse.Grid = PuzzlePiece(0, 1, ranks - 1);
+    CompareWithWhole(
+      controller, "empty-rank", sparse, PuzzlePiece(rank, ranks, ranks - 1), 64, false);
+  }
+
+  // Real data: OpenFOAM windAroundBuildings, Scotch pieces.
+  Scene wind{ nullptr, 0.0, 20.0, 20.0, 2.0, { -120, -260, 420 }, { 155, 90, 40 }, { 0, 0, 1 } };
+  wind.Grid = WindPieces(0, 1);
+  CompareWithWhole(controller, "wind", wind, WindPieces(rank, ranks), 96, false);
+
+  // A rank without the scalar array: every rank must skip the frame, none may hang.
+  {
+    auto piece = PuzzlePiece(rank, ranks, ranks);
+    if (rank == ranks - 1)
+    {
+      piece->GetPointData()->RemoveArray("Spheres");
+    }
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+    Check(pass->GetLastFrameFailed(), rank, "missing scalars: the frame is skipped everywhere");
+  }
+
+  // A 1x1 window.
+  {
+    auto piece = PuzzlePiece(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, puzzle, piece, bounds, 1, false, pass);
+    Check(!pass->GetLastFrameFailed(), rank, "1x1 window renders");
+  }
+
+  int globalFailures = 0;
+  controller->AllReduce(&failures, &globalFailures, 1, vtkCommunicator::SUM_OP);
+  if (rank == 0)
+  {
+    std::printf("%s: %d failure(s) on %d ranks\n", globalFailures ? "FAILED" : "PASSED",
+      globalFailures, ranks);
+  }
+  controller->Finalize();
+  return globalFailures == 0 ? 0 : 1;
+}
