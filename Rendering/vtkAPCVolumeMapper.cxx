@@ -11,13 +11,21 @@
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
+#include "vtkOpenGLQuadHelper.h"
+#include "vtkOpenGLRenderUtilities.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLShaderCache.h"
+#include "vtkOpenGLState.h"
 #include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
+#include "vtkShaderProgram.h"
+#include "vtkTextureObject.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
+#include "vtk_glew.h"
 
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
@@ -452,23 +460,50 @@ void vtkAPCVolumeMapper::ResolveImage(
 //------------------------------------------------------------------------------
 void vtkAPCVolumeMapper::BlendIntoWindow(vtkRenderer* ren, const float* rgba)
 {
+  // A float texture on a viewport quad, blended premultiplied-over into whatever framebuffer
+  // is bound: the window's in plain VTK, the one IceT composited into in ParaView (its
+  // result is captured from there, so drawing anywhere else would be lost). Float keeps
+  // the 8-bit quantisation of glDrawPixels out of the volume's colours.
   Internals& internal = *this->Internal;
-  // VTK blends straight (non-premultiplied) colour.
-  const size_t pixels = internal.Pixels();
-  std::vector<float> straight(4 * pixels);
-  for (size_t p = 0; p < pixels; ++p)
+  auto* window = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
+  if (!window || internal.Pixels() == 0)
   {
-    const float a = rgba[4 * p + 3];
-    const float inv = a > 0 ? 1.0f / a : 0.0f;
-    for (int c = 0; c < 3; ++c)
-    {
-      straight[4 * p + c] = std::min(1.0f, rgba[4 * p + c] * inv);
-    }
-    straight[4 * p + 3] = std::min(1.0f, std::max(0.0f, a));
+    return;
   }
-  vtkRenderWindow* window = ren->GetRenderWindow();
-  window->SetRGBAPixelData(internal.X0, internal.Y0, internal.X0 + internal.Width - 1,
-    internal.Y0 + internal.Height - 1, straight.data(), window->GetDoubleBuffer() ? 0 : 1, 1);
+  vtkNew<vtkTextureObject> texture;
+  texture->SetContext(window);
+  texture->Create2DFromRaw(internal.Width, internal.Height, 4, VTK_FLOAT,
+    const_cast<float*>(rgba)); // only read, despite the signature
+  texture->SetMinificationFilter(vtkTextureObject::Nearest);
+  texture->SetMagnificationFilter(vtkTextureObject::Nearest);
+  std::string fragment = vtkOpenGLRenderUtilities::GetFullScreenQuadFragmentShaderTemplate();
+  vtkShaderProgram::Substitute(fragment, "//VTK::FSQ::Decl", "uniform sampler2D volumeImage;");
+  vtkShaderProgram::Substitute(
+    fragment, "//VTK::FSQ::Impl", "gl_FragData[0] = texture2D(volumeImage, texCoord);");
+  {
+    vtkOpenGLQuadHelper quad(window,
+      vtkOpenGLRenderUtilities::GetFullScreenQuadVertexShader().c_str(), fragment.c_str(), "");
+    window->GetShaderCache()->ReadyShaderProgram(quad.Program);
+    texture->Activate();
+    quad.Program->SetUniformi("volumeImage", texture->GetTextureUnit());
+    vtkOpenGLState* state = window->GetState();
+    vtkOpenGLState::ScopedglEnableDisable blend(state, GL_BLEND);
+    vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
+    vtkOpenGLState::ScopedglBlendFuncSeparate blendFunction(state);
+    vtkOpenGLState::ScopedglDepthMask depthMask(state);
+    vtkOpenGLState::ScopedglViewport viewport(state);
+    vtkOpenGLState::ScopedglEnableDisable scissor(state, GL_SCISSOR_TEST);
+    state->vtkglEnable(GL_BLEND);
+    state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    state->vtkglDisable(GL_DEPTH_TEST);
+    state->vtkglDisable(GL_SCISSOR_TEST);
+    state->vtkglDepthMask(GL_FALSE);
+    state->vtkglViewport(internal.X0, internal.Y0, internal.Width, internal.Height);
+    quad.Render();
+    texture->Deactivate();
+    quad.ReleaseGraphicsResources(window);
+  }
+  texture->ReleaseGraphicsResources(window);
   internal.Clock.Lap("blend");
 }
 

@@ -1,0 +1,349 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkAPCVolumeRepresentation.h"
+
+#include "vtkAPCCompositePass.h"
+#include "vtkAPCVolumeMapper.h"
+
+#include "vtkAlgorithmOutput.h"
+#include "vtkAppendFilter.h"
+#include "vtkCompositeDataIterator.h"
+#include "vtkCompositeDataSet.h"
+#include "vtkDataObject.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkMultiProcessController.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPVRenderView.h"
+#include "vtkPVSession.h"
+#include "vtkPVSynchronizedRenderer.h"
+#include "vtkProcessModule.h"
+#include "vtkUnstructuredGrid.h"
+#include "vtkUnstructuredGridBase.h"
+#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+vtkStandardNewMacro(vtkAPCVolumeRepresentation);
+
+namespace
+{
+// vtkPVRenderView keeps its vtkPVSynchronizedRenderer protected, and only a view subclass
+// (like the Eye-Dome-Lighting view) is meant to install an image processing pass. Naming the
+// member through a derived class is the one standard-conforming way to reach it, and it
+// lets "APC Volume" work in the standard Render View instead of a view of its own.
+struct ViewAccess : public vtkPVRenderView
+{
+  static vtkPVSynchronizedRenderer* SynchronizedRenderer(vtkPVRenderView* view)
+  {
+    return view->*(&ViewAccess::SynchronizedRenderers);
+  }
+};
+
+// One vtkAPCCompositePass per view, shared by the APC volumes shown in it, installed while
+// at least one is visible; the pass it replaced comes back afterwards.
+struct Installation
+{
+  vtkSmartPointer<vtkAPCCompositePass> Pass;
+  vtkSmartPointer<vtkImageProcessingPass> Previous;
+  std::set<vtkAPCVolumeRepresentation*> Users;
+};
+
+std::map<vtkPVRenderView*, Installation>& Installations()
+{
+  static std::map<vtkPVRenderView*, Installation> installations;
+  return installations;
+}
+
+// Rendering happens where the render server lives: on the pvserver / pvbatch ranks and in
+// builtin sessions, not on a client connected to a remote server (it shows the server's
+// image).
+bool RendersHere()
+{
+  vtkProcessModule* pm = vtkProcessModule::GetProcessModule();
+  auto* session = pm ? vtkPVSession::SafeDownCast(pm->GetActiveSession()) : nullptr;
+  return !session || session->HasProcessRole(vtkPVSession::RENDER_SERVER);
+}
+}
+
+//------------------------------------------------------------------------------
+vtkAPCVolumeRepresentation::vtkAPCVolumeRepresentation()
+  : Mapper(vtkSmartPointer<vtkAPCVolumeMapper>::New())
+  , LocalPiece(vtkSmartPointer<vtkUnstructuredGrid>::New())
+{
+  this->APCVolume = vtkSmartPointer<vtkVolume>::New();
+  this->APCVolume->SetMapper(this->Mapper);
+  this->APCVolume->SetProperty(this->Property);
+}
+
+vtkAPCVolumeRepresentation::~vtkAPCVolumeRepresentation()
+{
+  this->Attach(false);
+}
+
+vtkAPCVolumeMapper* vtkAPCVolumeRepresentation::GetMapper()
+{
+  return this->Mapper;
+}
+
+//------------------------------------------------------------------------------
+int vtkAPCVolumeRepresentation::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Append(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkUnstructuredGridBase");
+  info->Append(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkCompositeDataSet");
+  info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+int vtkAPCVolumeRepresentation::RequestData(
+  vtkInformation* request, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  // This rank's cells, as one grid: composite inputs (OpenFOAM, Exodus readers) have their
+  // unstructured leaves appended here, locally; nothing crosses ranks.
+  this->LocalPiece = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  vtkDataObject* input = inputVector[0]->GetNumberOfInformationObjects()
+    ? vtkDataObject::GetData(inputVector[0], 0)
+    : nullptr;
+  vtkNew<vtkAppendFilter> append;
+  if (auto* grid = vtkUnstructuredGridBase::SafeDownCast(input))
+  {
+    append->AddInputData(grid);
+  }
+  else if (auto* composite = vtkCompositeDataSet::SafeDownCast(input))
+  {
+    vtkSmartPointer<vtkCompositeDataIterator> it;
+    it.TakeReference(composite->NewIterator());
+    for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem())
+    {
+      if (auto* leaf = vtkUnstructuredGridBase::SafeDownCast(it->GetCurrentDataObject()))
+      {
+        if (leaf->GetNumberOfCells() > 0)
+        {
+          append->AddInputData(leaf);
+        }
+      }
+    }
+  }
+  if (append->GetNumberOfInputConnections(0) > 0)
+  {
+    append->Update();
+    this->LocalPiece->ShallowCopy(append->GetOutput());
+  }
+  this->DataSize = this->LocalPiece->GetActualMemorySize();
+  this->LocalPiece->GetBounds(this->DataBounds);
+  return this->Superclass::RequestData(request, inputVector, outputVector);
+}
+
+//------------------------------------------------------------------------------
+int vtkAPCVolumeRepresentation::ProcessViewRequest(
+  vtkInformationRequestKey* request_type, vtkInformation* inInfo, vtkInformation* outInfo)
+{
+  if (!this->Superclass::ProcessViewRequest(request_type, inInfo, outInfo))
+  {
+    return 0; // invisible
+  }
+  if (request_type == vtkPVView::REQUEST_UPDATE())
+  {
+    // The piece stays on its rank: no ordered compositing, so no redistribution; and the
+    // view must render in parallel (remotely) whatever the data size.
+    vtkPVView::SetPiece(inInfo, this, this->LocalPiece, this->DataSize);
+    vtkPVRenderView::SetGeometryBounds(inInfo, this, this->DataBounds);
+    vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
+  }
+  else if (request_type == vtkPVView::REQUEST_UPDATE_LOD())
+  {
+    vtkPVRenderView::SetRequiresDistributedRenderingLOD(inInfo, this, true);
+  }
+  else if (request_type == vtkPVView::REQUEST_RENDER())
+  {
+    vtkDataObject* piece = vtkPVView::GetDeliveredPiece(inInfo, this);
+    this->Mapper->SetInputDataObject(piece ? piece : this->LocalPiece.Get());
+    this->UpdateMapperArray();
+    this->Attach(true);
+  }
+  return 1;
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeRepresentation::UpdateMapperArray()
+{
+  vtkInformation* info = this->GetInputArrayInformation(0);
+  if (info && info->Has(vtkDataObject::FIELD_ASSOCIATION()) &&
+    info->Has(vtkDataObject::FIELD_NAME()))
+  {
+    this->Mapper->SelectScalarArray(info->Get(vtkDataObject::FIELD_NAME()));
+    this->Mapper->SetScalarMode(
+      info->Get(vtkDataObject::FIELD_ASSOCIATION()) == vtkDataObject::FIELD_ASSOCIATION_CELLS
+        ? VTK_SCALAR_MODE_USE_CELL_FIELD_DATA
+        : VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
+  }
+  else
+  {
+    this->Mapper->SelectScalarArray(static_cast<const char*>(nullptr));
+    this->Mapper->SetScalarMode(VTK_SCALAR_MODE_DEFAULT);
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeRepresentation::Attach(bool attach)
+{
+  vtkPVRenderView* view = this->View;
+  auto& installations = Installations();
+  if (!attach)
+  {
+    for (auto it = installations.begin(); it != installations.end();)
+    {
+      Installation& installation = it->second;
+      if (installation.Users.erase(this))
+      {
+        installation.Pass->RemoveVolume(this->APCVolume);
+        if (installation.Users.empty())
+        {
+          vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(it->first);
+          sync->SetImageProcessingPass(installation.Previous);
+          sync->SetUseDepthBuffer(installation.Previous != nullptr);
+          it = installations.erase(it);
+          continue;
+        }
+      }
+      ++it;
+    }
+    return;
+  }
+  if (!view || !RendersHere())
+  {
+    return;
+  }
+  if (view->InTileDisplayMode() || view->InCaveDisplayMode())
+  {
+    vtkWarningMacro("APC Volume does not render in tile-display or CAVE mode.");
+    return;
+  }
+  Installation& installation = installations[view];
+  if (!installation.Pass)
+  {
+    vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
+    installation.Previous = sync->GetImageProcessingPass();
+    installation.Pass = vtkSmartPointer<vtkAPCCompositePass>::New();
+    installation.Pass->SetController(vtkMultiProcessController::GetGlobalController());
+    sync->SetImageProcessingPass(installation.Pass);
+    // IceT then leaves the composited depth in the display rank's framebuffer.
+    sync->SetUseDepthBuffer(true);
+  }
+  installation.Users.insert(this);
+  installation.Pass->AddVolume(this->APCVolume);
+  installation.Pass->SetLocalExact(this->Mode == 1);
+  installation.Pass->SetVerbosity(this->Verbosity);
+}
+
+//------------------------------------------------------------------------------
+bool vtkAPCVolumeRepresentation::AddToView(vtkView* view)
+{
+  // The volume is deliberately not added to the renderer: IceT must not render it.
+  this->View = vtkPVRenderView::SafeDownCast(view);
+  return this->View ? this->Superclass::AddToView(view) : false;
+}
+
+bool vtkAPCVolumeRepresentation::RemoveFromView(vtkView* view)
+{
+  this->Attach(false);
+  this->View = nullptr;
+  return this->Superclass::RemoveFromView(view);
+}
+
+void vtkAPCVolumeRepresentation::SetVisibility(bool visible)
+{
+  if (!visible)
+  {
+    this->Attach(false);
+  }
+  this->Superclass::SetVisibility(visible);
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeRepresentation::SetSampleDistance(double distance)
+{
+  this->Mapper->SetSampleDistance(distance);
+  this->MarkModified();
+}
+
+void vtkAPCVolumeRepresentation::SetNumberOfMoments(int moments)
+{
+  this->Mapper->SetNumberOfMoments(moments);
+  this->MarkModified();
+}
+
+void vtkAPCVolumeRepresentation::SetOverestimation(double beta)
+{
+  this->Mapper->SetOverestimation(beta);
+  this->MarkModified();
+}
+
+void vtkAPCVolumeRepresentation::SetMomentBias(double bias)
+{
+  this->Mapper->SetMomentBias(bias);
+  this->MarkModified();
+}
+
+void vtkAPCVolumeRepresentation::SetResolveMode(int mode)
+{
+  this->Mapper->SetResolveMode(mode);
+  this->MarkModified();
+}
+
+void vtkAPCVolumeRepresentation::SetNumberOfThreads(int threads)
+{
+  this->Mapper->SetNumberOfThreads(threads);
+  this->MarkModified();
+}
+
+void vtkAPCVolumeRepresentation::SetMode(int mode)
+{
+  if (this->Mode != mode)
+  {
+    this->Mode = mode;
+    this->Mapper->SetMode(mode == 1 ? vtkAPCVolumeMapper::EXACT : vtkAPCVolumeMapper::MBOIT);
+    this->MarkModified();
+  }
+}
+
+void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
+{
+  this->Verbosity = verbosity;
+  this->MarkModified();
+}
+
+//------------------------------------------------------------------------------
+double* vtkAPCVolumeRepresentation::GetLastTimings()
+{
+  std::fill(this->LastTimings, this->LastTimings + 11, 0.0);
+  for (const auto& entry : Installations())
+  {
+    if (entry.second.Users.count(this))
+    {
+      const vtkAPCCompositePass* pass = entry.second.Pass;
+      const char* stages[] = { "agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve",
+        "blend" };
+      for (int s = 0; s < 8; ++s)
+      {
+        this->LastTimings[s] = pass->GetLastStageSeconds(stages[s]);
+      }
+      this->LastTimings[8] = pass->GetLastStageSeconds(nullptr);
+      this->LastTimings[9] = pass->GetLastBytesSent();
+      this->LastTimings[10] = static_cast<double>(pass->GetLastCompositedPixels());
+    }
+  }
+  return this->LastTimings;
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "Mode: " << (this->Mode == 1 ? "local exact" : "APC") << "\n";
+  os << indent << "Verbosity: " << this->Verbosity << "\n";
+}
