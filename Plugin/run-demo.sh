@@ -9,6 +9,6 @@ mkdir -p "$out"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export APC_PLUGIN="$top/build/lib/paraview-5.11/plugins/APC/APC.so"
 export PYTHONPATH="$top/Plugin/Python${PYTHONPATH:+:$PYTHONPATH}"
-xvfb-run -a -s "-screen 0 1280x1024x24" \
+bash "$top/.ci/with-xvfb" \
   mpirun --oversubscribe -np "${APC_DEMO_RANKS:-4}" -x APC_PLUGIN -x PYTHONPATH \
   pvbatch --disable-xdisplay-test "$top/Plugin/Python/apc_demo.py" --output "$out"

@@ -130,7 +130,13 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, vtkDataArray* scalars, bool
     message = text.str();
   }
   std::string error;
-  if (!mesh.Finalize(&error))
+  const bool usable = mesh.Finalize(&error);
+  if (usable && mesh.GetNumberOfSkippedCells() > 0)
+  {
+    message += (message.empty() ? "" : "; ") + std::to_string(mesh.GetNumberOfSkippedCells()) +
+      " cells with non-finite or collapsed corners skipped";
+  }
+  if (!usable)
   {
     message += (message.empty() ? "" : "; ") + std::string("unusable mesh: ") + error;
     return false;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAPCCompositePass.h"
 
+#include "vtkAPCEXRWriter.h"
 #include "vtkAPCVolumeMapper.h"
 #include "vtkCamera.h"
 #include "vtkCommunicator.h"
@@ -17,6 +18,7 @@
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkVolume.h"
+#include "vtkXMLImageDataWriter.h"
 
 #include <algorithm>
 #include <array>
@@ -143,6 +145,7 @@ vtkAPCCompositePass::vtkAPCCompositePass()
 vtkAPCCompositePass::~vtkAPCCompositePass()
 {
   this->SetController(nullptr);
+  this->SetImageFileName(nullptr);
 }
 
 //------------------------------------------------------------------------------
@@ -439,6 +442,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     internal.Image->DeepCopy(first->GetLastImage());
     first->BlendIntoWindow(ren, rgba.data());
     internal.Lap("blend");
+    this->WriteImage();
   }
   if (this->Verbosity > 0 && isDisplay)
   {
@@ -455,6 +459,32 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
 }
 
 //------------------------------------------------------------------------------
+void vtkAPCCompositePass::WriteImage()
+{
+  if (!this->ImageFileName || !*this->ImageFileName)
+  {
+    return;
+  }
+  const std::string name = this->ImageFileName;
+  const bool exr = name.size() > 4 && name.compare(name.size() - 4, 4, ".exr") == 0;
+  if (exr)
+  {
+    vtkNew<vtkAPCEXRWriter> writer;
+    writer->SetFileName(name.c_str());
+    writer->SetInputData(this->Internal->Image);
+    writer->Write();
+  }
+  else
+  {
+    vtkNew<vtkXMLImageDataWriter> writer;
+    writer->SetFileName(name.c_str());
+    writer->SetInputData(this->Internal->Image);
+    writer->SetDataModeToBinary(); // Debian's ParaView rejects appended-mode XML
+    writer->Write();
+  }
+}
+
+//------------------------------------------------------------------------------
 void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
@@ -464,4 +494,6 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
   os << indent << "LocalExact: " << this->LocalExact << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
+  os << indent << "ImageFileName: " << (this->ImageFileName ? this->ImageFileName : "(none)")
+     << "\n";
 }

@@ -121,6 +121,16 @@ public:
   vtkIdType GetLastCompositedPixels() const;
   ///@}
 
+  ///@{
+  /**
+   * If set, the display process writes every frame's final float image (premultiplied RGBA
+   * of the volumes and the global moments) to this file: OpenEXR for ".exr", VTK XML image
+   * data (binary, readable everywhere) for ".vti".
+   */
+  vtkSetFilePathMacro(ImageFileName);
+  vtkGetFilePathMacro(ImageFileName);
+  ///@}
+
   /**
    * Whether the last frame was skipped because a process could not render (message on the
    * display process).
@@ -142,10 +152,13 @@ protected:
   bool CompositeInDouble = true;
   bool LocalExact = false;
   int Verbosity = 0;
+  char* ImageFileName = nullptr;
 
 private:
   vtkAPCCompositePass(const vtkAPCCompositePass&) = delete;
   void operator=(const vtkAPCCompositePass&) = delete;
+
+  void WriteImage();
 
   struct Internals;
   std::unique_ptr<Internals> Internal;

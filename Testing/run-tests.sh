@@ -5,4 +5,4 @@ set -euo pipefail
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bash "$top/.ci/build"
 cd "$top/build"
-xvfb-run -a -s "-screen 0 1280x1024x24" ctest --output-on-failure --timeout 600 "$@"
+bash "$top/.ci/with-xvfb" ctest --output-on-failure --timeout 600 "$@"

@@ -238,6 +238,7 @@ void vtkAPCVolumeRepresentation::Attach(bool attach)
   installation.Pass->AddVolume(this->APCVolume);
   installation.Pass->SetLocalExact(this->Mode == 1);
   installation.Pass->SetVerbosity(this->Verbosity);
+  installation.Pass->SetImageFileName(this->ImageFileName.c_str());
 }
 
 //------------------------------------------------------------------------------
@@ -309,6 +310,12 @@ void vtkAPCVolumeRepresentation::SetMode(int mode)
     this->Mapper->SetMode(mode == 1 ? vtkAPCVolumeMapper::EXACT : vtkAPCVolumeMapper::MBOIT);
     this->MarkModified();
   }
+}
+
+void vtkAPCVolumeRepresentation::SetImageFileName(const char* name)
+{
+  this->ImageFileName = name ? name : "";
+  this->MarkModified();
 }
 
 void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)

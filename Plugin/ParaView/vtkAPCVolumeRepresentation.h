@@ -30,8 +30,10 @@
 #include "APCParaViewModule.h" // for export macro
 #include "vtkSmartPointer.h"   // for ivars
 #include "vtkVolumeRepresentation.h"
+#include "vtkWeakPointer.h"   // for ivars
 #include "vtkWrappingHints.h" // for VTK_SIZEHINT
-#include "vtkWeakPointer.h" // for ivars
+
+#include <string> // for ivars
 
 class vtkAPCVolumeMapper;
 class vtkPVRenderView;
@@ -78,6 +80,14 @@ public:
   vtkGetMacro(Verbosity, int);
   ///@}
 
+  ///@{
+  /**
+   * A file (.exr or .vti) the display rank writes each frame's float image to; empty (the
+   * default) writes nothing.
+   */
+  void SetImageFileName(const char* name);
+  ///@}
+
   /**
    * The last frame's stage timings on this rank, in seconds: agree, depth, pass1, allreduce,
    * pass2, reduce, resolve, blend, total; then the bytes this rank sent and the composited
@@ -105,6 +115,7 @@ protected:
   vtkWeakPointer<vtkPVRenderView> View;
   int Mode = 0;
   int Verbosity = 0;
+  std::string ImageFileName;
   double LastTimings[11] = {};
 
 private:

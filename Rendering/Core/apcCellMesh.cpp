@@ -133,6 +133,7 @@ bool CellMesh::Finalize(std::string* error)
   this->Bounds.resize(numCells);
   const double inf = std::numeric_limits<double>::infinity();
   this->MeshBounds = { inf, -inf, inf, -inf, inf, -inf };
+  this->SkippedCells = 0;
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
     const int64_t* ids = this->GetCellPoints(cell);
@@ -140,22 +141,23 @@ bool CellMesh::Finalize(std::string* error)
     std::array<double, 6>& b = this->Bounds[cell];
     b = { inf, -inf, inf, -inf, inf, -inf };
     double centroid[3] = { 0, 0, 0 };
+    bool finite = true;
     for (int i = 0; i < corners; ++i)
     {
       const auto& p = this->Points[ids[i]];
       for (int d = 0; d < 3; ++d)
       {
+        finite = finite && std::isfinite(p[d]);
         b[2 * d] = std::min(b[2 * d], p[d]);
         b[2 * d + 1] = std::max(b[2 * d + 1], p[d]);
         centroid[d] += p[d] / corners;
       }
     }
-    for (int d = 0; d < 3; ++d)
+    if (!finite)
     {
-      this->MeshBounds[2 * d] = std::min(this->MeshBounds[2 * d], b[2 * d]);
-      this->MeshBounds[2 * d + 1] = std::max(this->MeshBounds[2 * d + 1], b[2 * d + 1]);
+      this->SkipCell(cell);
+      continue;
     }
-
     const FaceList& faces = FacesOf(this->Shapes[cell]);
     for (int f = 0; f < faces.Count; ++f)
     {
@@ -177,13 +179,36 @@ bool CellMesh::Finalize(std::string* error)
                                  static_cast<float>(sign * n[2]) },
         static_cast<float>(sign * offset) });
     }
+    // A cell needs at least four faces with area to enclose anything; with fewer (collapsed
+    // corners, a flat cell) its planes would leave rays unbounded, so it is left out.
+    if (static_cast<int64_t>(this->Planes.size()) - this->PlaneOffsets.back() < 4)
+    {
+      this->Planes.resize(this->PlaneOffsets.back());
+      this->SkipCell(cell);
+      continue;
+    }
     this->PlaneOffsets.push_back(static_cast<int64_t>(this->Planes.size()));
+    for (int d = 0; d < 3; ++d)
+    {
+      this->MeshBounds[2 * d] = std::min(this->MeshBounds[2 * d], b[2 * d]);
+      this->MeshBounds[2 * d + 1] = std::max(this->MeshBounds[2 * d + 1], b[2 * d + 1]);
+    }
   }
-  if (numCells == 0)
+  if (!(this->MeshBounds[0] <= this->MeshBounds[1]))
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
   }
   return true;
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::SkipCell(int64_t cell)
+{
+  // No planes and empty bounds: the binning and the walker pass over it.
+  const double inf = std::numeric_limits<double>::infinity();
+  this->Bounds[cell] = { inf, -inf, inf, -inf, inf, -inf };
+  this->PlaneOffsets.push_back(static_cast<int64_t>(this->Planes.size()));
+  ++this->SkippedCells;
 }
 
 //------------------------------------------------------------------------------

@@ -63,10 +63,16 @@ public:
   const std::array<double, 6>& GetCellBounds(int64_t cell) const { return this->Bounds[cell]; }
   const std::array<double, 6>& GetBounds() const { return this->MeshBounds; }
 
+  // Cells Finalize left out: non-finite corners, or too few faces with area to enclose
+  // anything (collapsed or flat cells). They have no planes and empty bounds.
+  int64_t GetNumberOfSkippedCells() const { return this->SkippedCells; }
+
   // Corners and scalars of one cell, ready for interpolation.
   void GetCorners(int64_t cell, CellCorners& corners) const;
 
 private:
+  void SkipCell(int64_t cell);
+
   std::vector<CellShape> Shapes;
   std::vector<int64_t> Offsets{ 0 };
   std::vector<int64_t> Connectivity;
@@ -75,6 +81,7 @@ private:
   std::vector<int64_t> PlaneOffsets;
   std::vector<std::array<double, 6>> Bounds;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
+  int64_t SkippedCells = 0;
 };
 
 } // namespace apc

@@ -227,6 +227,12 @@ struct SegmentVisitor
   }
 };
 
+// True for exactly one of n and -n (n non-zero): the first non-zero component is positive.
+inline bool InPositiveHalf(const std::array<float, 3>& n)
+{
+  return n[0] != 0 ? n[0] > 0 : (n[1] != 0 ? n[1] > 0 : n[2] > 0);
+}
+
 // Clips a ray against a cell's face planes: [tin, tout) is the part inside the cell. Every
 // cell evaluates a shared face with the same numbers (up to an exact sign flip), so the
 // intervals of neighbours meet exactly.
@@ -248,8 +254,11 @@ inline void ClipRay(
     {
       tout = std::min(tout, num / denom);
     }
-    else if (num < 0)
+    else if (num < 0 || (num == 0 && !InPositiveHalf(planes[p].Normal)))
     {
+      // The ray is outside this plane, or runs inside it. A plane shared by two cells
+      // appears in both with exactly opposite normals, so letting only the copy whose normal
+      // points into the "positive" half-space keep such a ray gives it to exactly one cell.
       tout = -std::numeric_limits<double>::infinity();
     }
   }
@@ -262,7 +271,8 @@ struct VolumeRayMarcher::Walker
 {
   template <class Visitor>
   static int64_t Tile(const CellMesh& mesh, const Bins& bins, const std::vector<RaySetup>& rays,
-    const TileRect& tile, int64_t tileIndex, const TransferTable& table, Visitor& visitor)
+    const TileRect& tile, int64_t tileIndex, const TransferTable& table, double farLimit,
+    Visitor& visitor)
   {
     const double spacing = table.GetSampleSpacing();
     const bool cellScalars = mesh.HasCellScalars();
@@ -289,6 +299,10 @@ struct VolumeRayMarcher::Walker
       }
       int planeCount = 0;
       const FacePlane* planes = mesh.GetPlanes(cell, planeCount);
+      if (planeCount == 0)
+      {
+        continue; // a cell the mesh left out (see CellMesh::GetNumberOfSkippedCells)
+      }
       bool haveCorners = false;
       double pcoords[3] = { 0, 0, 0 };
       for (int j = j0; j <= j1; ++j)
@@ -298,7 +312,9 @@ struct VolumeRayMarcher::Walker
           const int local = (j - tile.J0) * tile.Width() + (i - tile.I0);
           const RaySetup& ray = rays[local];
           double tin = 0.0;
-          double tout = ray.End;
+          // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes
+          // fail to enclose it (rounding on a nearly flat cell) from sampling forever.
+          double tout = std::min(ray.End, farLimit);
           ClipRay(ray, planes, planeCount, tin, tout);
           if (!(tin < tout))
           {
@@ -482,6 +498,10 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
   const int w = this->Camera->GetWidth();
   const int h = this->Camera->GetHeight();
   const int64_t tiles = static_cast<int64_t>(bins.TilesX) * bins.TilesY;
+  double nearLimit = 0;
+  double farLimit = 0;
+  this->Camera->DistanceRange(this->Mesh->GetBounds(), nearLimit, farLimit);
+  farLimit = farLimit * (1 + 1e-12) + 1e-300;
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;
@@ -517,7 +537,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
                 r.End = this->RayEnds[static_cast<int64_t>(j) * w + i];
               }
             }
-            samples.local() += Walker::Tile(*this->Mesh, bins, rays, tile, t, table, visitor);
+            samples.local() +=
+              Walker::Tile(*this->Mesh, bins, rays, tile, t, table, farLimit, visitor);
           }
         });
     });

@@ -1,0 +1,101 @@
+#!/usr/bin/env bash
+# Speed of vtkAPCVolumeMapper against VTK's unstructured-grid volume mappers: builds, runs
+# apcBenchmarkMappers under a virtual X server, writes out/benchmark/mappers.csv (and one PNG
+# per data set and mapper), prints the CSV and a summary of the ratios against the targets.
+# Arguments go to the program: --quick (256^2, 1 timed frame), --size N, --repeats N,
+# --datasets gear,wind,flange, --threads 1,2, --zsweep-max-cells N, --time-cap S, ...
+# Timings are wall clock on a shared machine: run it when nothing else is busy (the load
+# average is printed before and after).
+set -euo pipefail
+top=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+bash "$top/.ci/build"
+program="$top/build/bin/apcBenchmarkMappers"
+if [ ! -x "$program" ]; then
+  echo "error: $program was not built (is Testing/Benchmarks added to the build?)" >&2
+  exit 1
+fi
+out="$top/out/benchmark"
+mkdir -p "$out"
+
+echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores"
+start=$(date +%s)
+# xvfb-run -a alone races with concurrent xvfb-runs for the first free display; starting the
+# search at a per-process number keeps parallel test runs out of each other's X server.
+xvfb-run -a -n $((200 + $$ % 700)) -s "-screen 0 2048x2048x24" \
+  "$program" --out "$out" --csv "$out/mappers.csv" "$@"
+end=$(date +%s)
+echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg); benchmark $((end - start)) s"
+echo
+cat "$out/mappers.csv"
+echo
+
+python3 - "$out/mappers.csv" <<'EOF'
+import csv
+import sys
+
+rows = list(csv.DictReader(open(sys.argv[1])))
+
+
+def num(text):
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def frame(dataset, mapper, mode, threads, column="frame_s"):
+    for r in rows:
+        if (r["dataset"], r["mapper"], r["mode"], r["threads"]) == (dataset, mapper, mode, threads):
+            return num(r[column])
+    return None
+
+
+def ratio(a, b):
+    return f"{a / b:.2f}" if a and b else "-"
+
+
+def check(value, target, above):
+    if value is None:
+        return "-"
+    ok = value >= target if above else value <= target
+    return f"{value:.2f} {'ok' if ok else 'MISSED'}"
+
+
+threads = sorted({r["threads"] for r in rows if r["mapper"] == "apc"}, key=int)
+most = threads[-1]
+print(f"Summary (ratios; targets: MBOIT >= 2x faster than Bunyk, pass2/pass1 <= 1.2, "
+      f"{most} threads >= 1.8x one thread)")
+header = ["dataset", "mboit/bunyk", "matched/bunyk", "exact/bunyk", "pt/bunyk",
+          "pass2/pass1", "setup/frame", "mboit x" + most, "exact x" + most, "bunyk x" + most]
+table = [header]
+for dataset in dict.fromkeys(r["dataset"] for r in rows):
+    bunyk = frame(dataset, "bunyk", "", most)
+    mboit = frame(dataset, "apc", "mboit", most)
+    exact = frame(dataset, "apc", "exact", most)
+    matched = frame(dataset, "apc", "mboit-matched", most)
+    pt = frame(dataset, "pt", "", "gl")
+    p1 = frame(dataset, "apc", "mboit", "1", "pass1_s")
+    p2 = frame(dataset, "apc", "mboit", "1", "pass2_s")
+    setup = frame(dataset, "apc", "mboit", most, "setup_s")
+    speedups = []
+    for mapper, mode in (("apc", "mboit"), ("apc", "exact"), ("bunyk", "")):
+        one = frame(dataset, mapper, mode, "1")
+        many = frame(dataset, mapper, mode, most)
+        speedups.append(check(one / many, 1.8, True) if one and many else "-")
+    table.append([
+        dataset,
+        check(bunyk / mboit, 2.0, True) if bunyk and mboit else "-",
+        ratio(bunyk, matched),
+        ratio(bunyk, exact),
+        ratio(bunyk, pt),
+        check(p2 / p1, 1.2, False) if p1 and p2 else "-",
+        ratio(setup, mboit),
+        *speedups,
+    ])
+widths = [max(len(row[c]) for row in table) for c in range(len(header))]
+for row in table:
+    print("  ".join(cell.ljust(w) for cell, w in zip(row, widths)))
+print("(x/bunyk = Bunyk's frame time / x's at the same thread count, > 1 is faster than Bunyk;"
+      " pass2/pass1 at 1 thread; matched = MBOIT with as many samples as Bunyk integrates"
+      " segments)")
+EOF

@@ -1,0 +1,628 @@
+// What APC's compositing relies on, checked on the mapper and on the core ray marcher:
+// - the image does not depend on the order of the cells or the numbering of the points;
+// - the moment and colour sums of a split mesh add up to those of the whole mesh (the
+//   MPI_Allreduce / MPI_Reduce of distributed APC), for puzzle pieces and for jagged splits
+//   whose pieces interleave in depth, with every lattice sample taken exactly once;
+// - the per-pixel segment counts of the gear-teeth pieces add up to the analytic count;
+// - ghost cells (DUPLICATECELL, HIDDENCELL) render as if they were not there;
+// - a ray that lies exactly in a face plane shared by two cells samples it once.
+
+#include "apcTestGrids.h"
+
+#include "apcCellMesh.h"
+#include "apcCellMeshFromVTK.h"
+#include "apcDepthWarp.h"
+#include "apcMomentTransmittance.h"
+#include "apcRayCamera.h"
+#include "apcResolve.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
+
+#include "vtkExtractCells.h"
+#include "vtkIdList.h"
+#include "vtkUnsignedCharArray.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+namespace
+{
+using apctest::Frame;
+
+apctest::TransferFunction SpheresTF()
+{
+  // A red core seen through a translucent blue shell (as TestVolumeMapperQuality).
+  apctest::TransferFunction tf;
+  tf.Colours = { { 0.0, 0.0, 0.0, 0.0 }, { 0.5, 0.15, 0.3, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
+  tf.Opacities = { { 0.0, 0.0 }, { 0.2, 0.0 }, { 0.5, 0.12 }, { 0.75, 0.05 }, { 1.0, 0.95 } };
+  tf.UnitDistance = 0.1;
+  return tf;
+}
+
+apctest::TransferFunction RampTF()
+{
+  apctest::TransferFunction tf;
+  tf.Colours = { { 0.0, 0.1, 0.2, 1.0 }, { 0.5, 0.9, 0.9, 0.2 }, { 1.0, 1.0, 0.1, 0.0 } };
+  tf.Opacities = { { 0.0, 0.02 }, { 0.4, 0.1 }, { 1.0, 0.6 } };
+  tf.UnitDistance = 0.2;
+  return tf;
+}
+
+apctest::View Oblique(int size)
+{
+  apctest::View view;
+  view.Parallel = false;
+  view.Position = { 3.6, 2.5, 4.5 };
+  view.ViewAngle = 35;
+  view.Width = view.Height = size;
+  return view;
+}
+
+double Smooth(double x, double y, double z)
+{
+  return 0.5 + 0.45 * std::sin(2.1 * x + 0.4) * std::cos(1.7 * y - 0.3) * std::cos(1.3 * z + 0.2);
+}
+
+auto ModeSetter(int mode)
+{
+  return [mode](vtkAPCVolumeMapper* m)
+  {
+    m->SetMode(mode);
+    m->SetSampleDistance(0.01);
+  };
+}
+
+const char* ModeName(int mode)
+{
+  return mode == vtkAPCVolumeMapper::EXACT ? "EXACT" : "MBOIT";
+}
+
+//------------------------------------------------------------------------------
+// Shuffle invariance.
+//
+// MBOIT: each pixel's moments and colour sums are sums over its samples; shuffling the cells
+// changes only the order of the additions (the tiles take their cells in index order), so
+// the images agree to double rounding of sums of a few hundred terms, printed as floats:
+// 1e-5 is a generous bound on that (measured below; an order-dependent algorithm or a lost
+// or duplicated sample would differ by ~1e-3 or more, the absorbance of one sample).
+// EXACT: the same samples sorted by their unique lattice index, blended in the same order;
+// only the interpolation of a sample lying within rounding of a face shared by two cells
+// (whose plane may round differently with other point ids) could differ, by the field's
+// change over ~1e-7: the same 1e-5 bound.
+void ExpectShuffleInvariant(vtkUnstructuredGrid* grid, const apctest::TransferFunction& tf,
+  const apctest::View& view, const char* name)
+{
+  for (int mode : { vtkAPCVolumeMapper::MBOIT, vtkAPCVolumeMapper::EXACT })
+  {
+    const Frame reference = apctest::Render(grid, ModeSetter(mode), tf, view);
+    const double maxAlpha = apctest::MaxChannel(reference.RGBA, 4, 3);
+    EXPECT_GT(maxAlpha, 0.2) << name << ": the scene must be visible";
+    for (unsigned seed : { 1u, 2u, 3u })
+    {
+      auto shuffled = apctest::Shuffled(grid, seed);
+      // The copy really is shuffled: most cells and points have moved.
+      int cellsMoved = 0;
+      int pointsMoved = 0;
+      for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+      {
+        cellsMoved += apctest::CellCentre(grid, c) != apctest::CellCentre(shuffled, c);
+      }
+      for (vtkIdType p = 0; p < grid->GetNumberOfPoints(); ++p)
+      {
+        double a[3];
+        double b[3];
+        grid->GetPoint(p, a);
+        shuffled->GetPoint(p, b);
+        pointsMoved += a[0] != b[0] || a[1] != b[1] || a[2] != b[2];
+      }
+      EXPECT_GT(cellsMoved, grid->GetNumberOfCells() / 2);
+      EXPECT_GT(pointsMoved, grid->GetNumberOfPoints() / 2);
+      const Frame other = apctest::Render(shuffled, ModeSetter(mode), tf, view);
+      const double diff = apctest::MaxAbsDiff(reference.RGBA, other.RGBA);
+      const double momentDiff = apctest::MaxAbsDiff(reference.Moments, other.Moments);
+      std::cout << name << " " << ModeName(mode) << " seed " << seed
+                << ": max |RGBA - shuffled RGBA| = " << diff
+                << ", max |moments diff| = " << momentDiff << " (max alpha " << maxAlpha << ")\n";
+      EXPECT_LE(diff, 1e-5) << name << " " << ModeName(mode) << " seed " << seed;
+      if (mode == vtkAPCVolumeMapper::MBOIT)
+      {
+        // Moments are stored as floats; b0 is at most a few units here.
+        EXPECT_LE(momentDiff, 1e-5) << name << " seed " << seed;
+      }
+    }
+  }
+}
+
+TEST(VolumeMapperInvariance, ShuffledPuzzleRendersTheSame)
+{
+  auto grid = apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 4, 16);
+  ExpectShuffleInvariant(grid, SpheresTF(), Oblique(96), "puzzle spheres");
+}
+
+TEST(VolumeMapperInvariance, ShuffledMixedCellsRenderTheSame)
+{
+  auto grid = apctest::MixedBlock(8, Smooth);
+  std::cout << "mixed block: " << grid->GetNumberOfCells() << " cells\n";
+  ExpectShuffleInvariant(grid, RampTF(), Oblique(96), "mixed cells");
+}
+
+//------------------------------------------------------------------------------
+// Split sums on the core ray marcher, as distributed APC uses it.
+
+apc::CellMesh ToMesh(vtkUnstructuredGrid* grid)
+{
+  apc::CellMesh mesh;
+  std::string message;
+  const bool ok =
+    apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, message);
+  EXPECT_TRUE(ok) << message;
+  EXPECT_TRUE(message.empty()) << message;
+  return mesh;
+}
+
+apc::TransferTable RampTable(double spacing)
+{
+  // Colour and opacity ramps over [0,1], 256 entries.
+  const int n = 256;
+  std::vector<std::array<float, 3>> colours(n);
+  std::vector<double> opacities(n);
+  for (int i = 0; i < n; ++i)
+  {
+    const double s = i / (n - 1.0);
+    colours[i] = { static_cast<float>(s), static_cast<float>(0.3 + 0.5 * s * (1 - s)),
+      static_cast<float>(1 - s) };
+    opacities[i] = s < 0.2 ? 0.0 : 0.02 + 0.5 * (s - 0.2) * (s - 0.2);
+  }
+  return apc::TransferTable(0.0, 1.0, colours, opacities, spacing, 0.1);
+}
+
+struct Sums
+{
+  std::vector<double> Moments;
+  std::vector<double> Colour;
+  int64_t Samples = 0;
+};
+
+constexpr int kN = 4;
+
+// The two passes over a set of meshes that together make the scene: moments summed over
+// all of them, then each one's colour weighted by the summed moments (or by
+// colourMoments if given), summed.
+Sums MarchPieces(const std::vector<const apc::CellMesh*>& pieces, const apc::RayCamera& camera,
+  const apc::TransferTable& table, const apc::LogDepthWarp& warp,
+  const std::vector<double>* colourMoments = nullptr)
+{
+  const size_t pixels = static_cast<size_t>(camera.GetWidth()) * camera.GetHeight();
+  Sums sums;
+  sums.Moments.assign(pixels * (kN + 1), 0.0);
+  sums.Colour.assign(pixels * 4, 0.0);
+  apc::VolumeRayMarcher marcher;
+  for (const apc::CellMesh* piece : pieces)
+  {
+    marcher.SetMesh(piece);
+    marcher.SetView(camera, nullptr);
+    marcher.AccumulateMoments<kN>(table, warp, sums.Moments.data());
+    sums.Samples += marcher.GetLastSampleCount();
+  }
+  const apc::MomentSettings<kN> settings;
+  const double* moments = colourMoments ? colourMoments->data() : sums.Moments.data();
+  for (const apc::CellMesh* piece : pieces)
+  {
+    marcher.SetMesh(piece);
+    marcher.SetView(camera, nullptr);
+    marcher.AccumulateColour<kN>(table, warp, moments, settings, sums.Colour.data());
+  }
+  return sums;
+}
+
+struct SplitErrors
+{
+  double Moments = 0;          // max |b_k(pieces) - b_k(whole)| / b0(whole)
+  double Colour = 0;           // max |C(pieces) - C(whole)| / W(whole), same moments
+  double ColourSummed = 0;     // the same with each side's own moments in pass 2
+  double RGBA = 0;             // resolved pixels, own moments
+  double ExactNonAdditive = 0; // max |sum of the pieces' exact images - exact image|
+  int Visible = 0;
+};
+
+double RelativeDiff(const std::vector<double>& a, const std::vector<double>& b, int stride,
+  const std::vector<double>& norm, int normStride, int normOffset)
+{
+  double worst = 0;
+  for (size_t p = 0; p < a.size() / stride; ++p)
+  {
+    const double scale = norm[p * normStride + normOffset];
+    for (int k = 0; k < stride; ++k)
+    {
+      const double d = std::abs(a[p * stride + k] - b[p * stride + k]);
+      if (scale > 0)
+      {
+        worst = std::max(worst, d / scale);
+      }
+      else if (d != 0 || !(d == d))
+      {
+        worst = std::numeric_limits<double>::infinity(); // an empty pixel must stay empty
+      }
+    }
+  }
+  return worst;
+}
+
+SplitErrors CompareSplit(vtkUnstructuredGrid* whole,
+  const std::vector<vtkSmartPointer<vtkUnstructuredGrid>>& pieceGrids, const apc::RayCamera& camera,
+  const char* name)
+{
+  const apc::CellMesh wholeMesh = ToMesh(whole);
+  std::vector<apc::CellMesh> meshes;
+  vtkIdType pieceCells = 0;
+  for (const auto& g : pieceGrids)
+  {
+    meshes.push_back(ToMesh(g));
+    pieceCells += g->GetNumberOfCells();
+    EXPECT_GT(g->GetNumberOfCells(), 0) << name << ": every piece must own cells";
+  }
+  EXPECT_EQ(pieceCells, whole->GetNumberOfCells()) << name << ": the pieces must partition";
+  std::vector<const apc::CellMesh*> pieces;
+  for (const auto& m : meshes)
+  {
+    pieces.push_back(&m);
+  }
+
+  // What every rank shares: the camera, the transfer function, and the depth warp of the
+  // whole data's bounds.
+  const auto& b = wholeMesh.GetBounds();
+  const double diagonal = std::sqrt(
+    (b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) + (b[5] - b[4]) * (b[5] - b[4]));
+  const apc::TransferTable table = RampTable(diagonal / 300);
+  double tmin = 0;
+  double tmax = 0;
+  camera.DistanceRange(b, tmin, tmax);
+  const apc::LogDepthWarp warp(tmin, tmax);
+
+  const Sums reference = MarchPieces({ &wholeMesh }, camera, table, warp);
+  const Sums split = MarchPieces(pieces, camera, table, warp);
+  const Sums splitSameMoments = MarchPieces(pieces, camera, table, warp, &reference.Moments);
+
+  SplitErrors e;
+  EXPECT_EQ(split.Samples, reference.Samples)
+    << name << ": every lattice sample must be taken by exactly one piece";
+  e.Moments = RelativeDiff(split.Moments, reference.Moments, kN + 1, reference.Moments, kN + 1, 0);
+  e.Colour = RelativeDiff(splitSameMoments.Colour, reference.Colour, 4, reference.Colour, 4, 3);
+  e.ColourSummed = RelativeDiff(split.Colour, reference.Colour, 4, reference.Colour, 4, 3);
+  const size_t pixels = reference.Colour.size() / 4;
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    apc::ColourSums cs;
+    apc::ColourSums cw;
+    std::copy(split.Colour.begin() + 4 * p, split.Colour.begin() + 4 * p + 4, cs.Data());
+    std::copy(reference.Colour.begin() + 4 * p, reference.Colour.begin() + 4 * p + 4, cw.Data());
+    const apc::RGBA rs =
+      apc::Resolve(apc::ResolveMode::Renormalised, cs, split.Moments[p * (kN + 1)]);
+    const apc::RGBA rw =
+      apc::Resolve(apc::ResolveMode::Renormalised, cw, reference.Moments[p * (kN + 1)]);
+    for (int c = 0; c < 4; ++c)
+    {
+      e.RGBA = std::max(e.RGBA, std::abs(rs[c] - rw[c]));
+    }
+    e.Visible += rw[3] > 0.05;
+  }
+
+  // For the record: exact blending is not a sum over pieces.
+  std::vector<float> exactWhole(4 * pixels, 0.f);
+  std::vector<float> exactSum(4 * pixels, 0.f);
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&wholeMesh);
+  marcher.SetView(camera, nullptr);
+  marcher.RenderExact(table, exactWhole.data());
+  for (const apc::CellMesh* piece : pieces)
+  {
+    marcher.SetMesh(piece);
+    marcher.SetView(camera, nullptr);
+    marcher.RenderExact(table, exactSum.data());
+  }
+  e.ExactNonAdditive = apctest::MaxAbsDiff(exactWhole, exactSum);
+
+  std::cout << name << " (" << pieceGrids.size() << " pieces, " << reference.Samples << " samples, "
+            << e.Visible << " pixels with alpha > 0.05): moments rel. diff " << e.Moments
+            << ", colour rel. diff (same moments) " << e.Colour
+            << ", colour rel. diff (summed moments) " << e.ColourSummed
+            << ", resolved RGBA max diff " << e.RGBA
+            << "; EXACT images summed over pieces differ by " << e.ExactNonAdditive << "\n";
+  EXPECT_GT(e.Visible, static_cast<int>(pixels) / 5) << name << ": the scene must be visible";
+  // Moments: the same terms added in another order (per tile, per piece): a few hundred
+  // terms with |z^k a| <= a give errors ~ 1e-14 b0; 1e-12 leaves room and still fails on any
+  // lost, duplicated or differently warped sample (>= 1e-4 relative).
+  EXPECT_LE(e.Moments, 1e-12) << name;
+  // Colour with identical moments in pass 2: again only the order of the sums.
+  EXPECT_LE(e.Colour, 1e-12) << name;
+  // Colour with each side's own moments: T is reconstructed from moments that differ by
+  // ~1e-15 relative; the reconstruction (an LDL^T solve of a biased Hankel matrix, eps =
+  // 5e-7, and polynomial roots) amplifies that: measured up to 4e-13, so 1e-10 (250 times
+  // that) still fails on any real difference (a lost sample changes W by >= 1e-4).
+  EXPECT_LE(e.ColourSummed, 1e-10) << name;
+  // The resolved pixels, alpha C / W: the same bound (measured ~1e-15, the ratio cancels).
+  EXPECT_LE(e.RGBA, 1e-10) << name;
+  return e;
+}
+
+apc::RayCamera ObliqueCamera(int size)
+{
+  return apc::RayCamera(
+    { 3.6, 2.5, 4.5 }, { 0, 0, 0 }, { 0, 1, 0 }, 35.0, false, 1.0, size, size, 0.1, 100.0);
+}
+
+TEST(VolumeMapperInvariance, PuzzlePiecesSumToTheWhole)
+{
+  const apc::RayCamera camera = ObliqueCamera(96);
+  for (int k : { 2, 3, 5 })
+  {
+    auto whole = apctest::PuzzleGrid(vtkAPCPuzzleSource::SMOOTH, k, 2, 12);
+    std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+    for (int p = 0; p < k; ++p)
+    {
+      pieces.push_back(apctest::PuzzlePiece(vtkAPCPuzzleSource::SMOOTH, k, 2, 12, p));
+    }
+    CompareSplit(whole, pieces, camera, ("puzzle K=" + std::to_string(k)).c_str());
+  }
+}
+
+// Pieces as a graph partitioner leaves them: cells assigned by a hash of their id or by a
+// noisy coordinate along the view direction (so each piece owns several disjoint depth
+// layers), extracted with vtkExtractCells (each piece has its own, compacted point ids).
+std::vector<vtkSmartPointer<vtkUnstructuredGrid>> JaggedPieces(
+  vtkUnstructuredGrid* grid, int k, bool byHash)
+{
+  std::vector<vtkNew<vtkIdList>> lists(k);
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+  {
+    int piece;
+    if (byHash)
+    {
+      piece = static_cast<int>(apctest::CellHash(c) % k);
+    }
+    else
+    {
+      const auto x = apctest::CellCentre(grid, c);
+      const double s =
+        2.5 * (x[0] + 0.7 * x[1] + 0.9 * x[2]) + 0.35 * std::sin(9 * x[1] - 4 * x[0]);
+      piece = static_cast<int>(std::floor(s * 1.7 + 100.0)) % k;
+    }
+    lists[piece]->InsertNextId(c);
+  }
+  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+  for (int p = 0; p < k; ++p)
+  {
+    vtkNew<vtkExtractCells> extract;
+    extract->SetInputData(grid);
+    extract->SetCellList(lists[p]);
+    extract->Update();
+    pieces.push_back(extract->GetOutput());
+  }
+  return pieces;
+}
+
+TEST(VolumeMapperInvariance, JaggedPiecesSumToTheWhole)
+{
+  const apc::RayCamera camera = ObliqueCamera(96);
+  auto mixed = apctest::MixedBlock(12, Smooth);
+  auto puzzle = apctest::PuzzleGrid(vtkAPCPuzzleSource::SMOOTH, 3, 3, 12);
+  for (auto* grid : { mixed.Get(), puzzle.Get() })
+  {
+    const std::string what = grid == mixed.Get() ? "mixed" : "puzzle";
+    for (bool byHash : { true, false })
+    {
+      for (int k : { 2, 3, 5 })
+      {
+        auto pieces = JaggedPieces(grid, k, byHash);
+        // The pieces must really interleave in depth: along most rays each piece is entered
+        // more than once.
+        int64_t segments = 0;
+        int64_t covered = 0;
+        for (const auto& piece : pieces)
+        {
+          const apc::CellMesh mesh = ToMesh(piece);
+          apc::VolumeRayMarcher marcher;
+          marcher.SetMesh(&mesh);
+          marcher.SetView(camera, nullptr);
+          std::vector<int32_t> counts(96 * 96, 0);
+          marcher.CountSegments(counts.data());
+          for (int32_t c : counts)
+          {
+            segments += c;
+            covered += c > 0;
+          }
+        }
+        const double perPiece = static_cast<double>(segments) / std::max<int64_t>(covered, 1);
+        const std::string name =
+          what + (byHash ? " hash" : " noisy layers") + " K=" + std::to_string(k);
+        std::cout << name << ": mean segments per piece per covered ray " << perPiece << "\n";
+        EXPECT_GT(perPiece, 1.5) << name << ": the pieces must interleave in depth";
+        CompareSplit(grid, pieces, camera, name.c_str());
+      }
+    }
+  }
+}
+
+//------------------------------------------------------------------------------
+// Gear teeth seen along the slab axis: each puzzle piece owns SlabsPerPiece slabs separated
+// by the other pieces' slabs, so each ray crosses SlabsPerPiece disjoint segments of each
+// piece, K * SlabsPerPiece in all; the whole grid is one segment (adjacent slabs share
+// their boundary planes exactly, whatever their point ids). Integer counts: exact.
+TEST(VolumeMapperInvariance, GearTeethSegmentCounts)
+{
+  const int size = 24;
+  const int slabs = 3;
+  // Parallel, looking down -z, rays at |x|, |y| <= 0.9: every ray crosses every slab.
+  const apc::RayCamera camera(
+    { 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 }, 30.0, true, 0.9, size, size, 0.1, 100.0);
+  for (int k : { 2, 3, 5 })
+  {
+    std::vector<int32_t> sum(size * size, 0);
+    std::vector<int32_t> whole(size * size, 0);
+    for (int p = 0; p < k; ++p)
+    {
+      auto grid = apctest::PuzzlePiece(vtkAPCPuzzleSource::SANDWICH, k, slabs, 4, p);
+      const apc::CellMesh mesh = ToMesh(grid);
+      apc::VolumeRayMarcher marcher;
+      marcher.SetMesh(&mesh);
+      marcher.SetView(camera, nullptr);
+      std::vector<int32_t> counts(size * size, 0);
+      marcher.CountSegments(counts.data());
+      int wrong = 0;
+      for (int32_t c : counts)
+      {
+        wrong += c != slabs;
+      }
+      EXPECT_EQ(wrong, 0) << "K=" << k << " piece " << p << ": pixels without " << slabs
+                          << " segments";
+      for (int i = 0; i < size * size; ++i)
+      {
+        sum[i] += counts[i];
+      }
+    }
+    auto grid = apctest::PuzzleGrid(vtkAPCPuzzleSource::SANDWICH, k, slabs, 4);
+    const apc::CellMesh mesh = ToMesh(grid);
+    apc::VolumeRayMarcher marcher;
+    marcher.SetMesh(&mesh);
+    marcher.SetView(camera, nullptr);
+    marcher.CountSegments(whole.data());
+    const auto [sumMin, sumMax] = std::minmax_element(sum.begin(), sum.end());
+    const auto [wholeMin, wholeMax] = std::minmax_element(whole.begin(), whole.end());
+    std::cout << "gear teeth K=" << k << ", " << slabs << " slabs per piece: summed counts in ["
+              << *sumMin << ", " << *sumMax << "] (expected " << k * slabs << "), whole grid in ["
+              << *wholeMin << ", " << *wholeMax << "] (expected 1)\n";
+    EXPECT_EQ(*sumMin, k * slabs);
+    EXPECT_EQ(*sumMax, k * slabs);
+    EXPECT_EQ(*wholeMin, 1);
+    EXPECT_EQ(*wholeMax, 1);
+
+    // The mapper's heatmap of the whole grid, the same view through VTK's camera.
+    apctest::View view;
+    view.ParallelScale = 0.9;
+    view.Width = view.Height = size;
+    const Frame frame = apctest::Render(
+      grid,
+      [](vtkAPCVolumeMapper* m)
+      {
+        m->SetComputeSegmentCount(true);
+        m->SetSampleDistance(0.01);
+      },
+      {}, view);
+    ASSERT_EQ(frame.SegmentCount.size(), static_cast<size_t>(size * size));
+    const auto [mapperMin, mapperMax] =
+      std::minmax_element(frame.SegmentCount.begin(), frame.SegmentCount.end());
+    EXPECT_EQ(*mapperMin, 1) << "K=" << k;
+    EXPECT_EQ(*mapperMax, 1) << "K=" << k;
+  }
+}
+
+//------------------------------------------------------------------------------
+// Ghost cells. The grid without them is built on the very same points (so the face planes,
+// the mesh bounds, the cell order within tiles and hence every sum are the same) and,
+// separately, with vtkExtractCells (compacted point ids). Both must match to rounding:
+// 1e-6, a few float ulps of values <= 1 (measured 0 for the former).
+void ExpectGhostsSkipped(vtkUnstructuredGrid* grid, unsigned char flag,
+  const std::function<bool(vtkIdType)>& ghost, const apctest::TransferFunction& tf,
+  const char* name)
+{
+  auto ghosted = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  ghosted->ShallowCopy(grid);
+  vtkNew<vtkUnsignedCharArray> ghosts;
+  ghosts->SetName(vtkDataSetAttributes::GhostArrayName());
+  ghosts->SetNumberOfTuples(grid->GetNumberOfCells());
+  vtkNew<vtkIdList> kept;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+  {
+    ghosts->SetValue(c, ghost(c) ? flag : 0);
+    if (!ghost(c))
+    {
+      kept->InsertNextId(c);
+    }
+  }
+  ghosted->GetCellData()->AddArray(ghosts);
+  ASSERT_EQ(ghosted->GetCellGhostArray(), ghosts.Get());
+  auto subset = apctest::CellSubset(grid, [&ghost](vtkIdType c) { return !ghost(c); });
+  vtkNew<vtkExtractCells> extract;
+  extract->SetInputData(grid);
+  extract->SetCellList(kept);
+  extract->Update();
+  std::cout << name << ": " << grid->GetNumberOfCells() - kept->GetNumberOfIds() << " of "
+            << grid->GetNumberOfCells() << " cells are ghosts\n";
+
+  const auto view = Oblique(96);
+  for (int mode : { vtkAPCVolumeMapper::MBOIT, vtkAPCVolumeMapper::EXACT })
+  {
+    const Frame withGhosts = apctest::Render(ghosted, ModeSetter(mode), tf, view);
+    const Frame without = apctest::Render(subset, ModeSetter(mode), tf, view);
+    const Frame extracted = apctest::Render(extract->GetOutput(), ModeSetter(mode), tf, view);
+    const Frame all = apctest::Render(grid, ModeSetter(mode), tf, view);
+    const double dSubset = apctest::MaxAbsDiff(withGhosts.RGBA, without.RGBA);
+    const double dExtract = apctest::MaxAbsDiff(withGhosts.RGBA, extracted.RGBA);
+    const double dAll = apctest::MaxAbsDiff(withGhosts.RGBA, all.RGBA);
+    std::cout << name << " " << ModeName(mode) << ": max |ghosted - without ghosts| = " << dSubset
+              << " (same points), " << dExtract
+              << " (vtkExtractCells); vs. all cells drawn: " << dAll << "\n";
+    EXPECT_LE(dSubset, 1e-6) << name << " " << ModeName(mode);
+    EXPECT_LE(dExtract, 1e-6) << name << " " << ModeName(mode);
+    // The ghosts are a visible part of the scene: drawing them changes the picture.
+    EXPECT_GT(dAll, 0.05) << name << " " << ModeName(mode);
+  }
+}
+
+TEST(VolumeMapperInvariance, DuplicateCellsAreSkipped)
+{
+  auto grid = apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 2, 16);
+  auto* owner = grid->GetCellData()->GetArray("PuzzlePiece");
+  ASSERT_NE(owner, nullptr);
+  // One puzzle piece and, separately, half the cells by hash.
+  ExpectGhostsSkipped(
+    grid, vtkDataSetAttributes::DUPLICATECELL,
+    [owner](vtkIdType c) { return owner->GetComponent(c, 0) == 1; }, SpheresTF(),
+    "puzzle piece 1 DUPLICATECELL");
+  ExpectGhostsSkipped(
+    grid, vtkDataSetAttributes::DUPLICATECELL,
+    [](vtkIdType c) { return apctest::CellHash(c) % 2 == 0; }, SpheresTF(),
+    "half the cells DUPLICATECELL");
+}
+
+TEST(VolumeMapperInvariance, HiddenCellsAreSkipped)
+{
+  auto grid = apctest::MixedBlock(8, Smooth);
+  ExpectGhostsSkipped(
+    grid, vtkDataSetAttributes::HIDDENCELL,
+    [grid](vtkIdType c) { return apctest::CellCentre(grid, c)[0] > 0.1; }, RampTF(),
+    "mixed x > 0.1 HIDDENCELL");
+}
+
+//------------------------------------------------------------------------------
+// A ray lying exactly in a face plane shared by two cells (denominator 0 in the ray/plane
+// clip) must sample the volume once, not once per cell. This happens whenever a pixel centre
+// is aligned with a mesh plane: an odd-sized parallel view centred on a block with a face
+// at x = 0 puts the middle column of pixels in that plane, and the middle row in y = 0.
+TEST(VolumeMapperInvariance, RayInASharedFacePlaneSamplesOnce)
+{
+  const double sigma = -std::log(0.8); // alpha_tf 0.2 per unit distance
+  auto grid = apctest::HexBlock(4, [](double, double, double) { return 0.5; });
+  for (int mode : { vtkAPCVolumeMapper::EXACT, vtkAPCVolumeMapper::MBOIT })
+  {
+    apctest::View view;
+    view.Width = view.Height = 65; // pixel 32's centre is at x = 0 (y = 0) exactly
+    const Frame frame = apctest::Render(grid, ModeSetter(mode), {}, view);
+    // Parallel rays along -z through the block: L = 2 everywhere inside |x|, |y| < 1.
+    const double expected = -std::expm1(-2 * sigma);
+    // The lattice puts 200 +- 1 samples on the ray: alpha within exp(-2 sigma) *
+    // (exp(sigma * 0.01) - 1) ~ 1.5e-3 of the closed form; 2e-3 allows that.
+    const double tolerance = 2e-3;
+    auto alpha = [&](int i, int j) { return frame.RGBA[4 * (j * view.Width + i) + 3]; };
+    std::cout << ModeName(mode) << ": alpha off the planes " << alpha(20, 20) << ", in x = 0 "
+              << alpha(32, 20) << ", in y = 0 " << alpha(20, 32) << ", on both " << alpha(32, 32)
+              << "; expected " << expected << "\n";
+    EXPECT_NEAR(alpha(20, 20), expected, tolerance) << ModeName(mode) << " off the planes";
+    EXPECT_NEAR(alpha(32, 20), expected, tolerance) << ModeName(mode) << " ray in x = 0";
+    EXPECT_NEAR(alpha(20, 32), expected, tolerance) << ModeName(mode) << " ray in y = 0";
+    EXPECT_NEAR(alpha(32, 32), expected, tolerance) << ModeName(mode) << " ray in x = y = 0";
+  }
+}
+}

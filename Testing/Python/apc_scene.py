@@ -1,0 +1,165 @@
+"""Renders one APC scene with ParaView (pvbatch under mpirun, or pvpython connected to a
+pvserver with --server) and checks what every test of the ParaView integration needs:
+each rank's cells before and after rendering (no redistribution), the float image the display
+rank writes (--out), an optional comparison with a reference float image (--compare), and the
+screenshot (--png).
+
+Prints APC-TEST-PASSED or APC-TEST-FAILED (the ctest verdict) and the stage timings.
+"""
+
+import argparse
+import os
+import sys
+
+from paraview.simple import *  # noqa: F401,F403
+from paraview import servermanager
+import apcparaview
+
+parser = argparse.ArgumentParser()
+parser.add_argument("--scene", choices=["puzzle", "wind", "flange"], default="puzzle")
+parser.add_argument("--puzzle-pieces", type=int, default=4)
+parser.add_argument("--size", type=int, nargs=2, default=[160, 120])
+parser.add_argument("--out", help="float image (.vti or .exr) written by the display rank")
+parser.add_argument("--png", help="screenshot")
+parser.add_argument("--compare", help="reference .vti: the RGBA must match within --tolerance")
+parser.add_argument("--tolerance", type=float, default=1e-4)
+parser.add_argument("--plane", action="store_true", help="add an opaque slice through the data")
+parser.add_argument("--mode", default="APC", choices=["APC", "Local exact"])
+parser.add_argument("--drop-array-on-rank", type=int, default=-1,
+                    help="remove the rendered array on this rank (a broken piece)")
+parser.add_argument("--server", help="host:port of a pvserver to connect to")
+parser.add_argument("--expect-blank", action="store_true",
+                    help="the frame must be skipped (no float image written)")
+args = parser.parse_args()
+
+# Everything lives in main(): pvbatch runs programmable filters in this interpreter, and their
+# helpers rebind module globals (e.g. "source").
+def main():
+    failures = []
+
+
+    def check(ok, what):
+        if not ok:
+            failures.append(what)
+            print("check failed:", what)
+
+
+    if args.server:
+        host, port = args.server.split(":")
+        Connect(host, int(port))
+    apcparaview.load_plugin(ns=globals())
+    data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "Data")
+
+    if args.scene == "puzzle":
+        scene_source = APCPuzzleSource(NumberOfPuzzlePieces=args.puzzle_pieces, SlabsPerPiece=4,
+                                 Resolution=16, Field="Spheres")
+        scene_array, lo, hi, unit, spacing = "Spheres", 0.0, 1.0, 0.2, 0.02
+        camera = dict(CameraPosition=[2.5, 1.7, 3.1], CameraFocalPoint=[0, 0, 0],
+                      CameraViewUp=[0, 1, 0])
+    elif args.scene == "wind":
+        scene_source = XMLPartitionedUnstructuredGridReader(
+            FileName=[os.path.join(data, "windAroundBuildings", "wind.pvtu")])
+        scene_array, lo, hi, unit, spacing = "U_mag", 0.0, 20.0, 20.0, 2.0
+        camera = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
+                      CameraViewUp=[0, 0, 1])
+    else:
+        scene_source = XMLPartitionedUnstructuredGridReader(
+            FileName=[os.path.join(data, "flange", "flange.pvtu")])
+        scene_array, lo, hi, unit, spacing = "T", 273.0, 573.0, 0.005, 0.0005
+        camera = dict(CameraPosition=[0.12, -0.1, 0.1], CameraFocalPoint=[0, 0, 0.0],
+                      CameraViewUp=[0, 0, 1])
+
+    if args.drop_array_on_rank >= 0:
+        broken = ProgrammableFilter(registrationName="BrokenPiece", Input=scene_source)
+        broken.OutputDataSetType = "vtkUnstructuredGrid"
+        broken.Script = (
+            "from vtkmodules.vtkParallelCore import vtkMultiProcessController as C\n"
+            "out = self.GetOutput(); out.ShallowCopy(self.GetInput())\n"
+            "c = C.GetGlobalController()\n"
+            "if c and c.GetLocalProcessId() == %d:\n"
+            "    out.GetPointData().RemoveArray('%s')\n" % (args.drop_array_on_rank, scene_array))
+        scene_source = broken
+
+    before = apcparaview.rank_summaries(scene_source)
+    for s in before:
+        print("before:", s)
+
+    view = GetActiveViewOrCreate("RenderView")
+    view.ViewSize = args.size
+    view.OrientationAxesVisibility = 0
+    view.Background = [1, 1, 1]
+    try:
+        view.UseColorPaletteForBackground = 0
+    except AttributeError:
+        pass
+    display = Show(scene_source, view)
+    display.Representation = "APC Volume"
+    ColorBy(display, ("POINTS", scene_array))
+    lut = GetColorTransferFunction(scene_array)
+    lut.RGBPoints = [lo, 0.2, 0.3, 1.0, 0.5 * (lo + hi), 0.9, 0.9, 0.9, hi, 1.0, 0.2, 0.1]
+    pwf = GetOpacityTransferFunction(scene_array)
+    pwf.Points = [lo, 0.05, 0.5, 0.0, hi, 0.6, 0.5, 0.0]
+    display.ScalarOpacityUnitDistance = unit
+    display.APCSampleDistance = spacing
+    display.APCMode = args.mode
+    display.APCVerbosity = 1
+    if args.out:
+        display.APCImageFile = os.path.abspath(args.out)
+        if os.path.exists(args.out):
+            os.remove(args.out)
+    if args.plane:
+        slice_ = Slice(Input=scene_source)
+        slice_.SliceType.Normal = [0, 0, 1]
+        sd = Show(slice_, view)
+        sd.Representation = "Surface"
+        ColorBy(sd, None)
+        sd.AmbientColor = sd.DiffuseColor = [0.1, 0.8, 0.2]
+    for key, value in camera.items():
+        setattr(view, key, value)
+    view.CameraParallelProjection = 0
+    view.CameraViewAngle = 30
+    Render(view)
+    if args.png:
+        SaveScreenshot(args.png, view, ImageResolution=args.size)
+
+    display.UpdatePropertyInformation()
+    t = display.GetProperty("APCLastTimings").GetData()
+    names = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend", "total"]
+    print("APC timings on the display rank: " + ", ".join(
+        "%s %.4f s" % (n, v) for n, v in zip(names, t[:9])) +
+        ", bytes sent %.0f, pixels composited %.0f" % (t[9], t[10]))
+
+    after = apcparaview.rank_summaries(scene_source)
+    check([s["cells"] for s in after] == [s["cells"] for s in before],
+          "rendering moved no cells (per-rank counts unchanged)")
+
+    if args.out:
+        written = os.path.exists(args.out)
+        check(written != args.expect_blank,
+              "float image %s" % ("skipped" if args.expect_blank else "written"))
+    if args.compare and args.out and os.path.exists(args.out):
+        from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+        import numpy
+
+        def rgba(path):
+            reader = vtkXMLImageDataReader()
+            reader.SetFileName(path)
+            reader.Update()
+            return vtk_to_numpy(reader.GetOutput().GetPointData().GetArray("RGBA")).astype(numpy.float64)
+
+        a, b = rgba(args.out), rgba(args.compare)
+        check(a.shape == b.shape, "image sizes %s vs %s" % (a.shape, b.shape))
+        if a.shape == b.shape:
+            diff = float(numpy.abs(a - b).max())
+            print("max |distributed - reference| = %.3g over %d pixels (max alpha %.3f)"
+                  % (diff, a.shape[0], float(b[:, 3].max())))
+            check(diff <= args.tolerance, "within %g of the reference" % args.tolerance)
+            check(float(b[:, 3].max()) > 0.2, "the reference shows something")
+    return failures
+
+
+failures = main()
+print("APC-TEST-FAILED" if failures else "APC-TEST-PASSED")
+if failures:
+    sys.exit(1)
