@@ -331,11 +331,6 @@ struct VolumeRayMarcher::Walker
           {
             ++k;
           }
-          // Parametric coordinates of the last two samples on this ray: the next sample's lie
-          // almost on their line, so extrapolating gives Newton a guess it accepts in one step.
-          double previous[3];
-          bool twoBehind = false;
-          bool oneBehind = false;
           for (double t = static_cast<double>(k) * spacing; t < tout;
                ++k, t = static_cast<double>(k) * spacing)
           {
@@ -352,20 +347,10 @@ struct VolumeRayMarcher::Walker
               }
               const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
                 ray.O[2] + t * ray.D[2] };
-              double guess[3] = { pcoords[0], pcoords[1], pcoords[2] };
-              if (twoBehind)
-              {
-                for (int d = 0; d < 3; ++d)
-                {
-                  guess[d] = 2.0 * pcoords[d] - previous[d];
-                }
-              }
-              std::copy(pcoords, pcoords + 3, previous);
-              twoBehind = oneBehind;
-              oneBehind = true;
-              std::copy(guess, guess + 3, pcoords);
-              // Scalars need about single precision: 1e-7 in parametric units is ample and
-              // saves Newton steps on distorted cells.
+              // The previous sample's coordinates are a close first guess for Newton (an
+              // extrapolated guess was tried: it can leave the cell and converge to another
+              // root of a non-affine map). Scalars need about single precision: 1e-7 in
+              // parametric units is ample and saves Newton steps on distorted cells.
               interpolator.ParametricCoordinates(x, pcoords, nullptr, 1e-7);
               s = table.Lookup(interpolator.InterpolateScalar(pcoords));
             }
