@@ -6,7 +6,7 @@
 //
 //   apcBenchmarkMappers [--size N] [--quick] [--repeats N] [--datasets gear,wind,flange]
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
-//     [--time-cap S] [--spacing-scale F] [--no-images]
+//     [--time-cap S] [--spacing-scale F] [--mappers bunyk,exact,mboit,zsweep,pt] [--no-images]
 //
 // Run under an X server (xvfb-run); Testing/Benchmarks/run-benchmark.sh does everything.
 #include "vtkAPCPuzzleSource.h"
@@ -50,6 +50,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -72,6 +73,16 @@ using Clock = std::chrono::steady_clock;
 double SecondsSince(Clock::time_point start)
 {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// CPU seconds of all threads of this process (llvmpipe's GL threads included). Next to the
+// wall clock it tells whether a frame had its cores to itself: on a shared machine the wall
+// time grows, the CPU time much less.
+double ProcessCpuSeconds()
+{
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 // Bunyk and ZSweep hand every ray's cell segments to a ray integrator, one segment per cell
@@ -114,6 +125,7 @@ struct Options
   bool Images = true;
   std::vector<std::string> Datasets = { "gear", "wind", "flange" };
   std::vector<int> Threads = { 1, 2 };
+  std::vector<std::string> Mappers = { "bunyk", "exact", "mboit", "zsweep", "pt" };
   std::string Out = "out/benchmark";
   std::string Csv;
   std::string Data = APC_SOURCE_DIR "/Data";
@@ -156,6 +168,7 @@ struct Row
   double Pass1 = NAN;
   double Pass2 = NAN;
   double Setup = NAN;
+  double Cpu = NAN;
   double Samples = NAN;
   double RatioToBunyk = NAN;
   double Spacing = NAN;
@@ -242,7 +255,7 @@ vtkSmartPointer<vtkUnstructuredGrid> KeepField(vtkUnstructuredGrid* in, const st
   return out;
 }
 
-Scene MakeScene(const std::string& name, const Options& options)
+Scene MakeScene(const std::string& name, const Options& options, bool tetrahedra)
 {
   Scene scene;
   scene.Name = name;
@@ -288,7 +301,7 @@ Scene MakeScene(const std::string& name, const Options& options)
     scene.ViewUp = { 0.0, 0.0, 1.0 };
     scene.Azimuth = -35;
     scene.Elevation = 35;
-    scene.Dolly = 1.7; // the buildings fill the middle of the domain
+    scene.Dolly = 1.3; // the buildings sit low in the middle of the domain
     scene.Note = "points merged across the 8 pieces";
   }
   else if (name == "flange")
@@ -314,6 +327,11 @@ Scene MakeScene(const std::string& name, const Options& options)
 
   // Bunyk assumes tetrahedra and ZSweep reads only the first three points of every face, so
   // VTK's mappers get VTK's own tetrahedralisation; APC renders the original cells.
+  scene.Tets = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  if (!tetrahedra)
+  {
+    return scene;
+  }
   const auto start = Clock::now();
   vtkNew<vtkDataSetTriangleFilter> tets;
   tets->SetInputData(scene.Grid);
@@ -335,6 +353,7 @@ struct Stage
   Clock::time_point FrameStart = Clock::now();
   double TimeCap = 0;
   bool Aborted = false;
+  double LastCpuSeconds = 0;
 
   Stage(const Scene& scene, int size, double timeCap)
     : TimeCap(timeCap)
@@ -398,9 +417,11 @@ struct Stage
   double Render()
   {
     this->FrameStart = Clock::now();
+    const double cpu = ProcessCpuSeconds();
     this->Aborted = false;
     this->Window->Render();
     this->Window->WaitForCompletion();
+    this->LastCpuSeconds = ProcessCpuSeconds() - cpu;
     return SecondsSince(this->FrameStart);
   }
 
@@ -466,7 +487,8 @@ public:
   void RunDataset(const std::string& name)
   {
     std::cerr << "== " << name << ": preparing\n";
-    const Scene scene = MakeScene(name, this->Opt);
+    const Scene scene = MakeScene(
+      name, this->Opt, this->Wants("bunyk") || this->Wants("zsweep") || this->Wants("pt"));
     std::cerr << "   " << scene.Grid->GetNumberOfCells() << " cells, "
               << scene.Tets->GetNumberOfCells() << " tetrahedra (" << Format(scene.TetSeconds, 3)
               << " s), spacing " << scene.Spacing << "\n";
@@ -475,10 +497,17 @@ public:
 
     for (int threads : this->Opt.Threads)
     {
-      this->RunBunyk(scene, threads, threads == maxThreads);
+      if (this->Wants("bunyk"))
+      {
+        this->RunBunyk(scene, threads, threads == maxThreads);
+      }
     }
     for (int mode : { vtkAPCVolumeMapper::EXACT, vtkAPCVolumeMapper::MBOIT })
     {
+      if (!this->Wants(mode == vtkAPCVolumeMapper::EXACT ? "exact" : "mboit"))
+      {
+        continue;
+      }
       for (int threads : this->Opt.Threads)
       {
         this->RunAPC(scene, mode, threads, threads == maxThreads, scene.Spacing, "");
@@ -494,8 +523,14 @@ public:
       this->RunAPC(scene, vtkAPCVolumeMapper::MBOIT, maxThreads, true,
         scene.Spacing * apcSamples / bunykSamples, "mboit-matched");
     }
-    this->RunZSweep(scene);
-    this->RunPT(scene, maxThreads);
+    if (this->Wants("zsweep"))
+    {
+      this->RunZSweep(scene);
+    }
+    if (this->Wants("pt"))
+    {
+      this->RunPT(scene, maxThreads);
+    }
 
     // Ratios against Bunyk with the same number of threads (PT against the most threads).
     std::map<int, double> bunyk;
@@ -518,23 +553,39 @@ public:
     this->CompareImages(scene);
   }
 
-  void WriteCsv(std::ostream& out) const
+  static void WriteCsvHeader(std::ostream& out)
   {
     out << "dataset,cells,image,mapper,mode,threads,first_frame_s,frame_s,pass1_s,pass2_s,"
-           "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing\n";
-    for (const Row& row : this->Rows)
+           "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s\n";
+  }
+
+  // Rows from index first on; written per data set so that a crash keeps what was measured.
+  void WriteCsv(std::ostream& out, size_t first) const
+  {
+    for (size_t r = first; r < this->Rows.size(); ++r)
     {
+      const Row& row = this->Rows[r];
       const double perSecond = row.Samples / row.Frame;
       out << row.Dataset << ',' << row.Cells << ',' << row.Image << ',' << row.Mapper << ','
           << row.Mode << ',' << row.Threads << ',' << Format(row.FirstFrame) << ','
           << Format(row.Frame) << ',' << Format(row.Pass1) << ',' << Format(row.Pass2) << ','
           << (std::isnan(row.Samples) ? "" : std::to_string(static_cast<int64_t>(row.Samples)))
           << ',' << Format(perSecond, 3) << ',' << Format(row.RatioToBunyk, 3) << ','
-          << Quote(row.Note) << ',' << Format(row.Setup) << ',' << Format(row.Spacing) << '\n';
+          << Quote(row.Note) << ',' << Format(row.Setup) << ',' << Format(row.Spacing) << ','
+          << Format(row.Cpu) << '\n';
     }
+    out.flush();
   }
 
+  size_t GetNumberOfRows() const { return this->Rows.size(); }
+
 private:
+  bool Wants(const std::string& mapper) const
+  {
+    return std::find(this->Opt.Mappers.begin(), this->Opt.Mappers.end(), mapper) !=
+      this->Opt.Mappers.end();
+  }
+
   Row NewRow(const Scene& scene, vtkIdType cells, const std::string& mapper,
     const std::string& mode, const std::string& threads)
   {
@@ -569,6 +620,7 @@ private:
     // A frame of many seconds is measured once: repeats would not change the picture.
     const int repeats = row.FirstFrame > 20.0 ? 1 : this->Opt.Repeats;
     std::vector<double> frames;
+    std::vector<double> cpu;
     for (int f = 0; f < repeats; ++f)
     {
       const double seconds = stage.Render();
@@ -578,9 +630,11 @@ private:
         break;
       }
       frames.push_back(seconds);
+      cpu.push_back(stage.LastCpuSeconds);
       perFrame(f);
     }
     row.Frame = Median(frames);
+    row.Cpu = Median(cpu);
     if (repeats != this->Opt.Repeats)
     {
       row.Note += std::string(row.Note.empty() ? "" : "; ") + "1 timed frame (slow)";
@@ -591,8 +645,9 @@ private:
   {
     std::cerr << "   " << std::left << std::setw(7) << row.Mapper << std::setw(6) << row.Mode
               << " threads " << std::setw(3) << row.Threads << " first " << std::setw(8)
-              << Format(row.FirstFrame) << " frame " << std::setw(8) << Format(row.Frame)
-              << (row.Note.empty() ? "" : "  [" + row.Note + "]") << std::right << "\n";
+              << Format(row.FirstFrame) << " frame " << std::setw(8) << Format(row.Frame) << " cpu "
+              << std::setw(8) << Format(row.Cpu) << (row.Note.empty() ? "" : "  [" + row.Note + "]")
+              << std::right << "\n";
   }
 
   void KeepImage(const Scene& scene, const std::string& tag, Stage& stage)
@@ -841,6 +896,7 @@ void Usage()
   std::cerr << "usage: apcBenchmarkMappers [--size N] [--quick] [--repeats N]\n"
                "  [--datasets gear,wind,flange] [--out DIR] [--csv FILE] [--data DIR]\n"
                "  [--threads 1,2] [--zsweep-max-cells N] [--time-cap SECONDS] [--spacing-scale F]\n"
+               "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images]\n";
 }
 
@@ -909,6 +965,10 @@ int main(int argc, char* argv[])
     {
       options.TimeCap = std::stod(value());
     }
+    else if (arg == "--mappers")
+    {
+      options.Mappers = Split(value());
+    }
     else if (arg == "--spacing-scale")
     {
       options.SpacingScale = std::stod(value());
@@ -941,18 +1001,20 @@ int main(int argc, char* argv[])
   std::error_code error;
   std::filesystem::create_directories(options.Out, error);
   const auto start = Clock::now();
-  Benchmark benchmark(options);
-  for (const std::string& name : options.Datasets)
-  {
-    benchmark.RunDataset(name);
-  }
   std::ofstream csv(options.Csv);
   if (!csv)
   {
     std::cerr << "error: cannot write " << options.Csv << "\n";
     return 1;
   }
-  benchmark.WriteCsv(csv);
+  Benchmark::WriteCsvHeader(csv);
+  Benchmark benchmark(options);
+  for (const std::string& name : options.Datasets)
+  {
+    const size_t first = benchmark.GetNumberOfRows();
+    benchmark.RunDataset(name);
+    benchmark.WriteCsv(csv, first);
+  }
   std::cerr << "wrote " << options.Csv << " (" << Format(SecondsSince(start), 3) << " s)\n";
   return 0;
 }

@@ -19,10 +19,9 @@ mkdir -p "$out"
 
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores"
 start=$(date +%s)
-# xvfb-run -a alone races with concurrent xvfb-runs for the first free display; starting the
-# search at a per-process number keeps parallel test runs out of each other's X server.
-xvfb-run -a -n $((200 + $$ % 700)) -s "-screen 0 2048x2048x24" \
-  "$program" --out "$out" --csv "$out/mappers.csv" "$@"
+# The project's private Xvfb (2048x2048x24), not xvfb-run -a: with other X jobs running,
+# xvfb-run's display race and auth cookie killed the benchmark's windows mid-run.
+bash "$top/.ci/with-xvfb" "$program" --out "$out" --csv "$out/mappers.csv" "$@"
 end=$(date +%s)
 echo "load average after: $(cut -d' ' -f1-3 /proc/loadavg); benchmark $((end - start)) s"
 echo
@@ -98,4 +97,21 @@ for row in table:
 print("(x/bunyk = Bunyk's frame time / x's at the same thread count, > 1 is faster than Bunyk;"
       " pass2/pass1 at 1 thread; matched = MBOIT with as many samples as Bunyk integrates"
       " segments)")
+
+# A frame of t CPU-bound threads that had its cores to itself uses about t times its wall
+# time in CPU time; much less means other processes took cores and the wall times (and the
+# ratios and speedups) are inflated. Only 1-thread frames and APC's (whose serial part is
+# tiny) are judged: Bunyk's per-frame set-up runs on one thread whatever its thread count.
+noisy = []
+for r in rows:
+    wall, cpu = num(r["frame_s"]), num(r.get("cpu_s", ""))
+    judged = r["threads"] == "1" or (r["mapper"] == "apc" and r["threads"].isdigit())
+    if judged and wall and cpu and cpu < 0.85 * int(r["threads"]) * wall:
+        noisy.append(f"{r['dataset']}/{r['mapper']}/{r['mode'] or '-'}/{r['threads']} threads: "
+                     f"cpu {cpu:.3g} s in {wall:.3g} s wall")
+if noisy:
+    print("WARNING: other processes competed for the cores (frames got < 85 % of their threads' cores):")
+    for line in noisy:
+        print("  " + line)
+    print("The numbers are noisy: rerun on a quiet machine.")
 EOF

@@ -16,7 +16,8 @@ from paraview import servermanager
 import apcparaview
 
 parser = argparse.ArgumentParser()
-parser.add_argument("--scene", choices=["puzzle", "wind", "flange"], default="puzzle")
+parser.add_argument("--scene", choices=["puzzle", "wind", "flange", "flange-blocks"],
+                    default="puzzle")
 parser.add_argument("--puzzle-pieces", type=int, default=4)
 parser.add_argument("--size", type=int, nargs=2, default=[160, 120])
 parser.add_argument("--out", help="float image (.vti or .exr) written by the display rank")
@@ -62,11 +63,20 @@ def main():
         scene_array, lo, hi, unit, spacing = "U_mag", 0.0, 20.0, 20.0, 2.0
         camera = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
                       CameraViewUp=[0, 0, 1])
+    elif args.scene == "flange-blocks":
+        # A multiblock dataset (as the OpenFOAM and Exodus readers produce): the four Scotch
+        # pieces of the flange as four blocks.
+        blocks = [XMLUnstructuredGridReader(
+            FileName=[os.path.join(data, "flange", "flange_%d.vtu" % i)]) for i in range(4)]
+        scene_source = GroupDatasets(Input=blocks)
+        scene_array, lo, hi, unit, spacing = "T", 273.0, 573.0, 0.005, 0.0005
+        camera = dict(CameraPosition=[0.07, -0.06, 0.05], CameraFocalPoint=[0, -0.0025, -0.01],
+                      CameraViewUp=[0, 0, 1])
     else:
         scene_source = XMLPartitionedUnstructuredGridReader(
             FileName=[os.path.join(data, "flange", "flange.pvtu")])
         scene_array, lo, hi, unit, spacing = "T", 273.0, 573.0, 0.005, 0.0005
-        camera = dict(CameraPosition=[0.12, -0.1, 0.1], CameraFocalPoint=[0, 0, 0.0],
+        camera = dict(CameraPosition=[0.07, -0.06, 0.05], CameraFocalPoint=[0, -0.0025, -0.01],
                       CameraViewUp=[0, 0, 1])
 
     if args.drop_array_on_rank >= 0:
@@ -114,6 +124,7 @@ def main():
         sd.Representation = "Surface"
         ColorBy(sd, None)
         sd.AmbientColor = sd.DiffuseColor = [0.1, 0.8, 0.2]
+    Render(view)  # paraview.simple resets the camera on a view's first render: set ours after
     for key, value in camera.items():
         setattr(view, key, value)
     view.CameraParallelProjection = 0
