@@ -110,6 +110,28 @@ void Unpack(const Packed* packed, int width, const Rect& r, int components, Full
       full + (static_cast<size_t>(j) * width + r.I0) * components);
   }
 }
+
+// Sums the rectangle of an image over all processes, in precision T: onto every process
+// (allreduce) or onto the display process (reduce). Returns the bytes this process sent.
+template <class T>
+double SumRect(vtkMultiProcessController* controller, std::vector<double>& image, int width,
+  const Rect& rect, int components, bool everywhere, int display)
+{
+  const vtkIdType count = static_cast<vtkIdType>(rect.Pixels() * components);
+  std::vector<T> send(count);
+  std::vector<T> received(count);
+  Pack(image.data(), width, rect, components, send.data());
+  if (everywhere)
+  {
+    controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
+  }
+  else
+  {
+    controller->Reduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP, display);
+  }
+  Unpack(received.data(), width, rect, components, image.data());
+  return static_cast<double>(sizeof(T)) * count;
+}
 }
 
 struct vtkAPCCompositePass::Internals
@@ -385,39 +407,9 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     {
       return;
     }
-    const vtkIdType count = static_cast<vtkIdType>(rect.Pixels() * components);
-    if (this->CompositeInDouble)
-    {
-      std::vector<double> send(count);
-      std::vector<double> received(count);
-      Pack(image.data(), width, rect, components, send.data());
-      if (everywhere)
-      {
-        controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
-      }
-      else
-      {
-        controller->Reduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP, display);
-      }
-      Unpack(received.data(), width, rect, components, image.data());
-      internal.BytesSent += 8.0 * count;
-    }
-    else
-    {
-      std::vector<float> send(count);
-      std::vector<float> received(count);
-      Pack(image.data(), width, rect, components, send.data());
-      if (everywhere)
-      {
-        controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
-      }
-      else
-      {
-        controller->Reduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP, display);
-      }
-      Unpack(received.data(), width, rect, components, image.data());
-      internal.BytesSent += 4.0 * count;
-    }
+    internal.BytesSent += this->CompositeInDouble
+      ? SumRect<double>(controller, image, width, rect, components, everywhere, display)
+      : SumRect<float>(controller, image, width, rect, components, everywhere, display);
   };
   sum(momentImage, stride, true);
   internal.Lap("allreduce");

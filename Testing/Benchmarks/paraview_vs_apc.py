@@ -122,7 +122,13 @@ if TAG != "input":
     tri = vtkDataSetTriangleFilter(); tri.TetrahedraOnlyOn(); tri.SetInputData(piece); tri.Update()
     mine = tets(tri.GetOutput())
     res["tets_before"] = tri.GetOutput().GetNumberOfCells()
+    # Import the modules that wrap the real classes of the session (vtkSMSession) and of the
+    # representations: on the satellites nothing else has, and Python would see only the
+    # nearest wrapped base classes (vtkPVSession, vtkPassInputTypeAlgorithm).
+    import paraview.modules.vtkRemotingServerManager  # noqa: F401
+    import paraview.modules.vtkRemotingViews  # noqa: F401  (the representations' classes)
     session = vtkProcessModule.GetProcessModule().GetActiveSession()
+    res["session_class"] = session.GetClassName()
     rep = session.GetSIObject(GID).GetVTKObject()  # the display's vtkPVCompositeRepresentation
     while not hasattr(rep, "GetActiveVolumeMapper"):
         rep = rep.GetActiveRepresentation()

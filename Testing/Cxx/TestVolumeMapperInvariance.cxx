@@ -31,16 +31,6 @@ namespace
 {
 using apctest::Frame;
 
-apctest::TransferFunction SpheresTF()
-{
-  // A red core seen through a translucent blue shell (as TestVolumeMapperQuality).
-  apctest::TransferFunction tf;
-  tf.Colours = { { 0.0, 0.0, 0.0, 0.0 }, { 0.5, 0.15, 0.3, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
-  tf.Opacities = { { 0.0, 0.0 }, { 0.2, 0.0 }, { 0.5, 0.12 }, { 0.75, 0.05 }, { 1.0, 0.95 } };
-  tf.UnitDistance = 0.1;
-  return tf;
-}
-
 apctest::TransferFunction RampTF()
 {
   apctest::TransferFunction tf;
@@ -48,16 +38,6 @@ apctest::TransferFunction RampTF()
   tf.Opacities = { { 0.0, 0.02 }, { 0.4, 0.1 }, { 1.0, 0.6 } };
   tf.UnitDistance = 0.2;
   return tf;
-}
-
-apctest::View Oblique(int size)
-{
-  apctest::View view;
-  view.Parallel = false;
-  view.Position = { 3.6, 2.5, 4.5 };
-  view.ViewAngle = 35;
-  view.Width = view.Height = size;
-  return view;
 }
 
 double Smooth(double x, double y, double z)
@@ -138,14 +118,14 @@ void ExpectShuffleInvariant(vtkUnstructuredGrid* grid, const apctest::TransferFu
 TEST(VolumeMapperInvariance, ShuffledPuzzleRendersTheSame)
 {
   auto grid = apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 4, 16);
-  ExpectShuffleInvariant(grid, SpheresTF(), Oblique(96), "puzzle spheres");
+  ExpectShuffleInvariant(grid, apctest::SpheresTF(), apctest::ObliqueView(96), "puzzle spheres");
 }
 
 TEST(VolumeMapperInvariance, ShuffledMixedCellsRenderTheSame)
 {
   auto grid = apctest::MixedBlock(8, Smooth);
   std::cout << "mixed block: " << grid->GetNumberOfCells() << " cells\n";
-  ExpectShuffleInvariant(grid, RampTF(), Oblique(96), "mixed cells");
+  ExpectShuffleInvariant(grid, RampTF(), apctest::ObliqueView(96), "mixed cells");
 }
 
 //------------------------------------------------------------------------------
@@ -551,7 +531,7 @@ void ExpectGhostsSkipped(vtkUnstructuredGrid* grid, unsigned char flag,
   std::cout << name << ": " << grid->GetNumberOfCells() - kept->GetNumberOfIds() << " of "
             << grid->GetNumberOfCells() << " cells are ghosts\n";
 
-  const auto view = Oblique(96);
+  const auto view = apctest::ObliqueView(96);
   for (int mode : { vtkAPCVolumeMapper::MBOIT, vtkAPCVolumeMapper::EXACT })
   {
     const Frame withGhosts = apctest::Render(ghosted, ModeSetter(mode), tf, view);
@@ -579,11 +559,11 @@ TEST(VolumeMapperInvariance, DuplicateCellsAreSkipped)
   // One puzzle piece and, separately, half the cells by hash.
   ExpectGhostsSkipped(
     grid, vtkDataSetAttributes::DUPLICATECELL,
-    [owner](vtkIdType c) { return owner->GetComponent(c, 0) == 1; }, SpheresTF(),
+    [owner](vtkIdType c) { return owner->GetComponent(c, 0) == 1; }, apctest::SpheresTF(),
     "puzzle piece 1 DUPLICATECELL");
   ExpectGhostsSkipped(
     grid, vtkDataSetAttributes::DUPLICATECELL,
-    [](vtkIdType c) { return apctest::CellHash(c) % 2 == 0; }, SpheresTF(),
+    [](vtkIdType c) { return apctest::CellHash(c) % 2 == 0; }, apctest::SpheresTF(),
     "half the cells DUPLICATECELL");
 }
 

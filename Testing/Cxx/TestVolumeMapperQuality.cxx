@@ -2,6 +2,7 @@
 // teeth / sandwich), and the order independence MBOIT promises: a shuffled copy of the mesh
 // renders the same image.
 
+#include "apcTestGrids.h"
 #include "apcTestScenes.h"
 
 #include "apcImageMetrics.h"
@@ -18,27 +19,6 @@ namespace
 {
 using apctest::Frame;
 
-vtkSmartPointer<vtkUnstructuredGrid> Puzzle(int field, int pieces, int slabs, int resolution)
-{
-  vtkNew<vtkAPCPuzzleSource> source;
-  source->SetField(field);
-  source->SetNumberOfPuzzlePieces(pieces);
-  source->SetSlabsPerPiece(slabs);
-  source->SetResolution(resolution);
-  source->Update();
-  return source->GetOutput();
-}
-
-apctest::TransferFunction SpheresTF()
-{
-  // The paper's picture: a red core seen through a translucent blue shell.
-  apctest::TransferFunction tf;
-  tf.Colours = { { 0.0, 0.0, 0.0, 0.0 }, { 0.5, 0.15, 0.3, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
-  tf.Opacities = { { 0.0, 0.0 }, { 0.2, 0.0 }, { 0.5, 0.12 }, { 0.75, 0.05 }, { 1.0, 0.95 } };
-  tf.UnitDistance = 0.1;
-  return tf;
-}
-
 apctest::TransferFunction SandwichTF()
 {
   // One colour per puzzle piece (Sandwich = piece / (pieces - 1)), all fairly opaque: the
@@ -49,16 +29,6 @@ apctest::TransferFunction SandwichTF()
   tf.Opacities = { { 0.0, 0.6 }, { 1.0, 0.6 } };
   tf.UnitDistance = 0.1;
   return tf;
-}
-
-apctest::View Oblique(int size)
-{
-  apctest::View view;
-  view.Parallel = false;
-  view.Position = { 3.6, 2.5, 4.5 };
-  view.ViewAngle = 35;
-  view.Width = view.Height = size;
-  return view;
 }
 
 apc::ImageComparison CompareRGB(const Frame& a, const Frame& b)
@@ -91,7 +61,7 @@ auto ModeSetter(int mode)
 apc::ImageComparison RenderBothModes(
   const std::string& name, vtkDataSet* grid, const apctest::TransferFunction& tf)
 {
-  const auto view = Oblique(160);
+  const auto view = apctest::ObliqueView(160);
   const Frame exact = apctest::Render(grid, ModeSetter(vtkAPCVolumeMapper::EXACT), tf, view);
   const Frame mboit = apctest::Render(grid, ModeSetter(vtkAPCVolumeMapper::MBOIT), tf, view);
   apctest::WritePNG(apctest::OutputPath(name + "_exact.png"), exact.RGBA, view.Width, view.Height);
@@ -103,8 +73,8 @@ apc::ImageComparison RenderBothModes(
 
 TEST(VolumeMapperQuality, SpheresMBOITCloseToExact)
 {
-  const auto c =
-    RenderBothModes("spheres", Puzzle(vtkAPCPuzzleSource::SPHERES, 4, 4, 32), SpheresTF());
+  const auto c = RenderBothModes(
+    "spheres", apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 4, 32), apctest::SpheresTF());
   // The paper reports SSIM 0.99 / PSNR 32.3 dB on its sphere; these bounds sit just below
   // what this scene measures (see the issue note) so a regression shows.
   EXPECT_GE(c.Ssim, 0.99);
@@ -113,8 +83,8 @@ TEST(VolumeMapperQuality, SpheresMBOITCloseToExact)
 
 TEST(VolumeMapperQuality, GearTeethMBOITCloseToExact)
 {
-  const auto c =
-    RenderBothModes("gearteeth", Puzzle(vtkAPCPuzzleSource::SANDWICH, 4, 4, 24), SandwichTF());
+  const auto c = RenderBothModes(
+    "gearteeth", apctest::PuzzleGrid(vtkAPCPuzzleSource::SANDWICH, 4, 4, 24), SandwichTF());
   // Thin opaque slabs are MBOIT's hard case (the paper's Fig. on thin structures).
   EXPECT_GE(c.Ssim, 0.95);
   EXPECT_GE(c.Psnr, 25.0);

@@ -14,25 +14,6 @@ namespace
 {
 using apctest::Frame;
 
-apctest::TransferFunction SpheresTF()
-{
-  apctest::TransferFunction tf;
-  tf.Colours = { { 0.0, 0.0, 0.0, 0.0 }, { 0.5, 0.15, 0.3, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
-  tf.Opacities = { { 0.0, 0.0 }, { 0.2, 0.0 }, { 0.5, 0.12 }, { 0.75, 0.05 }, { 1.0, 0.95 } };
-  tf.UnitDistance = 0.1;
-  return tf;
-}
-
-apctest::View Oblique(int size)
-{
-  apctest::View view;
-  view.Parallel = false;
-  view.Position = { 3.6, 2.5, 4.5 };
-  view.ViewAngle = 35;
-  view.Width = view.Height = size;
-  return view;
-}
-
 // Number of values whose bit patterns differ (0 = bitwise identical); -1 for other sizes.
 template <class T>
 long BitwiseDifferences(const std::vector<T>& a, const std::vector<T>& b)
@@ -67,7 +48,7 @@ TEST(VolumeMapperThreads, ThreadCountDoesNotChangeTheImage)
           m->SetNumberOfThreads(threads);
           m->SetComputeSegmentCount(true);
         },
-        SpheresTF(), Oblique(160)));
+        apctest::SpheresTF(), apctest::ObliqueView(160)));
     }
     EXPECT_GT(apctest::MaxChannel(frames[0].RGBA, 4, 3), 0.3);
     for (size_t f = 1; f < frames.size(); ++f)
@@ -94,7 +75,7 @@ TEST(VolumeMapperThreads, RepeatedRendersAreIdentical)
 {
   auto grid =
     apctest::MixedBlock(8, [](double x, double y, double z) { return 0.5 + 0.4 * x * y * z; });
-  apctest::Scene scene(SpheresTF(), Oblique(96));
+  apctest::Scene scene(apctest::SpheresTF(), apctest::ObliqueView(96));
   scene.Mapper->SetInputData(grid);
   scene.Mapper->SetSampleDistance(0.01);
   const Frame first = scene.Render();
@@ -115,8 +96,8 @@ TEST(VolumeMapperThreads, CachedMeshFollowsDataChanges)
 {
   auto field = [](double x, double y, double z) { return 0.5 + 0.4 * x * y * z; };
   auto grid = apctest::HexBlock(6, field);
-  apctest::TransferFunction tf = SpheresTF();
-  apctest::Scene scene(tf, Oblique(64));
+  apctest::TransferFunction tf = apctest::SpheresTF();
+  apctest::Scene scene(tf, apctest::ObliqueView(64));
   scene.Mapper->SetInputData(grid);
   scene.Mapper->SetSampleDistance(0.01);
   const Frame before = scene.Render();
@@ -124,7 +105,7 @@ TEST(VolumeMapperThreads, CachedMeshFollowsDataChanges)
   auto fresh = [&](vtkUnstructuredGrid* g)
   {
     return apctest::Render(
-      g, [](vtkAPCVolumeMapper* m) { m->SetSampleDistance(0.01); }, tf, Oblique(64));
+      g, [](vtkAPCVolumeMapper* m) { m->SetSampleDistance(0.01); }, tf, apctest::ObliqueView(64));
   };
 
   // New scalar values in the same array.
@@ -166,8 +147,8 @@ TEST(VolumeMapperThreads, PipelineInputIsUpdated)
   source->SetSlabsPerPiece(2);
   source->SetResolution(8);
   source->SetField(vtkAPCPuzzleSource::SPHERES);
-  apctest::TransferFunction tf = SpheresTF();
-  apctest::Scene scene(tf, Oblique(64));
+  apctest::TransferFunction tf = apctest::SpheresTF();
+  apctest::Scene scene(tf, apctest::ObliqueView(64));
   scene.Mapper->SetInputConnection(source->GetOutputPort());
   scene.Mapper->SetSampleDistance(0.01);
   const Frame spheres = scene.Render();
@@ -178,7 +159,7 @@ TEST(VolumeMapperThreads, PipelineInputIsUpdated)
   vtkNew<vtkUnstructuredGrid> copy;
   copy->DeepCopy(source->GetOutput());
   const Frame expected = apctest::Render(
-    copy, [](vtkAPCVolumeMapper* m) { m->SetSampleDistance(0.01); }, tf, Oblique(64));
+    copy, [](vtkAPCVolumeMapper* m) { m->SetSampleDistance(0.01); }, tf, apctest::ObliqueView(64));
   std::cout << "pipeline input: max alpha first render " << apctest::MaxChannel(spheres.RGBA, 4, 3)
             << ", after changing the field max diff to a fresh render "
             << apctest::MaxAbsDiff(smooth.RGBA, expected.RGBA) << "\n";

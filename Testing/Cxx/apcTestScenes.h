@@ -108,6 +108,27 @@ struct View
   int Height = 64;
 };
 
+// The paper's picture for the Spheres field: a red core seen through a translucent blue shell.
+inline TransferFunction SpheresTF()
+{
+  TransferFunction tf;
+  tf.Colours = { { 0.0, 0.0, 0.0, 0.0 }, { 0.5, 0.15, 0.3, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
+  tf.Opacities = { { 0.0, 0.0 }, { 0.2, 0.0 }, { 0.5, 0.12 }, { 0.75, 0.05 }, { 1.0, 0.95 } };
+  tf.UnitDistance = 0.1;
+  return tf;
+}
+
+// A perspective view of [-1,1]^3 from an oblique corner, size x size pixels.
+inline View ObliqueView(int size)
+{
+  View view;
+  view.Parallel = false;
+  view.Position = { 3.6, 2.5, 4.5 };
+  view.ViewAngle = 35;
+  view.Width = view.Height = size;
+  return view;
+}
+
 struct Frame
 {
   int Width = 0;
