@@ -29,6 +29,7 @@ namespace
 struct TileRect
 {
   int I0, J0, I1, J1; // exclusive ends
+  int64_t Index;
   int Width() const { return this->I1 - this->I0; }
   int Pixels() const { return (this->I1 - this->I0) * (this->J1 - this->J0); }
 };
@@ -65,7 +66,7 @@ struct ExactVisitor
     }
   }
   void Segment(int, double, double) {}
-  void Sample(int pixel, int64_t k, double, const TransferSample& s)
+  void Sample(int pixel, int64_t k, double, double, const TransferSample& s)
   {
     this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
   }
@@ -111,16 +112,37 @@ struct MomentVisitor
   double* Output;
   int Width;
   const LogDepthWarp* Warp;
+  VolumeRayMarcher::SampleCache* Cache;
   std::vector<double> Sums;
+  std::vector<CachedSample>* Recorded = nullptr;
 
-  void BeginTile(const TileRect& tile) { this->Sums.assign(tile.Pixels() * (N + 1), 0.0); }
-  void Segment(int, double, double) {}
-  void Sample(int pixel, int64_t, double t, const TransferSample& s)
+  void BeginTile(const TileRect& tile)
   {
-    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), (*this->Warp)(t), s.Absorbance);
+    this->Sums.assign(tile.Pixels() * (N + 1), 0.0);
+    this->Recorded = this->Cache ? &this->Cache->Tiles[tile.Index] : nullptr;
+  }
+  void Segment(int, double, double) {}
+  void Sample(int pixel, int64_t, double t, double scalar, const TransferSample& s)
+  {
+    const double z = (*this->Warp)(t);
+    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
+    if (this->Cache && this->Cache->Record)
+    {
+      this->Recorded->push_back(
+        { static_cast<float>(z), static_cast<float>(scalar), static_cast<uint16_t>(pixel) });
+    }
   }
   void EndTile(const TileRect& tile)
   {
+    if (this->Recorded && this->Cache->Record)
+    {
+      // Over budget, the cache is dropped as a whole and pass 2 marches again.
+      const size_t bytes = this->Recorded->capacity() * sizeof(CachedSample);
+      if (this->Cache->Bytes.fetch_add(bytes) + bytes > this->Cache->MaxBytes)
+      {
+        this->Cache->Record = false;
+      }
+    }
     for (int p = 0; p < tile.Pixels(); ++p)
     {
       const int i = tile.I0 + p % tile.Width();
@@ -158,10 +180,14 @@ struct ColourVisitor
     this->Sums.assign(tile.Pixels(), { 0.0, 0.0, 0.0, 0.0 });
   }
   void Segment(int, double, double) {}
-  void Sample(int pixel, int64_t, double t, const TransferSample& s)
+  void Sample(int pixel, int64_t, double t, double, const TransferSample& s)
+  {
+    this->Add(pixel, (*this->Warp)(t), s);
+  }
+  void Add(int pixel, double z, const TransferSample& s)
   {
     const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
-    const double w = alpha * this->Transmittance[pixel]((*this->Warp)(t));
+    const double w = alpha * this->Transmittance[pixel](z);
     auto& sum = this->Sums[pixel];
     sum[0] += w * s.Colour[0];
     sum[1] += w * s.Colour[1];
@@ -201,7 +227,7 @@ struct SegmentVisitor
     }
   }
   void Segment(int pixel, double tin, double tout) { this->Pixels[pixel].emplace_back(tin, tout); }
-  void Sample(int, int64_t, double, const TransferSample&) {}
+  void Sample(int, int64_t, double, double, const TransferSample&) {}
   void EndTile(const TileRect& tile)
   {
     for (int p = 0; p < tile.Pixels(); ++p)
@@ -289,9 +315,11 @@ struct VolumeRayMarcher::Walker
       const int j0 = std::max(r[1], tile.J0);
       const int j1 = std::min(r[3], tile.J1 - 1);
       TransferSample cellSample{};
+      double cellScalar = 0.0;
       if (cellScalars)
       {
-        cellSample = table.Lookup(mesh.CellScalars[cell]);
+        cellScalar = mesh.CellScalars[cell];
+        cellSample = table.Lookup(cellScalar);
         if (!(cellSample.Absorbance > 0) && !Visitor::WantsSegments)
         {
           continue; // an invisible cell
@@ -335,6 +363,7 @@ struct VolumeRayMarcher::Walker
                ++k, t = static_cast<double>(k) * spacing)
           {
             TransferSample s = cellSample;
+            double scalar = cellScalar;
             if (!cellScalars)
             {
               if (!haveCorners)
@@ -352,12 +381,13 @@ struct VolumeRayMarcher::Walker
               // root of a non-affine map). Scalars need about single precision: 1e-7 in
               // parametric units is ample and saves Newton steps on distorted cells.
               interpolator.ParametricCoordinates(x, pcoords, nullptr, 1e-7);
-              s = table.Lookup(interpolator.InterpolateScalar(pcoords));
+              scalar = interpolator.InterpolateScalar(pcoords);
+              s = table.Lookup(scalar);
             }
             ++samples;
             if (s.Absorbance > 0)
             {
-              visitor.Sample(local, k, t, s);
+              visitor.Sample(local, k, t, scalar, s);
             }
           }
         }
@@ -371,6 +401,7 @@ struct VolumeRayMarcher::Walker
 //------------------------------------------------------------------------------
 VolumeRayMarcher::VolumeRayMarcher()
   : TileBins(new Bins)
+  , Cache(new SampleCache)
 {
 }
 
@@ -380,11 +411,15 @@ VolumeRayMarcher::~VolumeRayMarcher() = default;
 void VolumeRayMarcher::SetMesh(const CellMesh* mesh)
 {
   this->Mesh = mesh;
+  this->Cache->Valid = false;
+  this->Cache->Tiles.clear();
 }
 
 //------------------------------------------------------------------------------
 void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
 {
+  this->Cache->Valid = false;
+  this->Cache->Tiles.clear();
   this->Camera.reset(new RayCamera(camera));
   const int w = camera.GetWidth();
   const int h = camera.GetHeight();
@@ -527,7 +562,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
             const int tx = static_cast<int>(t % bins.TilesX);
             const int ty = static_cast<int>(t / bins.TilesX);
             const TileRect tile = { tx * this->TileSize, ty * this->TileSize,
-              std::min(w, (tx + 1) * this->TileSize), std::min(h, (ty + 1) * this->TileSize) };
+              std::min(w, (tx + 1) * this->TileSize), std::min(h, (ty + 1) * this->TileSize), t };
             rays.resize(tile.Pixels());
             for (int j = tile.J0; j < tile.J1; ++j)
             {
@@ -560,8 +595,23 @@ template <int N>
 void VolumeRayMarcher::AccumulateMoments(
   const TransferTable& table, const LogDepthWarp& warp, double* moments)
 {
-  MomentVisitor<N> visitor{ moments, this->Camera ? this->Camera->GetWidth() : 0, &warp, {} };
+  SampleCache& cache = *this->Cache;
+  const int64_t tiles = static_cast<int64_t>(this->TileBins->TilesX) * this->TileBins->TilesY;
+  cache.Tiles.assign(static_cast<size_t>(tiles), {});
+  cache.Bytes = 0;
+  cache.Record = cache.MaxBytes > 0;
+  MomentVisitor<N> visitor{ moments, this->Camera ? this->Camera->GetWidth() : 0, &warp, &cache,
+    {} };
   this->March(visitor, table);
+  cache.Valid = cache.Record;
+  cache.Table = &table;
+  cache.WarpNear = warp.Near();
+  cache.WarpFar = warp.Far();
+  cache.Moments = N;
+  if (!cache.Valid)
+  {
+    cache.Tiles.clear();
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -569,9 +619,63 @@ template <int N>
 void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDepthWarp& warp,
   const double* moments, const MomentSettings<N>& settings, double* colourSums)
 {
+  const SampleCache& cache = *this->Cache;
+  this->LastColourUsedCache = cache.Valid && cache.Table == &table && cache.Moments == N &&
+    cache.WarpNear == warp.Near() && cache.WarpFar == warp.Far();
+  if (this->LastColourUsedCache)
+  {
+    this->ReplayColour<N>(table, warp, moments, settings, colourSums);
+    return;
+  }
   ColourVisitor<N> visitor{ colourSums, this->Camera ? this->Camera->GetWidth() : 0, &warp, moments,
     &settings, {}, {} };
   this->March(visitor, table);
+}
+
+//------------------------------------------------------------------------------
+template <int N>
+void VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDepthWarp& warp,
+  const double* moments, const MomentSettings<N>& settings, double* colourSums)
+{
+  // Pass 2 from pass 1's samples: the same samples with the same values, re-weighted by the
+  // transmittance reconstructed from the global moments; no clipping, no interpolation.
+  const Bins& bins = *this->TileBins;
+  const int w = this->Camera->GetWidth();
+  const int h = this->Camera->GetHeight();
+  const ColourVisitor<N> prototype{ colourSums, w, &warp, moments, &settings, {}, {} };
+  tbb::combinable<ColourVisitor<N>> visitors([&prototype] { return prototype; });
+  tbb::combinable<int64_t> samples([] { return int64_t(0); });
+  const SampleCache& cache = *this->Cache;
+  tbb::task_arena arena(this->Threads > 0 ? this->Threads : tbb::task_arena::automatic);
+  arena.execute(
+    [&]
+    {
+      tbb::parallel_for(tbb::blocked_range<int64_t>(0, static_cast<int64_t>(cache.Tiles.size()), 1),
+        [&](const tbb::blocked_range<int64_t>& range)
+        {
+          ColourVisitor<N>& visitor = visitors.local();
+          for (int64_t t = range.begin(); t < range.end(); ++t)
+          {
+            const std::vector<CachedSample>& recorded = cache.Tiles[t];
+            if (recorded.empty())
+            {
+              continue;
+            }
+            const int tx = static_cast<int>(t % bins.TilesX);
+            const int ty = static_cast<int>(t / bins.TilesX);
+            const TileRect tile = { tx * this->TileSize, ty * this->TileSize,
+              std::min(w, (tx + 1) * this->TileSize), std::min(h, (ty + 1) * this->TileSize), t };
+            visitor.BeginTile(tile);
+            for (const CachedSample& sample : recorded)
+            {
+              visitor.Add(sample.Pixel, sample.Z, table.Lookup(sample.Scalar));
+            }
+            visitor.EndTile(tile);
+            samples.local() += static_cast<int64_t>(recorded.size());
+          }
+        });
+    });
+  this->LastSamples = samples.combine(std::plus<int64_t>());
 }
 
 //------------------------------------------------------------------------------

@@ -23,13 +23,23 @@
 #include "apcRayCamera.h"
 #include "apcTransferTable.h"
 
+#include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
 
 namespace apc
 {
+
+// One pass-1 sample kept for pass 2: its warped depth, its scalar, its pixel in the tile.
+struct CachedSample
+{
+  float Z;
+  float Scalar;
+  uint16_t Pixel;
+};
 
 class VolumeRayMarcher
 {
@@ -48,7 +58,15 @@ public:
 
   // 0 = as many as TBB offers.
   void SetNumberOfThreads(int threads) { this->Threads = threads; }
-  void SetTileSize(int pixels) { this->TileSize = pixels > 0 ? pixels : 16; }
+  // Square tiles of 1..256 pixels a side (default 16).
+  void SetTileSize(int pixels) { this->TileSize = std::min(std::max(pixels, 1), 256); }
+
+  // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
+  // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
+  // over the budget pass 2 marches again. 0 disables. Default 1 GiB.
+  void SetMaxSampleCacheBytes(size_t bytes) { this->Cache->MaxBytes = bytes; }
+  // Whether the last AccumulateColour replayed cached samples.
+  bool GetLastColourUsedCache() const { return this->LastColourUsedCache; }
 
   // Exact ordered blending: premultiplied RGBA, W*H*4.
   void RenderExact(const TransferTable& table, float* rgba);
@@ -73,15 +91,32 @@ public:
 
   struct Bins; // tile -> cells, per view
   struct Walker;
+  struct SampleCache
+  {
+    std::vector<std::vector<CachedSample>> Tiles;
+    std::atomic<size_t> Bytes{ 0 };
+    size_t MaxBytes = size_t(1) << 30;
+    std::atomic<bool> Record{ false };
+    bool Valid = false;
+    const TransferTable* Table = nullptr;
+    double WarpNear = 0;
+    double WarpFar = 0;
+    int Moments = 0;
+  };
 
 private:
   template <class Visitor>
   void March(Visitor& prototype, const TransferTable& table);
+  template <int N>
+  void ReplayColour(const TransferTable& table, const LogDepthWarp& warp, const double* moments,
+    const MomentSettings<N>& settings, double* colourSums);
 
   const CellMesh* Mesh = nullptr;
   std::unique_ptr<RayCamera> Camera;
   std::vector<float> RayEnds;
   std::unique_ptr<Bins> TileBins;
+  std::unique_ptr<SampleCache> Cache;
+  bool LastColourUsedCache = false;
   int Threads = 0;
   int TileSize = 16;
   int64_t LastSamples = 0;
