@@ -20,10 +20,13 @@
 #include "vtkVolume.h"
 #include "vtkXMLImageDataWriter.h"
 
+#include "apcVolumeRayMarcher.h"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -134,9 +137,30 @@ double SumRect(vtkMultiProcessController* controller, std::vector<double>& image
 }
 }
 
+namespace
+{
+// A segment as sent to its strip owner: the pixel within the owner's strip, the first lattice
+// index relative to the frame's smallest (so that it fits 32 bits: a ray would need 2^31
+// samples to overflow it), the premultiplied colour and the transmittance. KLast is not needed
+// for blending.
+struct WireSegment
+{
+  int32_t Pixel;
+  int32_t KFirst;
+  float Colour[3];
+  float Transmittance;
+};
+static_assert(sizeof(WireSegment) == 24, "segments travel as 24 bytes");
+
+constexpr int kSegmentTag = 470521;
+}
+
 struct vtkAPCCompositePass::Internals
 {
   std::vector<vtkSmartPointer<vtkVolume>> Volumes;
+  std::vector<vtkAPCVolumeMapper*> FrameMappers;
+  vtkIdType MessagesSent = 0;
+  apc::SegmentStatistics Segments;
   std::vector<std::pair<std::string, double>> Seconds;
   std::chrono::steady_clock::time_point Last;
   double BytesSent = 0;
@@ -226,6 +250,43 @@ double vtkAPCCompositePass::GetLastBytesSent() const
   return this->Internal->BytesSent;
 }
 
+vtkIdType vtkAPCCompositePass::GetLastMessagesSent() const
+{
+  return this->Internal->MessagesSent;
+}
+
+vtkIdType vtkAPCCompositePass::GetLastSegmentCount() const
+{
+  return static_cast<vtkIdType>(this->Internal->Segments.Segments);
+}
+
+vtkIdType vtkAPCCompositePass::GetLastNonEmptyPixels() const
+{
+  return static_cast<vtkIdType>(this->Internal->Segments.NonEmptyPixels);
+}
+
+double vtkAPCCompositePass::GetLastAverageSegmentsPerPixel() const
+{
+  return this->Internal->Segments.Average();
+}
+
+vtkIdType vtkAPCCompositePass::GetLastMaxSegmentsPerPixel() const
+{
+  return static_cast<vtkIdType>(this->Internal->Segments.MaxPerPixel);
+}
+
+void vtkAPCCompositePass::SetLocalExact(bool localExact)
+{
+  if (localExact)
+  {
+    this->SetCompositeMode(LOCAL_EXACT);
+  }
+  else if (this->CompositeMode == LOCAL_EXACT)
+  {
+    this->SetCompositeMode(APC);
+  }
+}
+
 vtkIdType vtkAPCCompositePass::GetLastCompositedPixels() const
 {
   return this->Internal->Pixels;
@@ -258,6 +319,8 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   }
   internal.StartClock();
   internal.BytesSent = 0;
+  internal.MessagesSent = 0;
+  internal.Segments = apc::SegmentStatistics();
   internal.Pixels = 0;
   internal.Failed = false;
   internal.Image->Initialize();
@@ -366,6 +429,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     {
       controller->Broadcast(packed.data(), static_cast<vtkIdType>(packed.size()), display);
       internal.BytesSent += isDisplay ? 4.0 * packed.size() : 0.0;
+      internal.MessagesSent += isDisplay ? 1 : 0;
     }
     Unpack(packed.data(), width, rect, 1, depth.data());
   }
@@ -380,7 +444,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       mapper->PrepareFrame(ren, internal.Volumes[v], bounds, depth.data(), 0.0);
     }
   }
-  if (this->LocalExact)
+  if (this->CompositeMode == LOCAL_EXACT)
   {
     for (vtkAPCVolumeMapper* mapper : mappers)
     {
@@ -390,6 +454,15 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     mappers.front()->StoreImages(rgba.data(), nullptr, nullptr, nullptr);
     mappers.front()->BlendIntoWindow(ren, rgba.data());
     internal.Lap("blend");
+    return;
+  }
+  if (this->CompositeMode == SEGMENTS)
+  {
+    internal.FrameMappers = mappers;
+    const int r[4] = { rect.I0, rect.J0, rect.I1, rect.J1 };
+    this->CompositeSegmentsFrame(ren, r, width, height);
+    internal.FrameMappers.clear();
+    this->ReportFrame(rect.Pixels());
     return;
   }
 
@@ -410,6 +483,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     internal.BytesSent += this->CompositeInDouble
       ? SumRect<double>(controller, image, width, rect, components, everywhere, display)
       : SumRect<float>(controller, image, width, rect, components, everywhere, display);
+    ++internal.MessagesSent;
   };
   sum(momentImage, stride, true);
   internal.Lap("allreduce");
@@ -436,17 +510,279 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     internal.Lap("blend");
     this->WriteImage();
   }
-  if (this->Verbosity > 0 && isDisplay)
+  this->ReportFrame(rect.Pixels());
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCCompositePass::ReportFrame(size_t pixels)
+{
+  vtkMultiProcessController* controller = this->Controller;
+  const bool parallel = controller && controller->GetNumberOfProcesses() > 1;
+  const int rank = parallel ? controller->GetLocalProcessId() : 0;
+  const int display =
+    parallel ? std::min(this->DisplayProcess, controller->GetNumberOfProcesses() - 1) : 0;
+  if (this->Verbosity < 1 || rank != display)
   {
-    std::ostringstream line;
-    line << "APC frame (" << (parallel ? controller->GetNumberOfProcesses() : 1) << " processes, "
-         << rect.Pixels() << " pixels composited):";
-    for (const auto& entry : internal.Seconds)
+    return;
+  }
+  const Internals& internal = *this->Internal;
+  std::ostringstream line;
+  line << (this->CompositeMode == SEGMENTS ? "APC segments frame (" : "APC frame (")
+       << (parallel ? controller->GetNumberOfProcesses() : 1) << " processes, " << pixels
+       << " pixels composited):";
+  for (const auto& entry : internal.Seconds)
+  {
+    line << ' ' << entry.first << ' ' << entry.second << " s,";
+  }
+  line << " bytes sent by the display process " << internal.BytesSent << " in "
+       << internal.MessagesSent << " messages";
+  if (this->CompositeMode == SEGMENTS)
+  {
+    line << "; segments per non-empty pixel: average " << internal.Segments.Average() << ", max "
+         << internal.Segments.MaxPerPixel;
+  }
+  vtkLog(INFO, << line.str());
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCCompositePass::CompositeSegmentsFrame(
+  vtkRenderer* ren, const int rectArray[4], int width, int height)
+{
+  Internals& internal = *this->Internal;
+  vtkMultiProcessController* controller = this->Controller;
+  const bool parallel = controller && controller->GetNumberOfProcesses() > 1;
+  const int processes = parallel ? controller->GetNumberOfProcesses() : 1;
+  const int rank = parallel ? controller->GetLocalProcessId() : 0;
+  const int display = parallel ? std::min(this->DisplayProcess, processes - 1) : 0;
+  Rect rect;
+  rect.I0 = rectArray[0];
+  rect.J0 = rectArray[1];
+  rect.I1 = rectArray[2];
+  rect.J1 = rectArray[3];
+  const int rectWidth = rect.Pixels() > 0 ? rect.Width() : 0;
+  const int rectHeight = rect.Pixels() > 0 ? rect.Height() : 0;
+  // Process o owns the rectangle's rows [stripStart(o), stripStart(o + 1)).
+  auto stripStart = [&](int o)
+  { return rect.J0 + static_cast<int>(static_cast<int64_t>(rectHeight) * o / processes); };
+
+  // 1. This process's segments, per volume.
+  std::vector<apc::SegmentImage> images(internal.FrameMappers.size());
+  for (size_t v = 0; v < images.size(); ++v)
+  {
+    internal.FrameMappers[v]->RenderSegments(images[v]);
+    if (images[v].Width != width || images[v].Height != height)
     {
-      line << ' ' << entry.first << ' ' << entry.second << " s,";
+      images[v].Reset(width, height); // a process that could not prepare renders nothing
     }
-    line << " bytes sent by the display process " << internal.BytesSent;
-    vtkLog(INFO, << line.str());
+  }
+  internal.Lap("segments");
+
+  // 2. Counts per owner and the smallest lattice index, to every process; then the segments.
+  std::vector<long long> mine(processes + 1, 0);
+  long long kMin = std::numeric_limits<long long>::max();
+  for (int o = 0; o < processes; ++o)
+  {
+    for (int j = stripStart(o); j < stripStart(o + 1); ++j)
+    {
+      for (const apc::SegmentImage& image : images)
+      {
+        const int64_t first = static_cast<int64_t>(j) * width + rect.I0;
+        const int64_t begin = image.Offsets[first];
+        const int64_t end = image.Offsets[first + rectWidth];
+        mine[o] += end - begin;
+        for (int64_t s = begin; s < end; ++s)
+        {
+          kMin = std::min<long long>(kMin, image.Segments[s].KFirst);
+        }
+      }
+    }
+  }
+  mine[processes] = kMin;
+  std::vector<long long> all(static_cast<size_t>(processes) * (processes + 1));
+  if (parallel)
+  {
+    controller->AllGather(mine.data(), all.data(), processes + 1);
+    internal.BytesSent += sizeof(long long) * mine.size();
+    ++internal.MessagesSent;
+  }
+  else
+  {
+    all = mine;
+  }
+  long long kBase = std::numeric_limits<long long>::max();
+  for (int p = 0; p < processes; ++p)
+  {
+    kBase = std::min(kBase, all[static_cast<size_t>(p) * (processes + 1) + processes]);
+  }
+  std::vector<std::vector<WireSegment>> outgoing(processes);
+  for (int o = 0; o < processes; ++o)
+  {
+    outgoing[o].reserve(static_cast<size_t>(mine[o]));
+    for (int j = stripStart(o); j < stripStart(o + 1); ++j)
+    {
+      for (int i = rect.I0; i < rect.I0 + rectWidth; ++i)
+      {
+        const int64_t pixel = static_cast<int64_t>(j) * width + i;
+        const int32_t local = (j - stripStart(o)) * rectWidth + (i - rect.I0);
+        for (const apc::SegmentImage& image : images)
+        {
+          for (int64_t s = image.Offsets[pixel]; s < image.Offsets[pixel + 1]; ++s)
+          {
+            const apc::RaySegment& seg = image.Segments[s];
+            outgoing[o].push_back({ local, static_cast<int32_t>(seg.KFirst - kBase),
+              { seg.Colour[0], seg.Colour[1], seg.Colour[2] }, seg.Transmittance });
+          }
+        }
+      }
+    }
+  }
+  std::vector<std::vector<WireSegment>> incoming(processes);
+  incoming[rank].swap(outgoing[rank]);
+  if (parallel)
+  {
+    // Direct send, one message per pair with segments. Pairs meet in rounds (partner = rank
+    // XOR round), the lower rank sending first: blocking sends then never wait in a cycle.
+    int rounds = 1;
+    while (rounds < processes)
+    {
+      rounds *= 2;
+    }
+    for (int round = 1; round < rounds; ++round)
+    {
+      const int partner = rank ^ round;
+      if (partner >= processes)
+      {
+        continue;
+      }
+      const std::vector<WireSegment>& send = outgoing[partner];
+      std::vector<WireSegment>& receive = incoming[partner];
+      receive.resize(
+        static_cast<size_t>(all[static_cast<size_t>(partner) * (processes + 1) + rank]));
+      auto sendPart = [&]
+      {
+        if (!send.empty())
+        {
+          controller->Send(reinterpret_cast<const char*>(send.data()),
+            static_cast<vtkIdType>(send.size() * sizeof(WireSegment)), partner, kSegmentTag);
+          internal.BytesSent += static_cast<double>(send.size() * sizeof(WireSegment));
+          ++internal.MessagesSent;
+        }
+      };
+      auto receivePart = [&]
+      {
+        if (!receive.empty())
+        {
+          controller->Receive(reinterpret_cast<char*>(receive.data()),
+            static_cast<vtkIdType>(receive.size() * sizeof(WireSegment)), partner, kSegmentTag);
+        }
+      };
+      if (rank < partner)
+      {
+        sendPart();
+        receivePart();
+      }
+      else
+      {
+        receivePart();
+        sendPart();
+      }
+    }
+  }
+  outgoing.clear();
+  internal.Lap("exchange");
+
+  // 3. The own strip: segments grouped by pixel (counting sort), then sorted and blended.
+  const int stripRows = stripStart(rank + 1) - stripStart(rank);
+  apc::SegmentImage strip;
+  strip.Reset(rectWidth, stripRows);
+  for (const auto& from : incoming)
+  {
+    for (const WireSegment& seg : from)
+    {
+      ++strip.Offsets[seg.Pixel + 1];
+    }
+  }
+  for (size_t p = 1; p < strip.Offsets.size(); ++p)
+  {
+    strip.Offsets[p] += strip.Offsets[p - 1];
+  }
+  strip.Segments.resize(static_cast<size_t>(strip.Offsets.back()));
+  {
+    std::vector<int64_t> fill(strip.Offsets.begin(), strip.Offsets.end() - 1);
+    for (const auto& from : incoming)
+    {
+      for (const WireSegment& seg : from)
+      {
+        strip.Segments[fill[seg.Pixel]++] = { seg.KFirst, seg.KFirst,
+          { seg.Colour[0], seg.Colour[1], seg.Colour[2] }, seg.Transmittance };
+      }
+    }
+  }
+  incoming.clear();
+  std::vector<float> stripImage(4 * static_cast<size_t>(rectWidth) * stripRows, 0.0f);
+  apc::CompositeSegmentImage(strip, stripImage.data());
+  const apc::SegmentStatistics own = apc::GetSegmentStatistics(strip);
+  internal.Lap("blend_segments");
+
+  // 4. The strips, in row order, are the rectangle's packed image on the display process.
+  std::vector<float> packed;
+  if (parallel)
+  {
+    std::vector<vtkIdType> lengths(processes);
+    std::vector<vtkIdType> offsets(processes);
+    for (int o = 0; o < processes; ++o)
+    {
+      lengths[o] = 4 * static_cast<vtkIdType>(rectWidth) * (stripStart(o + 1) - stripStart(o));
+      offsets[o] = 4 * static_cast<vtkIdType>(rectWidth) * (stripStart(o) - rect.J0);
+    }
+    packed.resize(rank == display ? 4 * rect.Pixels() : 1);
+    controller->GatherV(stripImage.data(), packed.data(), static_cast<vtkIdType>(stripImage.size()),
+      lengths.data(), offsets.data(), display);
+    if (rank != display && !stripImage.empty())
+    {
+      internal.BytesSent += sizeof(float) * static_cast<double>(stripImage.size());
+      ++internal.MessagesSent;
+    }
+  }
+  else
+  {
+    packed.swap(stripImage);
+  }
+  internal.Lap("gather");
+
+  // The statistics of all strips, for the record on every process.
+  long long stats[3] = { own.Segments, own.NonEmptyPixels, own.MaxPerPixel };
+  if (parallel)
+  {
+    std::vector<long long> gathered(3 * static_cast<size_t>(processes));
+    controller->AllGather(stats, gathered.data(), 3);
+    stats[0] = stats[1] = stats[2] = 0;
+    for (int p = 0; p < processes; ++p)
+    {
+      stats[0] += gathered[3 * p];
+      stats[1] += gathered[3 * p + 1];
+      stats[2] = std::max(stats[2], gathered[3 * p + 2]);
+    }
+  }
+  internal.Segments.Segments = stats[0];
+  internal.Segments.NonEmptyPixels = stats[1];
+  internal.Segments.MaxPerPixel = stats[2];
+  internal.Lap("statistics");
+
+  // 5. On the display process, over the opaque image, as in APC.
+  if (rank == display)
+  {
+    std::vector<float> rgba(4 * static_cast<size_t>(width) * height, 0.0f);
+    if (rect.Pixels() > 0)
+    {
+      Unpack(packed.data(), width, rect, 4, rgba.data());
+    }
+    vtkAPCVolumeMapper* first = internal.FrameMappers.front();
+    first->StoreImages(rgba.data(), nullptr, nullptr, nullptr);
+    internal.Image->DeepCopy(first->GetLastImage());
+    first->BlendIntoWindow(ren, rgba.data());
+    internal.Lap("blend");
+    this->WriteImage();
   }
 }
 
@@ -484,7 +820,11 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Volumes: " << this->Internal->Volumes.size() << "\n";
   os << indent << "DisplayProcess: " << this->DisplayProcess << "\n";
   os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
-  os << indent << "LocalExact: " << this->LocalExact << "\n";
+  os << indent << "CompositeMode: "
+     << (this->CompositeMode == SEGMENTS
+            ? "SEGMENTS"
+            : (this->CompositeMode == LOCAL_EXACT ? "LOCAL_EXACT" : "APC"))
+     << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
   os << indent << "ImageFileName: " << (this->ImageFileName ? this->ImageFileName : "(none)")
      << "\n";

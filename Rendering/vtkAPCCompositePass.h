@@ -27,6 +27,16 @@
  * together; they must then use the same NumberOfMoments, and the first volume's
  * Overestimation, MomentBias and ResolveMode apply to all.
  *
+ * CompositeMode SEGMENTS replaces steps 4-6 by the paper's exact sort-last baseline, for
+ * comparison: every process renders its ray segments, sends them directly to the process
+ * owning their strip of the screen rectangle (first every process's count per owner, in one
+ * allgather, then one message per pair of processes that has segments to exchange, pairs
+ * scheduled in rounds so that blocking sends cannot deadlock), each owner sorts and blends
+ * its pixels' segments front to back, and a gather brings the strips to the display
+ * process, which blends them over the opaque image. Segments travel as 24 bytes (pixel,
+ * first lattice index, float premultiplied colour and transmittance). Several volumes in this mode
+ * are exact only if they do not overlap in space (their segments would interleave along a ray).
+ *
  * Works with any vtkMultiProcessController (vtkMPIController for real runs; none or a
  * single process renders locally). In ParaView it is installed as the view's image
  * processing pass, after IceT.
@@ -44,6 +54,7 @@
 
 class vtkImageData;
 class vtkMultiProcessController;
+class vtkRenderer;
 class vtkVolume;
 
 class APCRENDERING_EXPORT vtkAPCCompositePass : public vtkImageProcessingPass
@@ -91,14 +102,36 @@ public:
   vtkBooleanMacro(CompositeInDouble, bool);
   ///@}
 
+  enum CompositeModeType
+  {
+    /// Approximate Puzzlepiece Compositing: moment allreduce and colour reduce (default).
+    APC = 0,
+    /// The exact sort-last baseline: each process's ray segments (runs of consecutive lattice
+    /// samples in its cells, pre-blended) are sent directly to the owner of their pixel
+    /// (the data's screen rectangle cut into one strip of rows per process), sorted by depth
+    /// and blended there, and the strips are gathered on the display process. Equal to the
+    /// one-process EXACT image to rounding on any partition; bytes grow with the number of
+    /// segments per pixel.
+    SEGMENTS = 1,
+    /// The volumes' EXACT mode without compositing: each process blends only its own cells
+    /// (a local reference; in parallel the display process shows its own piece only).
+    LOCAL_EXACT = 2
+  };
+
   ///@{
   /**
-   * Use the volumes' EXACT mode instead of APC, without compositing: each process blends
-   * only its own cells (a local reference; in parallel the display process shows its own
-   * piece only). Default off.
+   * How the processes' volumes are combined: APC (default), SEGMENTS or LOCAL_EXACT.
    */
-  vtkSetMacro(LocalExact, bool);
-  vtkGetMacro(LocalExact, bool);
+  vtkSetClampMacro(CompositeMode, int, APC, LOCAL_EXACT);
+  vtkGetMacro(CompositeMode, int);
+  ///@}
+
+  ///@{
+  /**
+   * Shorthand for CompositeMode LOCAL_EXACT (on) or APC (off).
+   */
+  void SetLocalExact(bool localExact);
+  bool GetLocalExact() const { return this->CompositeMode == LOCAL_EXACT; }
   vtkBooleanMacro(LocalExact, bool);
   ///@}
 
@@ -112,13 +145,32 @@ public:
 
   ///@{
   /**
-   * The last frame, per process: wall-clock seconds of a stage ("agree", "depth", "pass1",
-   * "allreduce", "pass2", "reduce", "resolve", "blend"; null for the total), bytes this
-   * process sent into the collectives, and the screen pixels composited.
+   * The last frame, per process: wall-clock seconds of a stage (null for the total), bytes
+   * this process sent into the collectives and point-to-point messages, the number of those
+   * (a collective this process contributes data to counts as one, as does each non-empty
+   * direct send), and the screen pixels composited. Stages: "agree", "depth", then for APC
+   * "pass1", "allreduce", "pass2", "reduce", "resolve"; for SEGMENTS "segments" (rendering
+   * them), "exchange" (counts and direct send to the strip owners), "blend_segments" (sort
+   * and blend of the own strip), "gather" (strips to the display process), "statistics"
+   * (the segment counts below; not counted in bytes or messages); for LOCAL_EXACT "exact";
+   * and "blend" (into the window, display process).
    */
   double GetLastStageSeconds(const char* stage) const;
   double GetLastBytesSent() const;
+  vtkIdType GetLastMessagesSent() const;
   vtkIdType GetLastCompositedPixels() const;
+  ///@}
+
+  ///@{
+  /**
+   * SEGMENTS mode, the last frame, the same on every process: segments over all processes,
+   * the pixels that have at least one, and the average and maximum number of segments per
+   * such pixel (what every strip owner received, sorted and blended). Zero in other modes.
+   */
+  vtkIdType GetLastSegmentCount() const;
+  vtkIdType GetLastNonEmptyPixels() const;
+  double GetLastAverageSegmentsPerPixel() const;
+  vtkIdType GetLastMaxSegmentsPerPixel() const;
   ///@}
 
   ///@{
@@ -150,7 +202,7 @@ protected:
   vtkMultiProcessController* Controller = nullptr;
   int DisplayProcess = 0;
   bool CompositeInDouble = true;
-  bool LocalExact = false;
+  int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;
 
@@ -159,6 +211,8 @@ private:
   void operator=(const vtkAPCCompositePass&) = delete;
 
   void WriteImage();
+  void CompositeSegmentsFrame(vtkRenderer* ren, const int rect[4], int width, int height);
+  void ReportFrame(size_t pixels);
 
   struct Internals;
   std::unique_ptr<Internals> Internal;

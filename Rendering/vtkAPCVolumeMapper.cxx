@@ -437,6 +437,20 @@ void vtkAPCVolumeMapper::CountSegments(int* counts)
 }
 
 //------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::RenderSegments(apc::SegmentImage& segments)
+{
+  Internals& internal = *this->Internal;
+  if (!internal.FrameReady)
+  {
+    segments.Reset(internal.Width, internal.Height);
+    return;
+  }
+  internal.Marcher.RenderSegments(*internal.Table, segments);
+  internal.Samples = internal.Marcher.GetLastSampleCount();
+  internal.Clock.Lap("segments");
+}
+
+//------------------------------------------------------------------------------
 void vtkAPCVolumeMapper::ResolveImage(
   const double* moments, const double* colourSums, float* rgba) const
 {

@@ -48,6 +48,10 @@
 class vtkDataArray;
 class vtkImageData;
 class vtkUnstructuredGridBase;
+namespace apc
+{
+struct SegmentImage;
+}
 
 class APCRENDERING_EXPORT vtkAPCVolumeMapper : public vtkUnstructuredGridVolumeMapper
 {
@@ -151,7 +155,8 @@ public:
   /**
    * Wall-clock seconds the last frame spent in a stage: "mesh" (copying the input, only when
    * it changed), "setup" (transfer function, camera, depth buffer, binning cells to tiles),
-   * "exact", "moments" (MBOIT pass 1), "colour" (pass 2), "resolve", "segments", "blend";
+   * "exact", "moments" (MBOIT pass 1), "colour" (pass 2), "resolve", "segments" (counting or
+   * rendering them), "blend";
    * null gives the total.
    */
   double GetLastStageSeconds(const char* stage) const;
@@ -192,6 +197,9 @@ public:
   void RenderColour(const double* moments, double* colourSums);
   void RenderExactImage(float* rgba);
   void CountSegments(int* counts);
+  /// This process's sort-last segments of every pixel (apc::RaySegment: runs of consecutive
+  /// lattice samples, pre-blended), for exact compositing across processes.
+  void RenderSegments(apc::SegmentImage& segments);
   void ResolveImage(const double* moments, const double* colourSums, float* rgba) const;
   void BlendIntoWindow(vtkRenderer* ren, const float* rgba);
   /// Keeps the given buffers (any may be null) as GetLastImage()'s arrays.

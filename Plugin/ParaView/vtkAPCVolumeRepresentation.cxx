@@ -236,7 +236,9 @@ void vtkAPCVolumeRepresentation::Attach(bool attach)
   }
   installation.Users.insert(this);
   installation.Pass->AddVolume(this->APCVolume);
-  installation.Pass->SetLocalExact(this->Mode == 1);
+  installation.Pass->SetCompositeMode(this->Mode == 2
+      ? vtkAPCCompositePass::SEGMENTS
+      : (this->Mode == 1 ? vtkAPCCompositePass::LOCAL_EXACT : vtkAPCCompositePass::APC));
   installation.Pass->SetVerbosity(this->Verbosity);
   installation.Pass->SetImageFileName(this->ImageFileName.c_str());
 }
@@ -307,7 +309,7 @@ void vtkAPCVolumeRepresentation::SetMode(int mode)
   if (this->Mode != mode)
   {
     this->Mode = mode;
-    this->Mapper->SetMode(mode == 1 ? vtkAPCVolumeMapper::EXACT : vtkAPCVolumeMapper::MBOIT);
+    this->Mapper->SetMode(mode != 0 ? vtkAPCVolumeMapper::EXACT : vtkAPCVolumeMapper::MBOIT);
     this->MarkModified();
   }
 }
@@ -347,10 +349,33 @@ double* vtkAPCVolumeRepresentation::GetLastTimings()
   return this->LastTimings;
 }
 
+double* vtkAPCVolumeRepresentation::GetLastSegmentStatistics()
+{
+  std::fill(this->LastSegmentStatistics, this->LastSegmentStatistics + 7, 0.0);
+  for (const auto& entry : Installations())
+  {
+    if (entry.second.Users.count(this))
+    {
+      const vtkAPCCompositePass* pass = entry.second.Pass;
+      const char* stages[] = { "segments", "exchange", "blend_segments", "gather" };
+      for (int s = 0; s < 4; ++s)
+      {
+        this->LastSegmentStatistics[s] = pass->GetLastStageSeconds(stages[s]);
+      }
+      this->LastSegmentStatistics[4] = static_cast<double>(pass->GetLastMessagesSent());
+      this->LastSegmentStatistics[5] = pass->GetLastAverageSegmentsPerPixel();
+      this->LastSegmentStatistics[6] = static_cast<double>(pass->GetLastMaxSegmentsPerPixel());
+    }
+  }
+  return this->LastSegmentStatistics;
+}
+
 //------------------------------------------------------------------------------
 void vtkAPCVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "Mode: " << (this->Mode == 1 ? "local exact" : "APC") << "\n";
+  os << indent
+     << "Mode: " << (this->Mode == 2 ? "exact segments" : (this->Mode == 1 ? "local exact" : "APC"))
+     << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
 }

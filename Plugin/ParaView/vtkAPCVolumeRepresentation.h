@@ -14,8 +14,9 @@
  *
  * Uses ParaView's colour and opacity transfer functions and array selection (LookupTable,
  * ScalarOpacityFunction, ColorArrayName, ScalarOpacityUnitDistance), and exposes the APC
- * settings: SampleDistance, NumberOfMoments, Overestimation, ResolveMode and Mode (APC, or
- * a local exact render of each rank's own cells for comparison).
+ * settings: SampleDistance, NumberOfMoments, Overestimation, ResolveMode and Mode (APC, a
+ * local exact render of each rank's own cells, or the exact sort-last segment baseline, for
+ * comparison).
  *
  * Limitations: in tile-display and CAVE modes the representation renders nothing (with a
  * warning); while another representation in the view needs ordered compositing, IceT
@@ -66,7 +67,8 @@ public:
   ///@{
   /**
    * 0: APC (default); 1: each rank's own cells in exact mode, without compositing (a local
-   * reference, for comparison).
+   * reference, for comparison); 2: the exact sort-last baseline (vtkAPCCompositePass
+   * SEGMENTS: ray segments sent to their pixel's owner, sorted and blended).
    */
   void SetMode(int mode);
   vtkGetMacro(Mode, int);
@@ -94,6 +96,11 @@ public:
    * pixels (11 values).
    */
   double* GetLastTimings() VTK_SIZEHINT(11);
+  /**
+   * The last SEGMENTS frame on this rank: seconds of segments, exchange, blend_segments and
+   * gather; messages sent; average and maximum segments per non-empty pixel (all ranks).
+   */
+  double* GetLastSegmentStatistics() VTK_SIZEHINT(7);
 
   vtkAPCVolumeMapper* GetMapper();
 
@@ -117,6 +124,7 @@ protected:
   int Verbosity = 0;
   std::string ImageFileName;
   double LastTimings[11] = {};
+  double LastSegmentStatistics[7] = {};
 
 private:
   vtkAPCVolumeRepresentation(const vtkAPCVolumeRepresentation&) = delete;

@@ -53,6 +53,7 @@ struct ExactVisitor
 {
   static constexpr bool WantsSegments = false;
   static constexpr bool WantsSamples = true;
+  static constexpr bool WantsTransparentSamples = false;
   float* Output;
   int Width;
   std::vector<std::vector<SampleRecord>> Pixels;
@@ -109,6 +110,7 @@ struct MomentVisitor
 {
   static constexpr bool WantsSegments = false;
   static constexpr bool WantsSamples = true;
+  static constexpr bool WantsTransparentSamples = false;
   double* Output;
   int Width;
   const LogDepthWarp* Warp;
@@ -158,6 +160,7 @@ struct ColourVisitor
 {
   static constexpr bool WantsSegments = false;
   static constexpr bool WantsSamples = true;
+  static constexpr bool WantsTransparentSamples = false;
   double* Output;
   int Width;
   const LogDepthWarp* Warp;
@@ -213,6 +216,7 @@ struct SegmentVisitor
 {
   static constexpr bool WantsSegments = true;
   static constexpr bool WantsSamples = false;
+  static constexpr bool WantsTransparentSamples = false;
   int32_t* Output;
   int Width;
   double Tolerance;
@@ -249,6 +253,96 @@ struct SegmentVisitor
       const int i = tile.I0 + p % tile.Width();
       const int j = tile.J0 + p / tile.Width();
       this->Output[static_cast<int64_t>(j) * this->Width + i] += count;
+    }
+  }
+};
+
+// The segments of one tile, pixel by pixel in the tile's order.
+struct TileSegments
+{
+  std::vector<int32_t> Counts;
+  std::vector<RaySegment> Segments;
+};
+
+// Sort-last segments: each pixel's samples sorted by k and cut into runs of consecutive k.
+// Transparent samples are taken too (they keep a run going), so that a run ends only where
+// the ray leaves this mesh's cells, whatever the transfer function.
+struct RunVisitor
+{
+  static constexpr bool WantsSegments = false;
+  static constexpr bool WantsSamples = true;
+  static constexpr bool WantsTransparentSamples = true;
+  std::vector<TileSegments>* Tiles;
+  std::vector<std::vector<SampleRecord>> Pixels;
+
+  void BeginTile(const TileRect& tile)
+  {
+    this->Pixels.resize(tile.Pixels());
+    for (auto& p : this->Pixels)
+    {
+      p.clear();
+    }
+  }
+  void Segment(int, double, double) {}
+  void Sample(int pixel, int64_t k, double, double, const TransferSample& s)
+  {
+    this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
+  }
+  void EndTile(const TileRect& tile)
+  {
+    TileSegments& out = (*this->Tiles)[tile.Index];
+    out.Counts.assign(tile.Pixels(), 0);
+    out.Segments.clear();
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      auto& samples = this->Pixels[p];
+      if (samples.empty())
+      {
+        continue;
+      }
+      std::sort(samples.begin(), samples.end(),
+        [](const SampleRecord& a, const SampleRecord& b) { return a.K < b.K; });
+      RaySegment run{ samples.front().K, samples.front().K, { 0, 0, 0 }, 1.0f };
+      double transmittance = 1.0;
+      double rgb[3] = { 0, 0, 0 };
+      bool visible = false;
+      auto flush = [&]
+      {
+        if (visible)
+        {
+          run.Colour = { static_cast<float>(rgb[0]), static_cast<float>(rgb[1]),
+            static_cast<float>(rgb[2]) };
+          run.Transmittance = static_cast<float>(transmittance);
+          out.Segments.push_back(run);
+          ++out.Counts[p];
+        }
+      };
+      for (const SampleRecord& s : samples)
+      {
+        if (s.K > run.KLast + 1)
+        {
+          flush();
+          run.KFirst = s.K;
+          transmittance = 1.0;
+          rgb[0] = rgb[1] = rgb[2] = 0.0;
+          visible = false;
+        }
+        run.KLast = s.K;
+        // Not (a > 0) also covers NaN scalars, whose colour must not reach the sums.
+        if (!(s.Absorbance > 0))
+        {
+          continue;
+        }
+        // The same arithmetic as ExactVisitor, so that one run equals the exact blend.
+        const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
+        for (int c = 0; c < 3; ++c)
+        {
+          rgb[c] += transmittance * alpha * s.Colour[c];
+        }
+        transmittance *= 1.0 - alpha;
+        visible = true;
+      }
+      flush();
     }
   }
 };
@@ -320,7 +414,8 @@ struct VolumeRayMarcher::Walker
       {
         cellScalar = mesh.CellScalars[cell];
         cellSample = table.Lookup(cellScalar);
-        if (!(cellSample.Absorbance > 0) && !Visitor::WantsSegments)
+        if (!(cellSample.Absorbance > 0) && !Visitor::WantsSegments &&
+          !Visitor::WantsTransparentSamples)
         {
           continue; // an invisible cell
         }
@@ -385,7 +480,7 @@ struct VolumeRayMarcher::Walker
               s = table.Lookup(scalar);
             }
             ++samples;
-            if (s.Absorbance > 0)
+            if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
             {
               visitor.Sample(local, k, t, scalar, s);
             }
@@ -676,6 +771,147 @@ void VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDepthWa
         });
     });
   this->LastSamples = samples.combine(std::plus<int64_t>());
+}
+
+//------------------------------------------------------------------------------
+void SegmentImage::Reset(int width, int height)
+{
+  this->Width = std::max(width, 0);
+  this->Height = std::max(height, 0);
+  this->Offsets.assign(static_cast<size_t>(this->Width) * this->Height + 1, 0);
+  this->Segments.clear();
+}
+
+SegmentStatistics GetSegmentStatistics(const SegmentImage& image)
+{
+  SegmentStatistics stats;
+  const int64_t pixels = static_cast<int64_t>(image.Offsets.size()) - 1;
+  for (int64_t p = 0; p < pixels; ++p)
+  {
+    const int64_t n = image.Count(p);
+    stats.Segments += n;
+    stats.NonEmptyPixels += n > 0;
+    stats.MaxPerPixel = std::max(stats.MaxPerPixel, n);
+  }
+  return stats;
+}
+
+std::array<double, 4> CompositeSegments(RaySegment* segments, size_t count)
+{
+  std::sort(segments, segments + count,
+    [](const RaySegment& a, const RaySegment& b) { return a.KFirst < b.KFirst; });
+  double transmittance = 1.0;
+  std::array<double, 4> rgba = { 0, 0, 0, 0 };
+  for (size_t s = 0; s < count; ++s)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      rgba[c] += transmittance * segments[s].Colour[c];
+    }
+    transmittance *= segments[s].Transmittance;
+  }
+  rgba[3] = 1.0 - transmittance;
+  return rgba;
+}
+
+void CompositeSegmentImage(SegmentImage& image, float* rgba, int threads)
+{
+  const int64_t pixels = static_cast<int64_t>(image.Offsets.size()) - 1;
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute(
+    [&]
+    {
+      tbb::parallel_for(tbb::blocked_range<int64_t>(0, pixels, 1024),
+        [&](const tbb::blocked_range<int64_t>& range)
+        {
+          for (int64_t p = range.begin(); p < range.end(); ++p)
+          {
+            const int64_t n = image.Count(p);
+            if (n == 0)
+            {
+              continue;
+            }
+            const std::array<double, 4> c =
+              CompositeSegments(image.Segments.data() + image.Offsets[p], static_cast<size_t>(n));
+            for (int k = 0; k < 4; ++k)
+            {
+              rgba[4 * p + k] += static_cast<float>(c[k]);
+            }
+          }
+        });
+    });
+}
+
+//------------------------------------------------------------------------------
+void VolumeRayMarcher::RenderSegments(const TransferTable& table, SegmentImage& segments)
+{
+  const int w = this->Camera ? this->Camera->GetWidth() : 0;
+  const int h = this->Camera ? this->Camera->GetHeight() : 0;
+  segments.Reset(w, h);
+  const Bins& bins = *this->TileBins;
+  const int64_t tiles = this->Camera ? static_cast<int64_t>(bins.TilesX) * bins.TilesY : 0;
+  std::vector<TileSegments> perTile(static_cast<size_t>(tiles));
+  RunVisitor visitor{ &perTile, {} };
+  this->March(visitor, table);
+
+  // Tiles were filled in parallel and in any order; the compressed rows are in pixel order.
+  auto forEachTilePixel = [&](int64_t t, auto&& visit)
+  {
+    const int tx = static_cast<int>(t % bins.TilesX);
+    const int ty = static_cast<int>(t / bins.TilesX);
+    const int i0 = tx * this->TileSize;
+    const int j0 = ty * this->TileSize;
+    const int i1 = std::min(w, i0 + this->TileSize);
+    const int j1 = std::min(h, j0 + this->TileSize);
+    int local = 0;
+    for (int j = j0; j < j1; ++j)
+    {
+      for (int i = i0; i < i1; ++i, ++local)
+      {
+        visit(local, static_cast<int64_t>(j) * w + i);
+      }
+    }
+  };
+  for (int64_t t = 0; t < tiles; ++t)
+  {
+    if (perTile[t].Counts.empty())
+    {
+      continue;
+    }
+    forEachTilePixel(
+      t, [&](int local, int64_t pixel) { segments.Offsets[pixel + 1] = perTile[t].Counts[local]; });
+  }
+  for (size_t p = 1; p < segments.Offsets.size(); ++p)
+  {
+    segments.Offsets[p] += segments.Offsets[p - 1];
+  }
+  segments.Segments.resize(static_cast<size_t>(segments.Offsets.back()));
+  tbb::task_arena arena(this->Threads > 0 ? this->Threads : tbb::task_arena::automatic);
+  arena.execute(
+    [&]
+    {
+      tbb::parallel_for(tbb::blocked_range<int64_t>(0, tiles, 1),
+        [&](const tbb::blocked_range<int64_t>& range)
+        {
+          for (int64_t t = range.begin(); t < range.end(); ++t)
+          {
+            const TileSegments& tile = perTile[t];
+            size_t next = 0;
+            if (tile.Segments.empty())
+            {
+              continue;
+            }
+            forEachTilePixel(t,
+              [&](int local, int64_t pixel)
+              {
+                const int32_t n = tile.Counts[local];
+                std::copy(tile.Segments.begin() + next, tile.Segments.begin() + next + n,
+                  segments.Segments.begin() + segments.Offsets[pixel]);
+                next += n;
+              });
+          }
+        });
+    });
 }
 
 //------------------------------------------------------------------------------

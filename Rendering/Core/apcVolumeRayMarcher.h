@@ -1,7 +1,8 @@
 // Ray marching of one rank's unstructured cells on the global sample lattice, in the three
 // ways APC needs: exact front-to-back blending (the ground truth), MBOIT pass 1 (absorbance
 // moments) and MBOIT pass 2 (colour weighted by the transmittance reconstructed from the
-// global moments), plus the per-pixel count of disjoint ray segments through the cells.
+// global moments), plus the per-pixel count of disjoint ray segments through the cells and
+// the segments themselves, pre-blended, for exact sort-last compositing across ranks.
 //
 // Work is organised by cell, not by ray: every cell is binned once per view into the screen
 // tiles its projection covers, then each tile (one TBB task) intersects its pixels' rays with
@@ -40,6 +41,62 @@ struct CachedSample
   float Scalar;
   uint16_t Pixel;
 };
+
+// One run of consecutive lattice samples k = KFirst..KLast along one pixel's ray that all lie
+// in this rank's cells (transparent samples included: a run ends only where the ray leaves
+// the rank's cells between two lattice points, or at the ray's end), blended front to back:
+// premultiplied colour and transmittance (1 - alpha). Runs of different ranks never
+// interleave on a ray, since every lattice sample belongs to exactly one rank, so blending all
+// ranks' runs in KFirst order is exactly the ordered blend of all samples. Wholly transparent
+// runs are not kept: they change nothing and would only be sent.
+struct RaySegment
+{
+  int64_t KFirst;
+  int64_t KLast;
+  std::array<float, 3> Colour;
+  // Rather than alpha: a float keeps a small transmittance to full relative precision, while
+  // 1 - alpha of an almost opaque run would lose it, and with it the weight of everything
+  // behind the run.
+  float Transmittance;
+};
+
+// Per-pixel segment lists in compressed rows: pixel p's segments are
+// Segments[Offsets[p] .. Offsets[p + 1]), in increasing KFirst. Width * Height pixels, row 0 at
+// the bottom, pixel (i, j) at j * Width + i.
+struct SegmentImage
+{
+  int Width = 0;
+  int Height = 0;
+  std::vector<int64_t> Offsets{ 0 };
+  std::vector<RaySegment> Segments;
+
+  int64_t Count(int64_t pixel) const { return this->Offsets[pixel + 1] - this->Offsets[pixel]; }
+  // Empty lists for every pixel of a width x height image.
+  void Reset(int width, int height);
+};
+
+// Segment statistics over the pixels that have at least one segment.
+struct SegmentStatistics
+{
+  int64_t Segments = 0;
+  int64_t NonEmptyPixels = 0;
+  int64_t MaxPerPixel = 0;
+  double Average() const
+  {
+    return this->NonEmptyPixels > 0 ? static_cast<double>(this->Segments) / this->NonEmptyPixels
+                                    : 0.0;
+  }
+};
+SegmentStatistics GetSegmentStatistics(const SegmentImage& image);
+
+// Blends one pixel's segments, from any ranks, front to back in KFirst order (sorting them in
+// place): premultiplied RGBA. Exact (to rounding) as long as the segments' k ranges do not
+// interleave.
+std::array<double, 4> CompositeSegments(RaySegment* segments, size_t count);
+
+// CompositeSegments for every pixel of an image (whose lists need not be sorted), added (+=)
+// to rgba, Width * Height * 4. threads: 0 = as many as TBB offers.
+void CompositeSegmentImage(SegmentImage& image, float* rgba, int threads = 0);
 
 class VolumeRayMarcher
 {
@@ -80,6 +137,9 @@ public:
   template <int N>
   void AccumulateColour(const TransferTable& table, const LogDepthWarp& warp, const double* moments,
     const MomentSettings<N>& settings, double* colourSums);
+
+  // This mesh's segments of every pixel (see RaySegment), replacing segments' content.
+  void RenderSegments(const TransferTable& table, SegmentImage& segments);
 
   // Number of disjoint intervals of each ray inside the cells (before the ray end), W*H.
   void CountSegments(int32_t* counts);

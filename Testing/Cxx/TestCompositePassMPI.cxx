@@ -1,7 +1,9 @@
 // Run under mpirun -np N. Each rank renders only its own cells through vtkAPCCompositePass;
 // the display rank's final float image must equal the one-process MBOIT image of the whole
 // data set to rounding, cells never move, and bad cases (an empty rank, a rank without the
-// scalar array, a 1x1 window) end the frame on every rank instead of hanging.
+// scalar array, a 1x1 window) end the frame on every rank instead of hanging. The exact
+// sort-last baseline (CompositeMode SEGMENTS) must equal the one-process EXACT image, and
+// on the gear teeth seen down the slab axis its segment count must be the analytic one.
 
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCPuzzleSource.h"
@@ -29,6 +31,7 @@
 #include "vtkVolumeProperty.h"
 #include "vtkXMLUnstructuredGridReader.h"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -56,6 +59,7 @@ struct Scene
   double Position[3];
   double FocalPoint[3];
   double ViewUp[3];
+  double ParallelScale = 0; // > 0: parallel projection
 };
 
 void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const Scene& scene)
@@ -82,6 +86,11 @@ void SetCamera(vtkRenderer* renderer, const Scene& scene, const double bounds[6]
   camera->SetPosition(scene.Position);
   camera->SetFocalPoint(scene.FocalPoint);
   camera->SetViewUp(scene.ViewUp);
+  if (scene.ParallelScale > 0)
+  {
+    camera->ParallelProjectionOn();
+    camera->SetParallelScale(scene.ParallelScale);
+  }
   renderer->ResetCameraClippingRange(bounds);
 }
 
@@ -135,8 +144,9 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& 
   return rgba;
 }
 
-// The one-process MBOIT image of the whole grid (the reference).
-std::vector<float> RenderWhole(const Scene& scene, int size, bool plane)
+// The one-process image of the whole grid (the reference), MBOIT or EXACT.
+std::vector<float> RenderWhole(
+  const Scene& scene, int size, bool plane, int mode = vtkAPCVolumeMapper::MBOIT)
 {
   vtkNew<vtkRenderWindow> window;
   window->SetOffScreenRendering(1);
@@ -145,6 +155,7 @@ std::vector<float> RenderWhole(const Scene& scene, int size, bool plane)
   window->AddRenderer(renderer);
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(scene.Grid);
+  mapper->SetMode(mode);
   vtkNew<vtkVolume> volume;
   ConfigureVolume(volume, mapper, scene);
   renderer->AddVolume(volume);
@@ -193,21 +204,32 @@ void GlobalBounds(vtkMPIController* controller, vtkUnstructuredGrid* piece, doub
   }
 }
 
-void CompareWithWhole(vtkMPIController* controller, const char* name, const Scene& scene,
-  vtkUnstructuredGrid* piece, int size, bool plane)
+// In SEGMENTS mode the reference is the one-process EXACT image; returns the pass's segment
+// statistics (average, max) on every rank.
+std::array<double, 2> CompareWithWhole(vtkMPIController* controller, const char* name,
+  const Scene& scene, vtkUnstructuredGrid* piece, int size, bool plane, bool segments = false)
 {
   const int rank = controller->GetLocalProcessId();
   const vtkIdType cellsBefore = piece->GetNumberOfCells();
   double bounds[6];
   GlobalBounds(controller, piece, bounds);
   vtkNew<vtkAPCCompositePass> pass;
+  if (segments)
+  {
+    pass->SetCompositeMode(vtkAPCCompositePass::SEGMENTS);
+  }
   const std::vector<float> distributed =
     RenderDistributed(controller, scene, piece, bounds, size, plane, pass);
   Check(piece->GetNumberOfCells() == cellsBefore, rank, std::string(name) + ": cells unchanged");
   Check(!pass->GetLastFrameFailed(), rank, std::string(name) + ": frame rendered");
+  // Bytes and messages of every rank, for the record.
+  double sent[2] = { pass->GetLastBytesSent(), static_cast<double>(pass->GetLastMessagesSent()) };
+  double totals[2] = { 0, 0 };
+  controller->Reduce(sent, totals, 2, vtkCommunicator::SUM_OP, 0);
   if (rank == 0)
   {
-    const std::vector<float> whole = RenderWhole(scene, size, plane);
+    const std::vector<float> whole = RenderWhole(
+      scene, size, plane, segments ? vtkAPCVolumeMapper::EXACT : vtkAPCVolumeMapper::MBOIT);
     double maxDiff = 0;
     double maxAlpha = 0;
     Check(distributed.size() == whole.size(), 0, std::string(name) + ": image sizes");
@@ -216,26 +238,57 @@ void CompareWithWhole(vtkMPIController* controller, const char* name, const Scen
       maxDiff = std::max(maxDiff, static_cast<double>(std::abs(distributed[v] - whole[v])));
       maxAlpha = v % 4 == 3 ? std::max(maxAlpha, static_cast<double>(whole[v])) : maxAlpha;
     }
-    std::printf("%s on %d ranks: max |distributed - one process| = %.3g (max alpha %.3f), "
-                "%lld pixels composited, %.0f bytes sent by the display rank, "
-                "pass1 %.4f s, allreduce %.4f s, pass2 %.4f s, reduce %.4f s\n",
-      name, controller->GetNumberOfProcesses(), maxDiff, maxAlpha,
-      static_cast<long long>(pass->GetLastCompositedPixels()), pass->GetLastBytesSent(),
-      pass->GetLastStageSeconds("pass1"), pass->GetLastStageSeconds("allreduce"),
-      pass->GetLastStageSeconds("pass2"), pass->GetLastStageSeconds("reduce"));
-    // Float images of double sums taken in another order: 1e-4 leaves room for the one
-    // float rounding of the result and the moment solve's sensitivity.
-    Check(maxDiff <= 1e-4, 0, std::string(name) + ": distributed equals one process");
+    if (segments)
+    {
+      std::printf("%s on %d ranks: max |segments - one-process EXACT| = %.3g (max alpha %.3f), "
+                  "%lld pixels composited, segments per non-empty pixel: average %.4f, max %lld "
+                  "(%lld segments, %lld pixels); bytes sent: display rank %.0f, all ranks %.0f "
+                  "in %.0f messages; segments %.4f s, exchange %.4f s, blend_segments %.4f s, "
+                  "gather %.4f s\n",
+        name, controller->GetNumberOfProcesses(), maxDiff, maxAlpha,
+        static_cast<long long>(pass->GetLastCompositedPixels()),
+        pass->GetLastAverageSegmentsPerPixel(),
+        static_cast<long long>(pass->GetLastMaxSegmentsPerPixel()),
+        static_cast<long long>(pass->GetLastSegmentCount()),
+        static_cast<long long>(pass->GetLastNonEmptyPixels()), pass->GetLastBytesSent(), totals[0],
+        totals[1], pass->GetLastStageSeconds("segments"), pass->GetLastStageSeconds("exchange"),
+        pass->GetLastStageSeconds("blend_segments"), pass->GetLastStageSeconds("gather"));
+      // Each segment's colour and transmittance are rounded to float once and blended in
+      // double, against the exact image's one rounding: a few float ulps (1.2e-7 on the
+      // puzzle). The wind pieces overlap by rounding at their interfaces, where their point
+      // data differ: a few lattice points lie in two cells with different colours, and even
+      // the one-process EXACT image blends such a pair in whichever order its sort leaves
+      // them (measured 2e-6 from that; 1e-5 leaves room).
+      Check(maxDiff <= 1e-5, 0, std::string(name) + ": segments equal one-process EXACT");
+    }
+    else
+    {
+      std::printf("%s on %d ranks: max |distributed - one process| = %.3g (max alpha %.3f), "
+                  "%lld pixels composited, %.0f bytes sent by the display rank (all ranks %.0f "
+                  "in %.0f messages), pass1 %.4f s, allreduce %.4f s, pass2 %.4f s, "
+                  "reduce %.4f s\n",
+        name, controller->GetNumberOfProcesses(), maxDiff, maxAlpha,
+        static_cast<long long>(pass->GetLastCompositedPixels()), pass->GetLastBytesSent(),
+        totals[0], totals[1], pass->GetLastStageSeconds("pass1"),
+        pass->GetLastStageSeconds("allreduce"), pass->GetLastStageSeconds("pass2"),
+        pass->GetLastStageSeconds("reduce"));
+      // Float images of double sums taken in another order: 1e-4 leaves room for the one
+      // float rounding of the result and the moment solve's sensitivity.
+      Check(maxDiff <= 1e-4, 0, std::string(name) + ": distributed equals one process");
+    }
     Check(maxAlpha > 0.2, 0, std::string(name) + ": something visible");
   }
+  return { pass->GetLastAverageSegmentsPerPixel(),
+    static_cast<double>(pass->GetLastMaxSegmentsPerPixel()) };
 }
 
-vtkSmartPointer<vtkUnstructuredGrid> PuzzlePiece(int piece, int pieces, int puzzlePieces)
+vtkSmartPointer<vtkUnstructuredGrid> PuzzlePiece(
+  int piece, int pieces, int puzzlePieces, int field = vtkAPCPuzzleSource::SPHERES)
 {
   vtkNew<vtkAPCPuzzleSource> source;
   source->SetNumberOfPuzzlePieces(puzzlePieces);
   source->SetResolution(12);
-  source->SetField(vtkAPCPuzzleSource::SPHERES);
+  source->SetField(field);
   source->UpdatePiece(piece, pieces, 0);
   return source->GetOutput();
 }
@@ -292,6 +345,39 @@ int main(int argc, char* argv[])
   wind.Grid = WindPieces(0, 1);
   CompareWithWhole(controller, "wind", wind, WindPieces(rank, ranks), 96, false);
 
+  // The exact sort-last baseline against the one-process EXACT image.
+  CompareWithWhole(
+    controller, "segments puzzle", puzzle, PuzzlePiece(rank, ranks, ranks), 96, false, true);
+  CompareWithWhole(
+    controller, "segments puzzle+plane", puzzle, PuzzlePiece(rank, ranks, ranks), 96, true, true);
+  if (ranks > 1)
+  {
+    Scene sparse = puzzle;
+    sparse.Grid = PuzzlePiece(0, 1, ranks - 1);
+    CompareWithWhole(controller, "segments empty-rank", sparse, PuzzlePiece(rank, ranks, ranks - 1),
+      64, false, true);
+  }
+  CompareWithWhole(controller, "segments wind", wind, WindPieces(rank, ranks), 96, false, true);
+
+  // Gear teeth seen down the slab axis (parallel, the view inside the box, so every pixel's
+  // ray crosses all K * 4 slabs): each rank's 4 slabs are 4 segments separated by the other
+  // ranks' slabs, K * 4 per pixel in all; one rank alone has one (its slabs touch).
+  {
+    Scene gear{ nullptr, 0.0, 1.0, 0.2, 0.02, { 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 }, 0.9 };
+    gear.Grid = PuzzlePiece(0, 1, ranks, vtkAPCPuzzleSource::SANDWICH);
+    const std::array<double, 2> stats = CompareWithWhole(controller, "segments gear teeth", gear,
+      PuzzlePiece(rank, ranks, ranks, vtkAPCPuzzleSource::SANDWICH), 32, false, true);
+    const double expected = ranks == 1 ? 1.0 : 4.0 * ranks;
+    if (rank == 0)
+    {
+      std::printf("gear teeth on %d ranks: %.4f segments per non-empty pixel (max %.0f), "
+                  "analytic %.0f\n",
+        ranks, stats[0], stats[1], expected);
+    }
+    Check(stats[0] == expected && stats[1] == expected, rank,
+      "segments gear teeth: the analytic segment count");
+  }
+
   // A rank without the scalar array: every rank must skip the frame, none may hang.
   {
     auto piece = PuzzlePiece(rank, ranks, ranks);
@@ -306,12 +392,14 @@ int main(int argc, char* argv[])
     Check(pass->GetLastFrameFailed(), rank, "missing scalars: the frame is skipped everywhere");
   }
 
-  // A 1x1 window.
+  // A 1x1 window, in both modes.
+  for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
   {
     auto piece = PuzzlePiece(rank, ranks, ranks);
     double bounds[6];
     GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> pass;
+    pass->SetCompositeMode(mode);
     RenderDistributed(controller, puzzle, piece, bounds, 1, false, pass);
     Check(!pass->GetLastFrameFailed(), rank, "1x1 window renders");
   }
