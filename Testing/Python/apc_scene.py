@@ -25,7 +25,8 @@ parser.add_argument("--png", help="screenshot")
 parser.add_argument("--compare", help="reference .vti: the RGBA must match within --tolerance")
 parser.add_argument("--tolerance", type=float, default=1e-4)
 parser.add_argument("--plane", action="store_true", help="add an opaque slice through the data")
-parser.add_argument("--mode", default="APC", choices=["APC", "Local exact"])
+parser.add_argument("--mode", default="APC",
+                    choices=["APC", "Local exact", "Exact (segments)"])
 parser.add_argument("--drop-array-on-rank", type=int, default=-1,
                     help="remove the rendered array on this rank (a broken piece)")
 parser.add_argument("--server", help="host:port of a pvserver to connect to")
