@@ -48,14 +48,9 @@ struct SampleRecord
   std::array<float, 3> Colour;
 };
 
-// Exact mode: each pixel's samples, sorted by lattice index and blended front to back.
-struct ExactVisitor
+// Each pixel's samples of one tile, in arrival order (the exact and segment modes sort them).
+struct PixelSampleLists
 {
-  static constexpr bool WantsSegments = false;
-  static constexpr bool WantsSamples = true;
-  static constexpr bool WantsTransparentSamples = false;
-  float* Output;
-  int Width;
   std::vector<std::vector<SampleRecord>> Pixels;
 
   void BeginTile(const TileRect& tile)
@@ -71,11 +66,29 @@ struct ExactVisitor
   {
     this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
   }
+};
+
+// Exact mode: each pixel's samples, sorted by lattice index and blended front to back.
+struct ExactVisitor
+{
+  static constexpr bool WantsSegments = false;
+  static constexpr bool WantsSamples = true;
+  static constexpr bool WantsTransparentSamples = false;
+  float* Output;
+  int Width;
+  PixelSampleLists Lists;
+
+  void BeginTile(const TileRect& tile) { this->Lists.BeginTile(tile); }
+  void Segment(int, double, double) {}
+  void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
+  {
+    this->Lists.Sample(pixel, k, t, scalar, s);
+  }
   void EndTile(const TileRect& tile)
   {
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      auto& samples = this->Pixels[p];
+      auto& samples = this->Lists.Pixels[p];
       if (samples.empty())
       {
         continue;
@@ -273,20 +286,13 @@ struct RunVisitor
   static constexpr bool WantsSamples = true;
   static constexpr bool WantsTransparentSamples = true;
   std::vector<TileSegments>* Tiles;
-  std::vector<std::vector<SampleRecord>> Pixels;
+  PixelSampleLists Lists;
 
-  void BeginTile(const TileRect& tile)
-  {
-    this->Pixels.resize(tile.Pixels());
-    for (auto& p : this->Pixels)
-    {
-      p.clear();
-    }
-  }
+  void BeginTile(const TileRect& tile) { this->Lists.BeginTile(tile); }
   void Segment(int, double, double) {}
-  void Sample(int pixel, int64_t k, double, double, const TransferSample& s)
+  void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
-    this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
+    this->Lists.Sample(pixel, k, t, scalar, s);
   }
   void EndTile(const TileRect& tile)
   {
@@ -295,7 +301,7 @@ struct RunVisitor
     out.Segments.clear();
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      auto& samples = this->Pixels[p];
+      auto& samples = this->Lists.Pixels[p];
       if (samples.empty())
       {
         continue;
