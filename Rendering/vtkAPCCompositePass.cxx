@@ -337,8 +337,8 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   // a process that cannot render must not leave the others waiting in a later collective.
   std::vector<vtkAPCVolumeMapper*> mappers;
   const double inf = std::numeric_limits<double>::infinity();
-  // -xmin, xmax, -ymin, ymax, -zmin, zmax, failed, moments, -moments
-  double agree[9] = { -inf, -inf, -inf, -inf, -inf, -inf, 0, 0, -inf };
+  // -xmin, xmax, -ymin, ymax, -zmin, zmax, failed, moments, -moments, volumes, -volumes
+  double agree[11] = { -inf, -inf, -inf, -inf, -inf, -inf, 0, 0, -inf, 0, 0 };
   std::ostringstream problem;
   for (const auto& volume : internal.Volumes)
   {
@@ -372,15 +372,24 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       }
     }
   }
-  double global[9];
-  std::copy(agree, agree + 9, global);
+  // Every process must take the same path below, so even "no visible APC volume here" is
+  // agreed: a process without one while others have some would skip their collectives.
+  agree[9] = static_cast<double>(mappers.size());
+  agree[10] = -agree[9];
+  double global[11];
+  std::copy(agree, agree + 11, global);
   if (parallel)
   {
-    controller->AllReduce(agree, global, 9, vtkCommunicator::MAX_OP);
+    controller->AllReduce(agree, global, 11, vtkCommunicator::MAX_OP);
   }
   internal.Lap("agree");
+  if (global[9] == 0)
+  {
+    return; // no visible APC volume anywhere
+  }
   const int moments = static_cast<int>(global[7]);
-  if (global[6] > 0 || (moments > 0 && moments != static_cast<int>(-global[8])))
+  const bool someWithout = -global[10] == 0;
+  if (global[6] > 0 || someWithout || moments != static_cast<int>(-global[8]))
   {
     internal.Failed = true;
     if (!problem.str().empty())
@@ -391,13 +400,13 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     {
       vtkErrorMacro("APC frame skipped: " << (global[6] > 0
                         ? "a process could not render its volume (its error says why)"
-                        : "the APC volumes use different numbers of moments"));
+                        : someWithout ? "a process has no visible APC volume while others have"
+                                      : "the APC volumes use different numbers of moments"));
     }
     return;
   }
   const double bounds[6] = { -global[0], global[1], -global[2], global[3], -global[4], global[5] };
-  if (mappers.empty() ||
-    !(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
+  if (!(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
   {
     return; // no cells anywhere: nothing to draw
   }

@@ -97,7 +97,7 @@ void SetCamera(vtkRenderer* renderer, const Scene& scene, const double bounds[6]
 // The display rank's float RGBA of the distributed render of each rank's piece.
 std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& scene,
   vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
-  vtkAPCCompositePass* pass)
+  vtkAPCCompositePass* pass, bool withVolume = true)
 {
   vtkNew<vtkRenderWindow> window;
   window->SetOffScreenRendering(1);
@@ -113,7 +113,10 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& 
   vtkNew<vtkVolume> volume;
   ConfigureVolume(volume, mapper, scene);
   pass->RemoveAllVolumes();
-  pass->AddVolume(volume);
+  if (withVolume)
+  {
+    pass->AddVolume(volume);
+  }
   vtkNew<vtkPlaneSource> source;
   vtkNew<vtkPolyDataMapper> planeMapper;
   vtkNew<vtkActor> actor;
@@ -390,6 +393,18 @@ int main(int argc, char* argv[])
     vtkNew<vtkAPCCompositePass> pass;
     RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
     Check(pass->GetLastFrameFailed(), rank, "missing scalars: the frame is skipped everywhere");
+  }
+
+  // A process without any APC volume (a misconfigured in-situ code): every process must skip
+  // the frame instead of waiting for it in a collective.
+  if (ranks > 1)
+  {
+    auto piece = PuzzlePiece(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass, rank != ranks - 1);
+    Check(pass->GetLastFrameFailed(), rank, "a process without a volume: frame skipped everywhere");
   }
 
   // A 1x1 window, in both modes.

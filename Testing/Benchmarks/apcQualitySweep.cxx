@@ -1,0 +1,288 @@
+// Image-quality sweep of vtkAPCVolumeMapper's MBOIT mode against its EXACT mode: for each
+// scene, EXACT once and MBOIT for every overestimation beta x number of moments x resolve,
+// compared (apc::CompareImages, data range 1) on the premultiplied RGB over black. Prints and
+// writes CSV rows scene,beta,moments,resolve,ssim,psnr,mse,max_abs_diff, then the best
+// setting by SSIM per scene and overall (mean SSIM over scenes), and where the paper's default
+// (beta 0.3, 4 moments) ranks. Not run by ctest.
+//
+//   apcQualitySweep [--out DIR] [--data DIR]
+//
+// DIR/quality.csv gets the rows, DIR/<scene>_exact.png the reference pictures.
+
+#include "apcTestScenes.h"
+
+#include "apcImageMetrics.h"
+#include "vtkAPCPuzzleSource.h"
+#include "vtkAPCVolumeMapper.h"
+#include "vtkImageData.h"
+#include "vtkPointData.h"
+#include "vtkXMLPUnstructuredGridReader.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#ifndef APC_SOURCE_DIR
+#define APC_SOURCE_DIR "."
+#endif
+
+namespace
+{
+
+constexpr int kSize = 256;
+const double kBetas[] = { 0.0, 0.1, 0.25, 0.3, 0.5 };
+const int kMoments[] = { 4, 6, 8 };
+const int kResolves[] = { vtkAPCVolumeMapper::RENORMALISED, vtkAPCVolumeMapper::PAPER_SUM };
+
+const char* ResolveName(int resolve)
+{
+  return resolve == vtkAPCVolumeMapper::PAPER_SUM ? "PAPER_SUM" : "RENORMALISED";
+}
+
+struct Scene
+{
+  std::string Name;
+  vtkSmartPointer<vtkDataSet> Grid;
+  apctest::TransferFunction TF;
+  apctest::View View;
+  double SampleDistance = 0.0;
+};
+
+struct Row
+{
+  std::string Scene;
+  double Beta = 0;
+  int Moments = 0;
+  int Resolve = 0;
+  apc::ImageComparison C;
+};
+
+// One colour per puzzle piece (Sandwich = piece / max(pieces - 1, 1)), all fairly opaque;
+// the transfer function of TestVolumeMapperQuality's gear-teeth test.
+apctest::TransferFunction SandwichTF()
+{
+  apctest::TransferFunction tf;
+  tf.Colours = { { 0.0, 0.9, 0.1, 0.1 }, { 1.0 / 3, 0.1, 0.8, 0.1 }, { 2.0 / 3, 0.1, 0.2, 0.9 },
+    { 1.0, 0.9, 0.8, 0.1 } };
+  tf.Opacities = { { 0.0, 0.6 }, { 1.0, 0.6 } };
+  tf.UnitDistance = 0.1;
+  return tf;
+}
+
+vtkSmartPointer<vtkDataSet> Puzzle(int field, int pieces, int slabs, int resolution)
+{
+  vtkNew<vtkAPCPuzzleSource> source;
+  source->SetField(field);
+  source->SetNumberOfPuzzlePieces(pieces);
+  source->SetSlabsPerPiece(slabs);
+  source->SetResolution(resolution);
+  source->Update();
+  return source->GetOutput();
+}
+
+std::vector<Scene> MakeScenes(const std::string& data)
+{
+  std::vector<Scene> scenes;
+  // Synthetic scenes: the lattice spacing of TestVolumeMapperQuality.
+  const apctest::View oblique = apctest::ObliqueView(kSize);
+  scenes.push_back({ "spheres", Puzzle(vtkAPCPuzzleSource::SPHERES, 4, 4, 32), apctest::SpheresTF(),
+    oblique, 0.01 });
+  scenes.push_back(
+    { "sandwich", Puzzle(vtkAPCPuzzleSource::SANDWICH, 3, 2, 24), SandwichTF(), oblique, 0.01 });
+  scenes.push_back(
+    { "gearteeth", Puzzle(vtkAPCPuzzleSource::SANDWICH, 4, 4, 24), SandwichTF(), oblique, 0.01 });
+
+  // OpenFOAM's windAroundBuildings, 8 Scotch pieces read as one grid; transfer function and
+  // camera of TestVolumeMapperRegression's WindAroundBuildings test.
+  vtkNew<vtkXMLPUnstructuredGridReader> reader;
+  const std::string path = data + "/windAroundBuildings/wind.pvtu";
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkSmartPointer<vtkDataSet> wind = reader->GetOutputAsDataSet();
+  if (!wind || wind->GetNumberOfCells() == 0 || !wind->GetPointData()->GetArray("U_mag"))
+  {
+    std::cerr << "error: could not read U_mag from " << path << "\n";
+    std::exit(2);
+  }
+  wind->GetPointData()->SetActiveScalars("U_mag");
+  apctest::TransferFunction tf;
+  tf.Min = 0;
+  tf.Max = 20;
+  tf.Colours = { { 0.0, 0.23, 0.30, 0.75 }, { 10.0, 0.87, 0.87, 0.87 },
+    { 20.0, 0.71, 0.02, 0.15 } };
+  tf.Opacities = { { 0.0, 0.5 }, { 2.0, 0.15 }, { 5.0, 0.0 }, { 12.0, 0.0 }, { 16.0, 0.03 },
+    { 20.0, 0.2 } };
+  tf.UnitDistance = 5.0;
+  apctest::View view;
+  view.Parallel = false;
+  view.FocalPoint = { 155, 90, 40 };
+  view.Position = { -120, -260, 420 };
+  view.ViewUp = { 0, 0, 1 };
+  view.ViewAngle = 30;
+  view.Width = view.Height = kSize;
+  scenes.push_back({ "wind", wind, tf, view, 1.0 });
+  return scenes;
+}
+
+// The volume alone, premultiplied RGB over black, of one frame.
+std::vector<float> RenderRGB(const Scene& scene, int mode, double beta, int moments, int resolve)
+{
+  const apctest::Frame frame = apctest::Render(
+    scene.Grid,
+    [&](vtkAPCVolumeMapper* m)
+    {
+      m->SetMode(mode);
+      m->SetSampleDistance(scene.SampleDistance);
+      m->SetOverestimation(beta);
+      m->SetNumberOfMoments(moments);
+      m->SetResolveMode(resolve);
+    },
+    scene.TF, scene.View);
+  if (frame.RGBA.size() != static_cast<size_t>(4 * kSize * kSize))
+  {
+    std::cerr << "error: no image for " << scene.Name << "\n";
+    std::exit(3);
+  }
+  return apc::CompositeOverBackground(frame.RGBA.data(), kSize, kSize, { 0, 0, 0 });
+}
+
+std::string Key(double beta, int moments, int resolve)
+{
+  std::ostringstream s;
+  s << "beta=" << beta << " moments=" << moments << " resolve=" << ResolveName(resolve);
+  return s.str();
+}
+
+std::string CsvLine(const Row& r)
+{
+  std::ostringstream s;
+  s.precision(6);
+  s << r.Scene << "," << r.Beta << "," << r.Moments << "," << ResolveName(r.Resolve) << ","
+    << r.C.Ssim << ",";
+  if (std::isinf(r.C.Psnr))
+  {
+    s << "inf";
+  }
+  else
+  {
+    s << r.C.Psnr;
+  }
+  s << "," << r.C.Mse << "," << r.C.MaxAbsDiff;
+  return s.str();
+}
+
+} // namespace
+
+int main(int argc, char* argv[])
+{
+  std::string out = ".";
+  std::string data = APC_SOURCE_DIR "/Data";
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    if ((arg == "--out" || arg == "--data") && i + 1 < argc)
+    {
+      (arg == "--out" ? out : data) = argv[++i];
+    }
+    else
+    {
+      std::cerr << "usage: apcQualitySweep [--out DIR] [--data DIR]\n";
+      return 1;
+    }
+  }
+  std::filesystem::create_directories(out);
+  const auto start = std::chrono::steady_clock::now();
+
+  std::ofstream csv(out + "/quality.csv");
+  const std::string header = "scene,beta,moments,resolve,ssim,psnr,mse,max_abs_diff";
+  csv << header << "\n";
+  std::cout << header << std::endl;
+
+  std::vector<Row> rows;
+  const std::vector<Scene> scenes = MakeScenes(data);
+  for (const Scene& scene : scenes)
+  {
+    const auto exact = RenderRGB(scene, vtkAPCVolumeMapper::EXACT, 0.3, 4, 0);
+    {
+      // PNG of the reference for a look (over black, like the comparison).
+      std::vector<float> rgba(4 * kSize * kSize);
+      for (int p = 0; p < kSize * kSize; ++p)
+      {
+        std::copy_n(&exact[3 * p], 3, &rgba[4 * p]);
+        rgba[4 * p + 3] = 1.0f;
+      }
+      apctest::WritePNG(out + "/" + scene.Name + "_exact.png", rgba, kSize, kSize);
+    }
+    for (double beta : kBetas)
+    {
+      for (int moments : kMoments)
+      {
+        for (int resolve : kResolves)
+        {
+          const auto mboit = RenderRGB(scene, vtkAPCVolumeMapper::MBOIT, beta, moments, resolve);
+          Row row{ scene.Name, beta, moments, resolve,
+            apc::CompareImages(mboit.data(), exact.data(), kSize, kSize, 3, 1.0, 16.0 / 255) };
+          const std::string line = CsvLine(row);
+          csv << line << "\n";
+          std::cout << line << std::endl;
+          rows.push_back(row);
+        }
+      }
+    }
+  }
+
+  std::cout << "\nbest by SSIM per scene (rank of the paper's default beta=0.3, 4 moments):\n";
+  std::map<std::string, double> meanSsim;
+  for (const Scene& scene : scenes)
+  {
+    std::vector<Row> sorted;
+    for (const Row& r : rows)
+    {
+      if (r.Scene == scene.Name)
+      {
+        sorted.push_back(r);
+        meanSsim[Key(r.Beta, r.Moments, r.Resolve)] += r.C.Ssim / scenes.size();
+      }
+    }
+    std::stable_sort(
+      sorted.begin(), sorted.end(), [](const Row& a, const Row& b) { return a.C.Ssim > b.C.Ssim; });
+    const Row& best = sorted.front();
+    std::cout << scene.Name << ": best " << Key(best.Beta, best.Moments, best.Resolve) << " SSIM "
+              << best.C.Ssim << ", PSNR " << best.C.Psnr << " dB\n";
+    for (size_t k = 0; k < sorted.size(); ++k)
+    {
+      if (sorted[k].Moments == 4 && std::abs(sorted[k].Beta - 0.3) < 1e-12)
+      {
+        std::cout << "  paper default " << ResolveName(sorted[k].Resolve) << ": rank " << k + 1
+                  << " of " << sorted.size() << ", SSIM " << sorted[k].C.Ssim << "\n";
+      }
+    }
+  }
+
+  std::vector<std::pair<std::string, double>> overall(meanSsim.begin(), meanSsim.end());
+  std::stable_sort(overall.begin(), overall.end(),
+    [](const auto& a, const auto& b) { return a.second > b.second; });
+  std::cout << "\noverall best by mean SSIM over " << scenes.size()
+            << " scenes: " << overall.front().first << " mean SSIM " << overall.front().second
+            << "\n";
+  for (size_t k = 0; k < overall.size(); ++k)
+  {
+    if (overall[k].first.find("beta=0.3 moments=4 ") == 0)
+    {
+      std::cout << "  paper default " << overall[k].first << ": rank " << k + 1 << " of "
+                << overall.size() << ", mean SSIM " << overall[k].second << "\n";
+    }
+  }
+  const double seconds =
+    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::cout << "\nwrote " << out << "/quality.csv (" << rows.size() << " rows) in " << seconds
+            << " s\n";
+  return 0;
+}
