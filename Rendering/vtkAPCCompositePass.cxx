@@ -337,8 +337,9 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   // a process that cannot render must not leave the others waiting in a later collective.
   std::vector<vtkAPCVolumeMapper*> mappers;
   const double inf = std::numeric_limits<double>::infinity();
-  // -xmin, xmax, -ymin, ymax, -zmin, zmax, failed, moments, -moments, volumes, -volumes
-  double agree[11] = { -inf, -inf, -inf, -inf, -inf, -inf, 0, 0, -inf, 0, 0 };
+  // -xmin, xmax, -ymin, ymax, -zmin, zmax, failed, moments, -moments, volumes, -volumes,
+  // width, -width, height, -height
+  double agree[15] = { -inf, -inf, -inf, -inf, -inf, -inf, 0, 0, -inf, 0, 0, 0, 0, 0, 0 };
   std::ostringstream problem;
   for (const auto& volume : internal.Volumes)
   {
@@ -376,11 +377,22 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   // agreed: a process without one while others have some would skip their collectives.
   agree[9] = static_cast<double>(mappers.size());
   agree[10] = -agree[9];
-  double global[11];
-  std::copy(agree, agree + 11, global);
+  // The screen rectangle and every image buffer derive from the viewport: sizes that differ
+  // between processes would make their collectives disagree in length.
+  int width = 0;
+  int height = 0;
+  int x0 = 0;
+  int y0 = 0;
+  ren->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
+  agree[11] = width;
+  agree[12] = -width;
+  agree[13] = height;
+  agree[14] = -height;
+  double global[15];
+  std::copy(agree, agree + 15, global);
   if (parallel)
   {
-    controller->AllReduce(agree, global, 11, vtkCommunicator::MAX_OP);
+    controller->AllReduce(agree, global, 15, vtkCommunicator::MAX_OP);
   }
   internal.Lap("agree");
   if (global[9] == 0)
@@ -389,7 +401,8 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   }
   const int moments = static_cast<int>(global[7]);
   const bool someWithout = -global[10] == 0;
-  if (global[6] > 0 || someWithout || moments != static_cast<int>(-global[8]))
+  const bool sizesDiffer = global[11] != -global[12] || global[13] != -global[14];
+  if (global[6] > 0 || someWithout || sizesDiffer || moments != static_cast<int>(-global[8]))
   {
     internal.Failed = true;
     if (!problem.str().empty())
@@ -411,14 +424,9 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     return; // no cells anywhere: nothing to draw
   }
 
-  int width = 0;
-  int height = 0;
-  int x0 = 0;
-  int y0 = 0;
-  ren->GetTiledSizeAndOrigin(&width, &height, &x0, &y0);
   if (width < 1 || height < 1)
   {
-    return;
+    return; // the same on every process (agreed above)
   }
   const Rect rect = ScreenRect(ren, bounds, width, height);
   const size_t pixels = static_cast<size_t>(width) * height;

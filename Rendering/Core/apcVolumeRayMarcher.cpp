@@ -66,6 +66,32 @@ struct PixelSampleLists
   {
     this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
   }
+  // Pixel p's samples in depth (lattice) order.
+  std::vector<SampleRecord>& Sorted(int p)
+  {
+    auto& samples = this->Pixels[p];
+    std::sort(samples.begin(), samples.end(),
+      [](const SampleRecord& a, const SampleRecord& b) { return a.K < b.K; });
+    return samples;
+  }
+};
+
+// Front-to-back blending of samples in depth order: the exact reference arithmetic, shared by
+// the exact mode and the segments so that one segment equals the exact blend of its run.
+struct FrontToBack
+{
+  double Transmittance = 1.0;
+  double Colour[3] = { 0, 0, 0 };
+
+  void Add(const SampleRecord& s)
+  {
+    const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
+    for (int c = 0; c < 3; ++c)
+    {
+      this->Colour[c] += this->Transmittance * alpha * s.Colour[c];
+    }
+    this->Transmittance *= 1.0 - alpha;
+  }
 };
 
 // Exact mode: each pixel's samples, sorted by lattice index and blended front to back.
@@ -88,32 +114,23 @@ struct ExactVisitor
   {
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      auto& samples = this->Lists.Pixels[p];
-      if (samples.empty())
+      if (this->Lists.Pixels[p].empty())
       {
         continue;
       }
-      std::sort(samples.begin(), samples.end(),
-        [](const SampleRecord& a, const SampleRecord& b) { return a.K < b.K; });
-      double transmittance = 1.0;
-      double rgb[3] = { 0, 0, 0 };
-      for (const SampleRecord& s : samples)
+      FrontToBack blend;
+      for (const SampleRecord& s : this->Lists.Sorted(p))
       {
-        const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
-        for (int c = 0; c < 3; ++c)
-        {
-          rgb[c] += transmittance * alpha * s.Colour[c];
-        }
-        transmittance *= 1.0 - alpha;
+        blend.Add(s);
       }
       const int i = tile.I0 + p % tile.Width();
       const int j = tile.J0 + p / tile.Width();
       float* out = this->Output + 4 * (static_cast<int64_t>(j) * this->Width + i);
       for (int c = 0; c < 3; ++c)
       {
-        out[c] += static_cast<float>(rgb[c]);
+        out[c] += static_cast<float>(blend.Colour[c]);
       }
-      out[3] += static_cast<float>(1.0 - transmittance);
+      out[3] += static_cast<float>(1.0 - blend.Transmittance);
     }
   }
 };
@@ -301,24 +318,21 @@ struct RunVisitor
     out.Segments.clear();
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      auto& samples = this->Lists.Pixels[p];
-      if (samples.empty())
+      if (this->Lists.Pixels[p].empty())
       {
         continue;
       }
-      std::sort(samples.begin(), samples.end(),
-        [](const SampleRecord& a, const SampleRecord& b) { return a.K < b.K; });
+      const std::vector<SampleRecord>& samples = this->Lists.Sorted(p);
       RaySegment run{ samples.front().K, samples.front().K, { 0, 0, 0 }, 1.0f };
-      double transmittance = 1.0;
-      double rgb[3] = { 0, 0, 0 };
+      FrontToBack blend;
       bool visible = false;
       auto flush = [&]
       {
         if (visible)
         {
-          run.Colour = { static_cast<float>(rgb[0]), static_cast<float>(rgb[1]),
-            static_cast<float>(rgb[2]) };
-          run.Transmittance = static_cast<float>(transmittance);
+          run.Colour = { static_cast<float>(blend.Colour[0]), static_cast<float>(blend.Colour[1]),
+            static_cast<float>(blend.Colour[2]) };
+          run.Transmittance = static_cast<float>(blend.Transmittance);
           out.Segments.push_back(run);
           ++out.Counts[p];
         }
@@ -329,8 +343,7 @@ struct RunVisitor
         {
           flush();
           run.KFirst = s.K;
-          transmittance = 1.0;
-          rgb[0] = rgb[1] = rgb[2] = 0.0;
+          blend = FrontToBack();
           visible = false;
         }
         run.KLast = s.K;
@@ -339,13 +352,7 @@ struct RunVisitor
         {
           continue;
         }
-        // The same arithmetic as ExactVisitor, so that one run equals the exact blend.
-        const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
-        for (int c = 0; c < 3; ++c)
-        {
-          rgb[c] += transmittance * alpha * s.Colour[c];
-        }
-        transmittance *= 1.0 - alpha;
+        blend.Add(s);
         visible = true;
       }
       flush();

@@ -407,6 +407,22 @@ int main(int argc, char* argv[])
     Check(pass->GetLastFrameFailed(), rank, "a process without a volume: frame skipped everywhere");
   }
 
+  // Viewports of different sizes (a misconfigured in-situ code): the image buffers would
+  // differ in length, so every process must skip the frame, in both modes.
+  if (ranks > 1)
+  {
+    for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
+    {
+      auto piece = PuzzlePiece(rank, ranks, ranks);
+      double bounds[6];
+      GlobalBounds(controller, piece, bounds);
+      vtkNew<vtkAPCCompositePass> pass;
+      pass->SetCompositeMode(mode);
+      RenderDistributed(controller, puzzle, piece, bounds, rank == 0 ? 32 : 40, false, pass);
+      Check(pass->GetLastFrameFailed(), rank, "viewports differ: frame skipped everywhere");
+    }
+  }
+
   // A 1x1 window, in both modes.
   for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
   {
