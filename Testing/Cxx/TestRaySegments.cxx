@@ -25,16 +25,6 @@
 
 namespace
 {
-apc::CellMesh ToMesh(vtkUnstructuredGrid* grid)
-{
-  apc::CellMesh mesh;
-  std::string message;
-  const bool ok =
-    apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, message);
-  EXPECT_TRUE(ok) << message;
-  return mesh;
-}
-
 // Colour and opacity ramps over [0,1]; fully transparent below 0.2, so that transparent
 // samples sit inside runs and whole runs can be transparent.
 apc::TransferTable RampTable(double spacing, bool transparentBelow)
@@ -52,12 +42,6 @@ apc::TransferTable RampTable(double spacing, bool transparentBelow)
   return apc::TransferTable(0.0, 1.0, colours, opacities, spacing, 0.1);
 }
 
-apc::RayCamera ObliqueCamera(int size)
-{
-  return apc::RayCamera(
-    { 3.6, 2.5, 4.5 }, { 0, 0, 0 }, { 0, 1, 0 }, 35.0, false, 1.0, size, size, 0.1, 100.0);
-}
-
 struct SplitResult
 {
   double MaxDiff = 0;
@@ -72,7 +56,7 @@ SplitResult CompositeSplit(vtkUnstructuredGrid* whole,
   const std::vector<vtkSmartPointer<vtkUnstructuredGrid>>& pieceGrids, const apc::RayCamera& camera,
   bool transparentBelow, const float* rayEnds = nullptr)
 {
-  const apc::CellMesh wholeMesh = ToMesh(whole);
+  const apc::CellMesh wholeMesh = apctest::ToMesh(whole);
   const auto& b = wholeMesh.GetBounds();
   const double diagonal = std::sqrt(
     (b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) + (b[5] - b[4]) * (b[5] - b[4]));
@@ -90,7 +74,7 @@ SplitResult CompositeSplit(vtkUnstructuredGrid* whole,
   std::vector<std::vector<apc::RaySegment>> perPixel(pixels);
   for (const auto& grid : pieceGrids)
   {
-    const apc::CellMesh mesh = ToMesh(grid);
+    const apc::CellMesh mesh = apctest::ToMesh(grid);
     marcher.SetMesh(&mesh);
     marcher.SetView(camera, rayEnds);
     apc::SegmentImage segments;
@@ -160,21 +144,8 @@ void Report(const std::string& name, const SplitResult& r)
 
 std::vector<vtkSmartPointer<vtkUnstructuredGrid>> HashPieces(vtkUnstructuredGrid* grid, int k)
 {
-  std::vector<vtkNew<vtkIdList>> lists(k);
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
-  {
-    lists[apctest::CellHash(c) % k]->InsertNextId(c);
-  }
-  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
-  for (int p = 0; p < k; ++p)
-  {
-    vtkNew<vtkExtractCells> extract;
-    extract->SetInputData(grid);
-    extract->SetCellList(lists[p]);
-    extract->Update();
-    pieces.push_back(extract->GetOutput());
-  }
-  return pieces;
+  return apctest::SplitCells(
+    grid, k, [k](vtkIdType c) { return static_cast<int>(apctest::CellHash(c) % k); });
 }
 
 double Smooth(double x, double y, double z)
@@ -185,7 +156,7 @@ double Smooth(double x, double y, double z)
 TEST(RaySegments, WholeMeshIsExact)
 {
   auto grid = apctest::MixedBlock(8, Smooth);
-  const SplitResult r = CompositeSplit(grid, { grid }, ObliqueCamera(64), true);
+  const SplitResult r = CompositeSplit(grid, { grid }, apctest::ObliqueCamera(64), true);
   Report("mixed block, one piece", r);
   // A convex mesh: at most one run per ray (fewer where a whole run is transparent).
   EXPECT_EQ(r.Stats.MaxPerPixel, 1);
@@ -207,7 +178,7 @@ TEST(RaySegments, PuzzlePiecesCompositeToExact)
       {
         Report("puzzle field " + std::to_string(field) + " K=" + std::to_string(k) +
             (transparent ? " (transparent below 0.2)" : ""),
-          CompositeSplit(whole, pieces, ObliqueCamera(80), transparent));
+          CompositeSplit(whole, pieces, apctest::ObliqueCamera(80), transparent));
       }
     }
   }
@@ -218,7 +189,8 @@ TEST(RaySegments, JaggedPiecesCompositeToExact)
   auto grid = apctest::MixedBlock(12, Smooth);
   for (int k : { 2, 3, 5 })
   {
-    const SplitResult r = CompositeSplit(grid, HashPieces(grid, k), ObliqueCamera(80), true);
+    const SplitResult r =
+      CompositeSplit(grid, HashPieces(grid, k), apctest::ObliqueCamera(80), true);
     Report("mixed block, cells hashed into " + std::to_string(k) + " pieces", r);
     EXPECT_GT(r.Stats.Average(), 3.0) << "hashed pieces must interleave along the rays";
   }
@@ -227,7 +199,7 @@ TEST(RaySegments, JaggedPiecesCompositeToExact)
 TEST(RaySegments, OpaqueGeometryStopsTheSegments)
 {
   const int size = 64;
-  const apc::RayCamera camera = ObliqueCamera(size);
+  const apc::RayCamera camera = apctest::ObliqueCamera(size);
   std::vector<float> rayEnds(size * size);
   for (int j = 0; j < size; ++j)
   {
@@ -267,7 +239,7 @@ TEST(RaySegments, GearTeethSegmentCounts)
     for (int p = 0; p < k; ++p)
     {
       auto grid = apctest::PuzzlePiece(vtkAPCPuzzleSource::SANDWICH, k, slabs, 4, p);
-      const apc::CellMesh mesh = ToMesh(grid);
+      const apc::CellMesh mesh = apctest::ToMesh(grid);
       marcher.SetMesh(&mesh);
       marcher.SetView(camera, nullptr);
       apc::SegmentImage segments;

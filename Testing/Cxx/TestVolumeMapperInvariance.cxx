@@ -131,17 +131,6 @@ TEST(VolumeMapperInvariance, ShuffledMixedCellsRenderTheSame)
 //------------------------------------------------------------------------------
 // Split sums on the core ray marcher, as distributed APC uses it.
 
-apc::CellMesh ToMesh(vtkUnstructuredGrid* grid)
-{
-  apc::CellMesh mesh;
-  std::string message;
-  const bool ok =
-    apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, message);
-  EXPECT_TRUE(ok) << message;
-  EXPECT_TRUE(message.empty()) << message;
-  return mesh;
-}
-
 apc::TransferTable RampTable(double spacing)
 {
   // Colour and opacity ramps over [0,1], 256 entries.
@@ -234,12 +223,12 @@ SplitErrors CompareSplit(vtkUnstructuredGrid* whole,
   const std::vector<vtkSmartPointer<vtkUnstructuredGrid>>& pieceGrids, const apc::RayCamera& camera,
   const char* name)
 {
-  const apc::CellMesh wholeMesh = ToMesh(whole);
+  const apc::CellMesh wholeMesh = apctest::ToMesh(whole);
   std::vector<apc::CellMesh> meshes;
   vtkIdType pieceCells = 0;
   for (const auto& g : pieceGrids)
   {
-    meshes.push_back(ToMesh(g));
+    meshes.push_back(apctest::ToMesh(g));
     pieceCells += g->GetNumberOfCells();
     EXPECT_GT(g->GetNumberOfCells(), 0) << name << ": every piece must own cells";
   }
@@ -327,15 +316,9 @@ SplitErrors CompareSplit(vtkUnstructuredGrid* whole,
   return e;
 }
 
-apc::RayCamera ObliqueCamera(int size)
-{
-  return apc::RayCamera(
-    { 3.6, 2.5, 4.5 }, { 0, 0, 0 }, { 0, 1, 0 }, 35.0, false, 1.0, size, size, 0.1, 100.0);
-}
-
 TEST(VolumeMapperInvariance, PuzzlePiecesSumToTheWhole)
 {
-  const apc::RayCamera camera = ObliqueCamera(96);
+  const apc::RayCamera camera = apctest::ObliqueCamera(96);
   for (int k : { 2, 3, 5 })
   {
     auto whole = apctest::PuzzleGrid(vtkAPCPuzzleSource::SMOOTH, k, 2, 12);
@@ -354,38 +337,23 @@ TEST(VolumeMapperInvariance, PuzzlePiecesSumToTheWhole)
 std::vector<vtkSmartPointer<vtkUnstructuredGrid>> JaggedPieces(
   vtkUnstructuredGrid* grid, int k, bool byHash)
 {
-  std::vector<vtkNew<vtkIdList>> lists(k);
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
-  {
-    int piece;
-    if (byHash)
+  return apctest::SplitCells(grid, k,
+    [grid, k, byHash](vtkIdType c)
     {
-      piece = static_cast<int>(apctest::CellHash(c) % k);
-    }
-    else
-    {
+      if (byHash)
+      {
+        return static_cast<int>(apctest::CellHash(c) % k);
+      }
       const auto x = apctest::CellCentre(grid, c);
       const double s =
         2.5 * (x[0] + 0.7 * x[1] + 0.9 * x[2]) + 0.35 * std::sin(9 * x[1] - 4 * x[0]);
-      piece = static_cast<int>(std::floor(s * 1.7 + 100.0)) % k;
-    }
-    lists[piece]->InsertNextId(c);
-  }
-  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
-  for (int p = 0; p < k; ++p)
-  {
-    vtkNew<vtkExtractCells> extract;
-    extract->SetInputData(grid);
-    extract->SetCellList(lists[p]);
-    extract->Update();
-    pieces.push_back(extract->GetOutput());
-  }
-  return pieces;
+      return static_cast<int>(std::floor(s * 1.7 + 100.0)) % k;
+    });
 }
 
 TEST(VolumeMapperInvariance, JaggedPiecesSumToTheWhole)
 {
-  const apc::RayCamera camera = ObliqueCamera(96);
+  const apc::RayCamera camera = apctest::ObliqueCamera(96);
   auto mixed = apctest::MixedBlock(12, Smooth);
   auto puzzle = apctest::PuzzleGrid(vtkAPCPuzzleSource::SMOOTH, 3, 3, 12);
   for (auto* grid : { mixed.Get(), puzzle.Get() })
@@ -402,7 +370,7 @@ TEST(VolumeMapperInvariance, JaggedPiecesSumToTheWhole)
         int64_t covered = 0;
         for (const auto& piece : pieces)
         {
-          const apc::CellMesh mesh = ToMesh(piece);
+          const apc::CellMesh mesh = apctest::ToMesh(piece);
           apc::VolumeRayMarcher marcher;
           marcher.SetMesh(&mesh);
           marcher.SetView(camera, nullptr);
@@ -444,7 +412,7 @@ TEST(VolumeMapperInvariance, GearTeethSegmentCounts)
     for (int p = 0; p < k; ++p)
     {
       auto grid = apctest::PuzzlePiece(vtkAPCPuzzleSource::SANDWICH, k, slabs, 4, p);
-      const apc::CellMesh mesh = ToMesh(grid);
+      const apc::CellMesh mesh = apctest::ToMesh(grid);
       apc::VolumeRayMarcher marcher;
       marcher.SetMesh(&mesh);
       marcher.SetView(camera, nullptr);
@@ -463,7 +431,7 @@ TEST(VolumeMapperInvariance, GearTeethSegmentCounts)
       }
     }
     auto grid = apctest::PuzzleGrid(vtkAPCPuzzleSource::SANDWICH, k, slabs, 4);
-    const apc::CellMesh mesh = ToMesh(grid);
+    const apc::CellMesh mesh = apctest::ToMesh(grid);
     apc::VolumeRayMarcher marcher;
     marcher.SetMesh(&mesh);
     marcher.SetView(camera, nullptr);
@@ -615,8 +583,8 @@ TEST(VolumeMapperInvariance, CachedAndRemarchedPassTwoAgree)
 {
   auto grid = apctest::MixedBlock(12,
     [](double x, double y, double z) { return 0.5 + 0.3 * std::sin(3 * x) * std::cos(2 * y) * z; });
-  apc::CellMesh mesh = ToMesh(grid);
-  const apc::RayCamera camera = ObliqueCamera(64);
+  apc::CellMesh mesh = apctest::ToMesh(grid);
+  const apc::RayCamera camera = apctest::ObliqueCamera(64);
   double tmin = 0;
   double tmax = 0;
   camera.DistanceRange(mesh.GetBounds(), tmin, tmax);

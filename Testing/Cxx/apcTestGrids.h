@@ -6,10 +6,17 @@
 
 #include "apcTestScenes.h"
 
+#include "apcCellMesh.h"
+#include "apcCellMeshFromVTK.h"
+#include "apcRayCamera.h"
 #include "vtkAPCPuzzleSource.h"
 #include "vtkCellData.h"
 #include "vtkDataSetAttributes.h"
+#include "vtkExtractCells.h"
+#include "vtkIdList.h"
 #include "vtkPointData.h"
+
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -17,6 +24,7 @@
 #include <functional>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace apctest
@@ -327,6 +335,47 @@ inline double MaxChannel(const std::vector<float>& image, int channels, int chan
     m = std::max(m, static_cast<double>(image[v]));
   }
   return m;
+}
+
+// The grid cut into k pieces by cell: owner(c) in [0, k) picks cell c's piece. Each piece is
+// extracted with vtkExtractCells, so it has its own, compacted point ids (as on a rank).
+inline std::vector<vtkSmartPointer<vtkUnstructuredGrid>> SplitCells(
+  vtkUnstructuredGrid* grid, int k, const std::function<int(vtkIdType)>& owner)
+{
+  std::vector<vtkNew<vtkIdList>> lists(k);
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+  {
+    lists[owner(c)]->InsertNextId(c);
+  }
+  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+  for (int p = 0; p < k; ++p)
+  {
+    vtkNew<vtkExtractCells> extract;
+    extract->SetInputData(grid);
+    extract->SetCellList(lists[p]);
+    extract->Update();
+    pieces.push_back(extract->GetOutput());
+  }
+  return pieces;
+}
+
+// The ray marcher's copy of a grid with point scalars (a test failure if unusable).
+inline apc::CellMesh ToMesh(vtkUnstructuredGrid* grid)
+{
+  apc::CellMesh mesh;
+  std::string message;
+  const bool ok =
+    apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, message);
+  EXPECT_TRUE(ok) << message;
+  EXPECT_TRUE(message.empty()) << message;
+  return mesh;
+}
+
+// The core camera of ObliqueView (apcTestScenes.h), for tests that drive the ray marcher.
+inline apc::RayCamera ObliqueCamera(int size)
+{
+  return apc::RayCamera(
+    { 3.6, 2.5, 4.5 }, { 0, 0, 0 }, { 0, 1, 0 }, 35.0, false, 1.0, size, size, 0.1, 100.0);
 }
 
 } // namespace apctest
