@@ -48,7 +48,8 @@ struct SampleRecord
   std::array<float, 3> Colour;
 };
 
-// Each pixel's samples of one tile, in arrival order (the exact and segment modes sort them).
+// Each pixel's samples of one tile, in arrival order (the exact and segment modes sort them);
+// the base of the visitors that need whole rays.
 struct PixelSampleLists
 {
   std::vector<std::vector<SampleRecord>> Pixels;
@@ -95,31 +96,23 @@ struct FrontToBack
 };
 
 // Exact mode: each pixel's samples, sorted by lattice index and blended front to back.
-struct ExactVisitor
+struct ExactVisitor : PixelSampleLists
 {
   static constexpr bool WantsSegments = false;
   static constexpr bool WantsSamples = true;
   static constexpr bool WantsTransparentSamples = false;
   float* Output;
   int Width;
-  PixelSampleLists Lists;
-
-  void BeginTile(const TileRect& tile) { this->Lists.BeginTile(tile); }
-  void Segment(int, double, double) {}
-  void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
-  {
-    this->Lists.Sample(pixel, k, t, scalar, s);
-  }
   void EndTile(const TileRect& tile)
   {
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      if (this->Lists.Pixels[p].empty())
+      if (this->Pixels[p].empty())
       {
         continue;
       }
       FrontToBack blend;
-      for (const SampleRecord& s : this->Lists.Sorted(p))
+      for (const SampleRecord& s : this->Sorted(p))
       {
         blend.Add(s);
       }
@@ -297,20 +290,12 @@ struct TileSegments
 // Sort-last segments: each pixel's samples sorted by k and cut into runs of consecutive k.
 // Transparent samples are taken too (they keep a run going), so that a run ends only where
 // the ray leaves this mesh's cells, whatever the transfer function.
-struct RunVisitor
+struct RunVisitor : PixelSampleLists
 {
   static constexpr bool WantsSegments = false;
   static constexpr bool WantsSamples = true;
   static constexpr bool WantsTransparentSamples = true;
   std::vector<TileSegments>* Tiles;
-  PixelSampleLists Lists;
-
-  void BeginTile(const TileRect& tile) { this->Lists.BeginTile(tile); }
-  void Segment(int, double, double) {}
-  void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
-  {
-    this->Lists.Sample(pixel, k, t, scalar, s);
-  }
   void EndTile(const TileRect& tile)
   {
     TileSegments& out = (*this->Tiles)[tile.Index];
@@ -318,11 +303,11 @@ struct RunVisitor
     out.Segments.clear();
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      if (this->Lists.Pixels[p].empty())
+      if (this->Pixels[p].empty())
       {
         continue;
       }
-      const std::vector<SampleRecord>& samples = this->Lists.Sorted(p);
+      const std::vector<SampleRecord>& samples = this->Sorted(p);
       RaySegment run{ samples.front().K, samples.front().K, { 0, 0, 0 }, 1.0f };
       FrontToBack blend;
       bool visible = false;
@@ -694,7 +679,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
 //------------------------------------------------------------------------------
 void VolumeRayMarcher::RenderExact(const TransferTable& table, float* rgba)
 {
-  ExactVisitor visitor{ rgba, this->Camera ? this->Camera->GetWidth() : 0, {} };
+  ExactVisitor visitor{ {}, rgba, this->Camera ? this->Camera->GetWidth() : 0 };
   this->March(visitor, table);
 }
 
@@ -864,7 +849,7 @@ void VolumeRayMarcher::RenderSegments(const TransferTable& table, SegmentImage& 
   const Bins& bins = *this->TileBins;
   const int64_t tiles = this->Camera ? static_cast<int64_t>(bins.TilesX) * bins.TilesY : 0;
   std::vector<TileSegments> perTile(static_cast<size_t>(tiles));
-  RunVisitor visitor{ &perTile, {} };
+  RunVisitor visitor{ {}, &perTile };
   this->March(visitor, table);
 
   // Tiles were filled in parallel and in any order; the compressed rows are in pixel order.
