@@ -112,22 +112,7 @@ std::vector<Scene> MakeScenes(const std::string& data)
     std::exit(2);
   }
   wind->GetPointData()->SetActiveScalars("U_mag");
-  apctest::TransferFunction tf;
-  tf.Min = 0;
-  tf.Max = 20;
-  tf.Colours = { { 0.0, 0.23, 0.30, 0.75 }, { 10.0, 0.87, 0.87, 0.87 },
-    { 20.0, 0.71, 0.02, 0.15 } };
-  tf.Opacities = { { 0.0, 0.5 }, { 2.0, 0.15 }, { 5.0, 0.0 }, { 12.0, 0.0 }, { 16.0, 0.03 },
-    { 20.0, 0.2 } };
-  tf.UnitDistance = 5.0;
-  apctest::View view;
-  view.Parallel = false;
-  view.FocalPoint = { 155, 90, 40 };
-  view.Position = { -120, -260, 420 };
-  view.ViewUp = { 0, 0, 1 };
-  view.ViewAngle = 30;
-  view.Width = view.Height = kSize;
-  scenes.push_back({ "wind", wind, tf, view, 1.0 });
+  scenes.push_back({ "wind", wind, apctest::WindTF(), apctest::WindView(kSize, kSize), 1.0 });
   return scenes;
 }
 

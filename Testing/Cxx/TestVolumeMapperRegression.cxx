@@ -146,23 +146,7 @@ TEST(VolumeMapperRegression, WindAroundBuildings)
   vtkDataSet* wind = reader->GetOutputAsDataSet();
   ASSERT_EQ(wind->GetNumberOfCells(), 331699);
   wind->GetPointData()->SetActiveScalars("U_mag");
-  // The wakes of the buildings (nearly still air) in blue, the fast stream above in red.
-  apctest::TransferFunction tf;
-  tf.Min = 0;
-  tf.Max = 20;
-  tf.Colours = { { 0.0, 0.23, 0.30, 0.75 }, { 10.0, 0.87, 0.87, 0.87 },
-    { 20.0, 0.71, 0.02, 0.15 } };
-  tf.Opacities = { { 0.0, 0.5 }, { 2.0, 0.15 }, { 5.0, 0.0 }, { 12.0, 0.0 }, { 16.0, 0.03 },
-    { 20.0, 0.2 } };
-  tf.UnitDistance = 5.0;
-  apctest::View view;
-  view.Parallel = false;
-  view.FocalPoint = { 155, 90, 40 };
-  view.Position = { -120, -260, 420 };
-  view.ViewUp = { 0, 0, 1 };
-  view.ViewAngle = 30;
-  view.Width = 160;
-  view.Height = 120;
-  CheckAgainstBaseline("wind_mboit", wind, tf, view, 1.0, 0.95, 30.0);
+  CheckAgainstBaseline(
+    "wind_mboit", wind, apctest::WindTF(), apctest::WindView(160, 120), 1.0, 0.95, 30.0);
 }
 }

@@ -129,6 +129,35 @@ inline View ObliqueView(int size)
   return view;
 }
 
+// The real wind data (U_mag): the buildings' wakes (nearly still air) in blue, the fast
+// stream above in red.
+inline TransferFunction WindTF()
+{
+  TransferFunction tf;
+  tf.Min = 0;
+  tf.Max = 20;
+  tf.Colours = { { 0.0, 0.23, 0.30, 0.75 }, { 10.0, 0.87, 0.87, 0.87 },
+    { 20.0, 0.71, 0.02, 0.15 } };
+  tf.Opacities = { { 0.0, 0.5 }, { 2.0, 0.15 }, { 5.0, 0.0 }, { 12.0, 0.0 }, { 16.0, 0.03 },
+    { 20.0, 0.2 } };
+  tf.UnitDistance = 5.0;
+  return tf;
+}
+
+// Above the wind domain, looking at the buildings from the south-west.
+inline View WindView(int width, int height)
+{
+  View view;
+  view.Parallel = false;
+  view.FocalPoint = { 155, 90, 40 };
+  view.Position = { -120, -260, 420 };
+  view.ViewUp = { 0, 0, 1 };
+  view.ViewAngle = 30;
+  view.Width = width;
+  view.Height = height;
+  return view;
+}
+
 struct Frame
 {
   int Width = 0;
