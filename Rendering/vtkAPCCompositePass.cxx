@@ -522,7 +522,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     first->ResolveImage(momentImage.data(), colourImage.data(), rgba.data());
     internal.Lap("resolve");
     first->StoreImages(rgba.data(), momentImage.data(), colourImage.data(), nullptr);
-    internal.Image->DeepCopy(first->GetLastImage());
+    internal.Image->ShallowCopy(first->GetLastImage()); // the mapper makes new arrays each frame
     first->BlendIntoWindow(ren, rgba.data());
     internal.Lap("blend");
     this->WriteImage();
@@ -796,7 +796,7 @@ void vtkAPCCompositePass::CompositeSegmentsFrame(
     }
     vtkAPCVolumeMapper* first = internal.FrameMappers.front();
     first->StoreImages(rgba.data(), nullptr, nullptr, nullptr);
-    internal.Image->DeepCopy(first->GetLastImage());
+    internal.Image->ShallowCopy(first->GetLastImage()); // the mapper makes new arrays each frame
     first->BlendIntoWindow(ren, rgba.data());
     internal.Lap("blend");
     this->WriteImage();
