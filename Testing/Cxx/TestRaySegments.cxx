@@ -12,6 +12,7 @@
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
 #include "apcRayCamera.h"
+#include "apcSegmentTransfer.h"
 #include "apcTransferTable.h"
 #include "apcVolumeRayMarcher.h"
 
@@ -224,7 +225,8 @@ TEST(RaySegments, OpaqueGeometryStopsTheSegments)
 // Gear teeth seen along the slab axis (parallel, looking down -z, every ray through all
 // slabs): each piece's SlabsPerPiece slabs are separated by the other pieces' slabs, each
 // thicker than the sample spacing, so every pixel has exactly SlabsPerPiece runs per piece,
-// K * SlabsPerPiece in all. Integer counts: exact.
+// K * SlabsPerPiece in all. Integer counts: exact. So are the transfers of direct send and
+// binary swap (apc::CountSegmentTransfer).
 TEST(RaySegments, GearTeethSegmentCounts)
 {
   const int size = 24;
@@ -232,17 +234,18 @@ TEST(RaySegments, GearTeethSegmentCounts)
   const apc::RayCamera camera(
     { 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 }, 30.0, true, 0.9, size, size, 0.1, 100.0);
   const apc::TransferTable table = RampTable(0.01, false);
-  for (int k : { 1, 2, 3, 5 })
+  for (int k : { 1, 2, 3, 4, 5 })
   {
     apc::VolumeRayMarcher marcher;
     int64_t total = 0;
+    std::vector<apc::SegmentImage> images(k);
     for (int p = 0; p < k; ++p)
     {
       auto grid = apctest::PuzzlePiece(vtkAPCPuzzleSource::SANDWICH, k, slabs, 4, p);
       const apc::CellMesh mesh = apctest::ToMesh(grid);
       marcher.SetMesh(&mesh);
       marcher.SetView(camera, nullptr);
-      apc::SegmentImage segments;
+      apc::SegmentImage& segments = images[p];
       marcher.RenderSegments(table, segments);
       const apc::SegmentStatistics stats = apc::GetSegmentStatistics(segments);
       // One piece alone is one run per pixel: its slabs touch.
@@ -256,6 +259,24 @@ TEST(RaySegments, GearTeethSegmentCounts)
               << " slabs per piece: " << static_cast<double>(total) / (size * size)
               << " segments per pixel\n";
     EXPECT_EQ(total, (k == 1 ? 1 : k * slabs) * size * size) << "K=" << k;
+
+    // Exchanging them: the owner's own runs stay (direct send); binary swap merges the touching
+    // slabs of consecutive pieces, so each block of 2^r pieces still sends `slabs` runs.
+    std::vector<const apc::SegmentImage*> ranks;
+    for (const auto& image : images)
+    {
+      ranks.push_back(&image);
+    }
+    const apc::SegmentTransferCounts transfer = apc::CountSegmentTransfer(ranks);
+    const int64_t pixels = size * size;
+    EXPECT_EQ(transfer.NonEmptyPixels, pixels);
+    EXPECT_EQ(transfer.DirectSend, (k == 1 ? 0 : slabs * (k - 1)) * pixels) << "K=" << k;
+    if (k == 2 || k == 4)
+    {
+      const int64_t log2k = k == 2 ? 1 : 2;
+      EXPECT_EQ(transfer.BinarySwap, slabs * (k - 1) * pixels) << "K=" << k;
+      EXPECT_EQ(transfer.BinarySwapUnmerged, slabs * k * log2k / 2 * pixels) << "K=" << k;
+    }
   }
 }
 }
