@@ -287,6 +287,16 @@ void vtkAPCCompositePass::SetLocalExact(bool localExact)
   }
 }
 
+void vtkAPCCompositePass::GetScreenRectangle(
+  vtkRenderer* ren, const double bounds[6], int width, int height, int rectangle[4])
+{
+  const Rect r = ScreenRect(ren, bounds, width, height);
+  rectangle[0] = r.I0;
+  rectangle[1] = r.J0;
+  rectangle[2] = r.I1;
+  rectangle[3] = r.J1;
+}
+
 vtkIdType vtkAPCCompositePass::GetLastCompositedPixels() const
 {
   return this->Internal->Pixels;

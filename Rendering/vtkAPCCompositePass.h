@@ -195,6 +195,15 @@ public:
    */
   vtkImageData* GetLastImage();
 
+  /**
+   * The pixels [rectangle[0], rectangle[2]) x [rectangle[1], rectangle[3]) of a width x height
+   * viewport whose rays can meet the box bounds (its projected corners and one pixel of
+   * margin): what the pass composites, and splits into the SEGMENTS strips. The whole viewport
+   * if a corner lies behind the eye. For tools that model the pass's traffic.
+   */
+  static void GetScreenRectangle(
+    vtkRenderer* ren, const double bounds[6], int width, int height, int rectangle[4]);
+
 protected:
   vtkAPCCompositePass();
   ~vtkAPCCompositePass() override;

@@ -4,21 +4,24 @@
 // pass in both compositing modes, APC and the exact sort-last baseline SEGMENTS, from 4
 // cameras on an orbit. Rank 0 appends one CSV row per mode and camera: the frame time (max
 // over ranks, median over frames), the stage times (max over ranks, median over frames),
-// bytes and messages summed over ranks, pixels composited and the segment statistics.
+// bytes and messages summed over ranks, pixels composited, the segment statistics, and how
+// far the distributed image is from one process rendering all pieces with the same mapper
+// (MBOIT for APC, EXACT for SEGMENTS): the paper's "APC on N ranks = 1-process MBOIT".
 //
 //   mpirun -np N apcScalingBenchmark [--size S] [--frames F] [--out scaling.csv]
 //
 // Not run by ctest; see run-scaling.sh.
 
+#include "apcGearTeethScene.h"
 #include "vtkAPCCompositePass.h"
-#include "vtkAPCPuzzleSource.h"
 #include "vtkAPCVolumeMapper.h"
 
-#include "vtkCamera.h"
-#include "vtkColorTransferFunction.h"
+#include "vtkDataArray.h"
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
 #include "vtkMPIController.h"
 #include "vtkNew.h"
-#include "vtkPiecewiseFunction.h"
+#include "vtkPointData.h"
 #include "vtkRenderStepsPass.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
@@ -34,6 +37,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -56,46 +60,40 @@ double Median(std::vector<double> values)
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
-// One colour per puzzle piece (the Sandwich field is piece / max(pieces - 1, 1)), all fairly
-// opaque, as TestVolumeMapperQuality's SandwichTF.
-void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, int pieces)
+// Rank 0's one-process render of all pieces (its own window, no pass) in the given mode.
+vtkSmartPointer<vtkFloatArray> OneProcessImage(int pieces, int size, int camera, int mode)
 {
-  static const double palette[8][3] = { { 0.9, 0.1, 0.1 }, { 0.1, 0.8, 0.1 }, { 0.1, 0.2, 0.9 },
-    { 0.9, 0.8, 0.1 }, { 0.8, 0.1, 0.8 }, { 0.1, 0.8, 0.8 }, { 0.9, 0.5, 0.1 }, { 0.6, 0.6, 0.6 } };
-  vtkNew<vtkColorTransferFunction> colour;
-  const double denominator = std::max(pieces - 1, 1);
-  for (int p = 0; p < pieces; ++p)
-  {
-    const double* c = palette[p % 8];
-    colour->AddRGBPoint(p / denominator, c[0], c[1], c[2]);
-  }
-  vtkNew<vtkPiecewiseFunction> opacity;
-  opacity->AddPoint(0.0, 0.6);
-  opacity->AddPoint(1.0, 0.6);
-  vtkNew<vtkVolumeProperty> property;
-  property->SetColor(colour);
-  property->SetScalarOpacity(opacity);
-  property->SetScalarOpacityUnitDistance(0.1);
-  mapper->SetSampleDistance(0.01);
-  volume->SetMapper(mapper);
-  volume->SetProperty(property);
+  vtkNew<vtkRenderWindow> window;
+  window->SetOffScreenRendering(1);
+  window->SetSize(size, size);
+  vtkNew<vtkRenderer> renderer;
+  window->AddRenderer(renderer);
+  vtkNew<vtkAPCVolumeMapper> mapper;
+  mapper->SetInputData(apcbench::GearTeethPiece(0, pieces, 1));
+  mapper->SetMode(mode);
+  vtkNew<vtkVolume> volume;
+  apcbench::ConfigureGearTeethVolume(volume, mapper, pieces);
+  renderer->AddVolume(volume);
+  apcbench::SetGearTeethCamera(renderer, camera);
+  window->Render();
+  vtkNew<vtkFloatArray> rgba;
+  rgba->DeepCopy(mapper->GetLastImage()->GetPointData()->GetArray("RGBA"));
+  return rgba;
 }
 
-void SetCamera(vtkRenderer* renderer, double azimuthDegrees)
+double MaxAbsDiff(vtkDataArray* a, vtkDataArray* b)
 {
-  const double distance = 4.5;
-  const double pi = 3.14159265358979323846;
-  const double azimuth = azimuthDegrees * pi / 180;
-  const double elevation = 30 * pi / 180;
-  vtkCamera* camera = renderer->GetActiveCamera();
-  camera->ParallelProjectionOff();
-  camera->SetFocalPoint(0, 0, 0);
-  camera->SetPosition(distance * std::cos(elevation) * std::sin(azimuth),
-    distance * std::sin(elevation), distance * std::cos(elevation) * std::cos(azimuth));
-  camera->SetViewUp(0, 1, 0);
-  camera->SetViewAngle(30);
-  const double bounds[6] = { -1, 1, -1, 1, -1, 1 };
-  renderer->ResetCameraClippingRange(bounds);
+  if (!a || !b || a->GetNumberOfValues() != b->GetNumberOfValues())
+  {
+    return std::numeric_limits<double>::infinity();
+  }
+  double worst = 0;
+  for (vtkIdType v = 0; v < a->GetNumberOfValues(); ++v)
+  {
+    worst = std::max(
+      worst, std::abs(a->GetVariantValue(v).ToDouble() - b->GetVariantValue(v).ToDouble()));
+  }
+  return worst;
 }
 
 double Seconds()
@@ -157,13 +155,7 @@ int main(int argc, char* argv[])
   }
 
   // This rank's piece: one puzzle piece per rank, constant work per rank.
-  vtkNew<vtkAPCPuzzleSource> source;
-  source->SetNumberOfPuzzlePieces(0);
-  source->SetSlabsPerPiece(4);
-  source->SetResolution(32);
-  source->SetField(vtkAPCPuzzleSource::SANDWICH);
-  source->UpdatePiece(rank, ranks, 0);
-  vtkSmartPointer<vtkUnstructuredGrid> piece = source->GetOutput();
+  vtkSmartPointer<vtkUnstructuredGrid> piece = apcbench::GearTeethPiece(rank, ranks);
 
   vtkNew<vtkRenderWindow> window;
   window->SetOffScreenRendering(1);
@@ -178,12 +170,11 @@ int main(int argc, char* argv[])
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(piece);
   vtkNew<vtkVolume> volume;
-  ConfigureVolume(volume, mapper, ranks);
+  apcbench::ConfigureGearTeethVolume(volume, mapper, ranks);
   pass->AddVolume(volume);
 
   std::ostringstream rows;
   int failedFrames = 0;
-  const double azimuths[4] = { 0, 90, 180, 270 };
   for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
   {
     const bool apc = mode == vtkAPCCompositePass::APC;
@@ -191,11 +182,11 @@ int main(int argc, char* argv[])
     const int numberOfStages = apc ? NumberOfAPCStages : NumberOfSegmentStages;
     pass->SetCompositeMode(mode);
     // One untimed frame per mode: shader compilation and first-touch allocations.
-    SetCamera(renderer, azimuths[0]);
+    apcbench::SetGearTeethCamera(renderer, 0);
     window->Render();
     for (int camera = 0; camera < 4; ++camera)
     {
-      SetCamera(renderer, azimuths[camera]);
+      apcbench::SetGearTeethCamera(renderer, camera);
       // Per frame: the max over ranks of the frame time and of every stage's time.
       std::vector<std::vector<double>> maxima(1 + numberOfStages);
       for (int f = 0; f < frames; ++f)
@@ -218,6 +209,13 @@ int main(int argc, char* argv[])
         }
         failedFrames += pass->GetLastFrameFailed() ? 1 : 0;
       }
+      double identity = 0;
+      if (rank == 0)
+      {
+        auto reference = OneProcessImage(
+          ranks, size, camera, apc ? vtkAPCVolumeMapper::MBOIT : vtkAPCVolumeMapper::EXACT);
+        identity = MaxAbsDiff(pass->GetLastImage()->GetPointData()->GetArray("RGBA"), reference);
+      }
       // Bytes and messages of the last frame (the same every frame for a fixed camera).
       double sent[2] = { pass->GetLastBytesSent(),
         static_cast<double>(pass->GetLastMessagesSent()) };
@@ -227,7 +225,7 @@ int main(int argc, char* argv[])
       {
         char line[1024];
         std::snprintf(line, sizeof(line), "%d,%s,%d,%g,%d,%d,%.6f", ranks, apc ? "APC" : "SEGMENTS",
-          camera, azimuths[camera], size, frames, Median(maxima[0]));
+          camera, apcbench::kGearAzimuths[camera], size, frames, Median(maxima[0]));
         rows << line;
         // Stage columns: the APC ones, then the SEGMENTS ones; the other mode's are empty.
         for (int s = 0; s < NumberOfAPCStages; ++s)
@@ -261,7 +259,8 @@ int main(int argc, char* argv[])
             static_cast<long long>(pass->GetLastMaxSegmentsPerPixel()));
           rows << line;
         }
-        rows << '\n';
+        std::snprintf(line, sizeof(line), ",%.3g\n", identity);
+        rows << line;
       }
     }
   }
@@ -288,7 +287,8 @@ int main(int argc, char* argv[])
       {
         csv << "ranks,mode,camera,azimuth,size,frames,frame_s,pass1_s,allreduce_s,pass2_s,"
                "reduce_s,resolve_s,segments_s,exchange_s,blend_segments_s,gather_s,bytes_sent,"
-               "messages,pixels_composited,avg_segments_per_pixel,max_segments_per_pixel\n";
+               "messages,pixels_composited,avg_segments_per_pixel,max_segments_per_pixel,"
+               "max_abs_diff_vs_1process\n";
       }
       csv << rows.str();
     }
