@@ -5,9 +5,10 @@
 // setting by SSIM per scene and overall (mean SSIM over scenes), and where the paper's default
 // (beta 0.3, 4 moments) ranks. Not run by ctest.
 //
-//   apcQualitySweep [--out DIR] [--data DIR]
+//   apcQualitySweep [--out DIR] [--data DIR] [--size S] [--scenes spheres,sandwich,...]
 //
-// DIR/quality.csv gets the rows, DIR/<scene>_exact.png the reference pictures.
+// DIR/quality.csv gets the rows, DIR/<scene>_exact.png the reference pictures and
+// DIR/<scene>_b<beta>_m<moments>_<resolve>.png every MBOIT picture (over black, as compared).
 
 #include "apcTestScenes.h"
 
@@ -21,6 +22,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -36,7 +38,7 @@
 namespace
 {
 
-constexpr int kSize = 256;
+int kSize = 256; // --size
 const double kBetas[] = { 0.0, 0.1, 0.25, 0.3, 0.5 };
 const int kMoments[] = { 4, 6, 8 };
 const int kResolves[] = { vtkAPCVolumeMapper::RENORMALISED, vtkAPCVolumeMapper::PAPER_SUM };
@@ -87,7 +89,7 @@ vtkSmartPointer<vtkDataSet> Puzzle(int field, int pieces, int slabs, int resolut
   return source->GetOutput();
 }
 
-std::vector<Scene> MakeScenes(const std::string& data)
+std::vector<Scene> MakeScenes(const std::string& data, const std::string& wanted)
 {
   std::vector<Scene> scenes;
   // Synthetic scenes: the lattice spacing of TestVolumeMapperQuality.
@@ -113,6 +115,14 @@ std::vector<Scene> MakeScenes(const std::string& data)
   }
   wind->GetPointData()->SetActiveScalars("U_mag");
   scenes.push_back({ "wind", wind, apctest::WindTF(), apctest::WindView(kSize, kSize), 1.0 });
+  if (!wanted.empty())
+  {
+    const std::string list = "," + wanted + ",";
+    scenes.erase(
+      std::remove_if(scenes.begin(), scenes.end(),
+        [&](const Scene& scene) { return list.find("," + scene.Name + ",") == std::string::npos; }),
+      scenes.end());
+  }
   return scenes;
 }
 
@@ -169,16 +179,22 @@ int main(int argc, char* argv[])
 {
   std::string out = ".";
   std::string data = APC_SOURCE_DIR "/Data";
+  std::string wanted;
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
-    if ((arg == "--out" || arg == "--data") && i + 1 < argc)
+    if ((arg == "--out" || arg == "--data" || arg == "--scenes") && i + 1 < argc)
     {
-      (arg == "--out" ? out : data) = argv[++i];
+      (arg == "--out" ? out : arg == "--data" ? data : wanted) = argv[++i];
+    }
+    else if (arg == "--size" && i + 1 < argc && std::atoi(argv[i + 1]) >= 16)
+    {
+      kSize = std::atoi(argv[++i]);
     }
     else
     {
-      std::cerr << "usage: apcQualitySweep [--out DIR] [--data DIR]\n";
+      std::cerr << "usage: apcQualitySweep [--out DIR] [--data DIR] [--size S >= 16] "
+                   "[--scenes spheres,sandwich,gearteeth,wind]\n";
       return 1;
     }
   }
@@ -191,20 +207,27 @@ int main(int argc, char* argv[])
   std::cout << header << std::endl;
 
   std::vector<Row> rows;
-  const std::vector<Scene> scenes = MakeScenes(data);
+  const std::vector<Scene> scenes = MakeScenes(data, wanted);
+  if (scenes.empty())
+  {
+    std::cerr << "error: no scene matches --scenes " << wanted << "\n";
+    return 1;
+  }
   for (const Scene& scene : scenes)
   {
     const auto exact = RenderRGB(scene, vtkAPCVolumeMapper::EXACT, 0.3, 4, 0);
+    // PNGs for a look, over black like the comparison.
+    auto writePNG = [&](const std::vector<float>& rgb, const std::string& name)
     {
-      // PNG of the reference for a look (over black, like the comparison).
       std::vector<float> rgba(4 * kSize * kSize);
       for (int p = 0; p < kSize * kSize; ++p)
       {
-        std::copy_n(&exact[3 * p], 3, &rgba[4 * p]);
+        std::copy_n(&rgb[3 * p], 3, &rgba[4 * p]);
         rgba[4 * p + 3] = 1.0f;
       }
-      apctest::WritePNG(out + "/" + scene.Name + "_exact.png", rgba, kSize, kSize);
-    }
+      apctest::WritePNG(out + "/" + name + ".png", rgba, kSize, kSize);
+    };
+    writePNG(exact, scene.Name + "_exact");
     for (double beta : kBetas)
     {
       for (int moments : kMoments)
@@ -214,6 +237,9 @@ int main(int argc, char* argv[])
           const auto mboit = RenderRGB(scene, vtkAPCVolumeMapper::MBOIT, beta, moments, resolve);
           Row row{ scene.Name, beta, moments, resolve,
             apc::CompareImages(mboit.data(), exact.data(), kSize, kSize, 3, 1.0, 16.0 / 255) };
+          std::ostringstream name;
+          name << scene.Name << "_b" << beta << "_m" << moments << "_" << ResolveName(resolve);
+          writePNG(mboit, name.str());
           const std::string line = CsvLine(row);
           csv << line << "\n";
           std::cout << line << std::endl;

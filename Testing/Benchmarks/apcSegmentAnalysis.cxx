@@ -87,8 +87,9 @@ public:
   vtkRenderer* GetRenderer() { return this->Renderer; }
 
   // pieces[r]: rank r's cells; volume carries the transfer function.
-  std::string Run(const Config& config, const std::vector<vtkSmartPointer<vtkUnstructuredGrid>>& pieces,
-    vtkVolume* volume, vtkAPCVolumeMapper* mapper, const double bounds[6], const std::string& out)
+  std::string Run(const Config& config,
+    const std::vector<vtkSmartPointer<vtkUnstructuredGrid>>& pieces, vtkVolume* volume,
+    vtkAPCVolumeMapper* mapper, const double bounds[6], const std::string& out)
   {
     std::vector<float> depth(static_cast<size_t>(this->Width) * this->Height, 1.0f);
     std::vector<apc::SegmentImage> images(pieces.size());
@@ -110,14 +111,14 @@ public:
       ranks.push_back(&image);
     }
     int rect[4];
-    vtkAPCCompositePass::GetScreenRectangle(this->Renderer, bounds, this->Width, this->Height, rect);
+    vtkAPCCompositePass::GetScreenRectangle(
+      this->Renderer, bounds, this->Width, this->Height, rect);
     const apc::SegmentTransferCounts c = apc::CountSegmentTransfer(ranks, rect[1], rect[3]);
     const long long rectPixels =
       static_cast<long long>(rect[2] - rect[0]) * static_cast<long long>(rect[3] - rect[1]);
     const int n = config.Ranks;
-    const double apcBytes = n > 1
-      ? rectPixels * (8.0 * n * (mapper->GetNumberOfMoments() + 1 + 4) + 4.0)
-      : 0.0;
+    const double apcBytes =
+      n > 1 ? rectPixels * (8.0 * n * (mapper->GetNumberOfMoments() + 1 + 4) + 4.0) : 0.0;
 
     std::string heatmap;
     if (config.Heatmap)
@@ -153,7 +154,8 @@ private:
     {
       for (int i = 0; i < this->Width; ++i)
       {
-        const int32_t v = std::min<int32_t>(counts[static_cast<size_t>(j) * this->Width + i], 65535);
+        const int32_t v =
+          std::min<int32_t>(counts[static_cast<size_t>(j) * this->Width + i], 65535);
         const unsigned char bytes[2] = { static_cast<unsigned char>(v >> 8),
           static_cast<unsigned char>(v & 255) };
         f.write(reinterpret_cast<const char*>(bytes), 2);
@@ -316,8 +318,7 @@ int main(int argc, char* argv[])
         double position[3];
         for (int k = 0; k < 3; ++k)
         {
-          position[k] =
-            view.FocalPoint[k] + distances[d] * (view.Position[k] - view.FocalPoint[k]);
+          position[k] = view.FocalPoint[k] + distances[d] * (view.Position[k] - view.FocalPoint[k]);
         }
         camera->SetFocalPoint(view.FocalPoint.data());
         camera->SetPosition(position);
@@ -327,8 +328,8 @@ int main(int argc, char* argv[])
         analysis.GetRenderer()->ResetCameraClippingRange(bounds);
         char label[32];
         std::snprintf(label, sizeof(label), "%g", distances[d]);
-        rows << analysis.Run({ "wind-" + std::string(label), n, label, true }, pieces, volume,
-          mapper, bounds, out);
+        rows << analysis.Run(
+          { "wind-" + std::string(label), n, label, true }, pieces, volume, mapper, bounds, out);
       }
     }
   }

@@ -5,12 +5,16 @@
 Renders the bundled OpenFOAM data (Data/windAroundBuildings/wind.pvtu: 331,699 cells in 8
 Scotch pieces, field U_mag) at 1024x1024 with the same camera and transfer function:
 
-  apc     the APC Volume representation, sample distance --sample-distance (and the default,
-          0 = bounding-box diagonal / 256);
+  apc          the APC Volume representation, sample distance --sample-distance;
+  apc-default  the same at its default sample distance (0 = bounding-box diagonal / 256);
+  segments     the APC Volume representation in its "Exact (segments)" mode (sort-last
+               compositing of ray segments, the exact distributed baseline), default spacing;
   pt      ParaView's Volume representation with its default mapper 'Projected tetra';
   bunyk   ParaView's Volume representation with 'Bunyk ray cast'.
 
-Each case gets a fresh view (only one volume visible). Times are wall clock on rank 0 (the
+The camera looks at the buildings from the south-west; --distances moves it along its line of
+sight (factors of the focal distance, 1 = the demo's view). Each case and distance gets a fresh
+view (only one volume visible). Times are wall clock on rank 0 (the
 script's process) around Render(view): the first frame of a new representation (for ParaView's
 Volume that includes its tetrahedralisation and the redistribution of the data into a kd-tree
 for ordered compositing) and --frames later frames (median). The reader is updated before any
@@ -23,7 +27,9 @@ tetrahedra the rank already had (matched by centroid). Every rank writes what it
 JSON file next to the CSV; rank 0 reads them. From these, cells dropped by the redistribution
 (ParaView 5.11 on Debian loses cells there) and an estimate of the bytes it moved.
 
-Writes --csv (one row per case), one screenshot PNG per case, and prints both.
+Writes --csv (one row per case and distance), one screenshot PNG per case and distance, for the
+APC cases the display rank's float image (<case>_d<distance>_np<N>.vti, written in one extra,
+untimed frame) so that runs on different rank counts can be compared, and prints the CSV.
 The script ends normally: pvbatch 5.11 aborts with a GLX error on sys.exit(0) after rendering.
 """
 
@@ -51,7 +57,11 @@ parser.add_argument("--frames", type=int, default=3, help="later frames to time 
 parser.add_argument("--sample-distance", type=float, default=1.0,
                     help="APC sample distance in metres (the cells are ~1-10 m)")
 parser.add_argument("--cases", default="apc,apc-default,pt,bunyk",
-                    help="comma-separated: apc, apc-default, pt, bunyk")
+                    help="comma-separated: apc, apc-default, segments, pt, bunyk")
+parser.add_argument("--distances", default="1",
+                    help="comma-separated camera distance factors (1 = the default view)")
+parser.add_argument("--no-float-images", action="store_true",
+                    help="do not write the APC cases' float images")
 parser.add_argument("--only-rendered-array", action="store_true",
                     help="read only U_mag (default: every array, as the reader does in the GUI)")
 parser.add_argument("--data", default=os.path.join(here, "..", "..", "Data",
@@ -64,9 +74,12 @@ OPACITY = [0, 0.5, 0.5, 0, 2, 0.15, 0.5, 0, 5, 0, 0.5, 0, 12, 0, 0.5, 0,
 CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
               CameraViewUp=[0, 0, 1], CameraViewAngle=30, CameraParallelProjection=0)
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
-COLUMNS = (["representation", "mapper", "ranks", "image", "first_frame_s", "frame_s"] +
-           [s + "_s" for s in STAGES] +
-           ["bytes_display_rank", "pixels_composited", "cells_per_rank_before",
+SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
+COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
+            "first_frame_s", "frame_s"] +
+           [s + "_s" for s in STAGES] + [s + "_s" for s in SEGMENT_STAGES] +
+           ["bytes_display_rank", "messages_display_rank", "pixels_composited",
+            "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
             "cells_per_rank_after", "note"])
 
 # Runs on every rank inside a programmable filter (its input: the reader's piece on that rank).
@@ -214,16 +227,21 @@ def main(args):
     cases = {
         "apc": ("APC Volume", "APC", args.sample_distance),
         "apc-default": ("APC Volume", "APC", 0.0),
+        "segments": ("APC Volume", "Exact (segments)", 0.0),
         "pt": ("Volume", "Projected tetra", None),
         "bunyk": ("Volume", "Bunyk ray cast", None),
     }
     rows = []
-    for key in args.cases.split(","):
+    runs = [(d, key) for d in args.distances.split(",") for key in args.cases.split(",")]
+    for distance, key in runs:
         representation, mapper, spacing = cases[key]
+        camera = dict(CAMERA)
+        camera["CameraPosition"] = [f + float(distance) * (p - f) for p, f in
+                                    zip(CAMERA["CameraPosition"], CAMERA["CameraFocalPoint"])]
         view = CreateView("RenderView")
         view.ViewSize = args.size
         view.OrientationAxesVisibility = 0
-        for k, v in CAMERA.items():
+        for k, v in camera.items():
             setattr(view, k, v)
         display = Show(reader, view)
         display.Representation = representation
@@ -236,9 +254,10 @@ def main(args):
         apc = representation == "APC Volume"
         if apc:
             display.APCSampleDistance = spacing
+            display.APCMode = mapper
         else:
             display.SelectMapper = mapper
-        for k, v in CAMERA.items():  # Show() may have touched the camera
+        for k, v in camera.items():  # Show() may have touched the camera
             setattr(view, k, v)
 
         timings = []
@@ -249,30 +268,46 @@ def main(args):
             seconds = time.perf_counter() - start
             if apc:
                 display.UpdatePropertyInformation()
-                timings.append(list(display.GetProperty("APCLastTimings").GetData()))
+                timings.append(list(display.GetProperty("APCLastTimings").GetData()) +
+                               list(display.GetProperty("APCLastSegmentStatistics").GetData()))
             return seconds
 
         first = frame()
         later = [frame() for _ in range(args.frames)]
-        name = "%s_np%d.png" % (key, ranks)
+        stem = "%s_d%s_np%d" % (key, distance, ranks)
+        name = stem + ".png"
         SaveScreenshot(os.path.join(out, name), view, ImageResolution=args.size)
-        row = dict(representation=representation, mapper=mapper, ranks=ranks, image=name,
-                   first_frame_s="%.3f" % first, frame_s="%.3f" % statistics.median(later))
+        row = dict(case=key, representation=representation, mapper=mapper, ranks=ranks,
+                   distance=distance, image=name, first_frame_s="%.3f" % first,
+                   frame_s="%.3f" % statistics.median(later))
+        if apc and not args.no_float_images:
+            display.APCImageFile = os.path.join(out, stem + ".vti")
+            Render(view)
+            display.APCImageFile = ""
+            row["float_image"] = stem + ".vti"
         notes = ["later frames %s s" % " ".join("%.2f" % t for t in later)]
         if apc:
             # Median of each stage over the later frames (the first frame's are in the note).
+            segments = mapper == "Exact (segments)"
             for i, s in enumerate(STAGES):
-                row[s + "_s"] = "%.4f" % statistics.median(t[i] for t in timings[1:])
+                if not segments or s in ("agree", "depth", "blend"):
+                    row[s + "_s"] = "%.4f" % statistics.median(t[i] for t in timings[1:])
+            if segments:
+                for i, s in enumerate(SEGMENT_STAGES):
+                    row[s + "_s"] = "%.4f" % statistics.median(t[11 + i] for t in timings[1:])
+                row["avg_segments_per_pixel"] = "%.4f" % timings[-1][16]
+                row["max_segments_per_pixel"] = "%d" % timings[-1][17]
+            row["messages_display_rank"] = "%d" % timings[-1][15]
             row["bytes_display_rank"] = "%d" % statistics.median(t[9] for t in timings[1:])
             row["pixels_composited"] = "%d" % statistics.median(t[10] for t in timings[1:])
             row["cells_per_rank_before"] = "/".join(str(s["cells"]) for s in before)
             after = apcparaview.rank_summaries(reader)
             row["cells_per_rank_after"] = "/".join(str(s["cells"]) for s in after)
             notes.insert(0, "sample distance %.3g m%s; stage times are medians of the later "
-                            "frames (APC total %.3f s; first frame's total %.3f s, pass1 %.3f s)"
+                            "frames (pass total %.3f s; first frame's total %.3f s)"
                          % (spacing or diagonal / 256, " (default 0 = diagonal/256)"
                             if not spacing else "", statistics.median(t[8] for t in timings[1:]),
-                            timings[0][8], timings[0][2]))
+                            timings[0][8]))
             notes.append("cells unchanged by rendering" if after == before
                          else "CELLS MOVED by rendering")
         else:
@@ -304,8 +339,9 @@ def main(args):
                 notes.append("REDISTRIBUTION LOST %.2f %% OF THE VOLUME" % (100 * lost))
         row["note"] = "; ".join(notes)
         rows.append(row)
-        print("  %-10s %-16s first %.2f s, later %s s" % (
-            representation, mapper, first, " ".join("%.2f" % t for t in later)), flush=True)
+        print("  %-10s %-16s distance %-4s first %.2f s, later %s s" % (
+            representation, mapper, distance, first, " ".join("%.2f" % t for t in later)),
+            flush=True)
         Hide(reader, view)
         Delete(display)
         del display
