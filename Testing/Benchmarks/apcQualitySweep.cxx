@@ -285,7 +285,8 @@ int main(int argc, char* argv[])
             << "\n";
   for (size_t k = 0; k < overall.size(); ++k)
   {
-    if (overall[k].first.find("beta=0.3 moments=4 ") == 0)
+    if (overall[k].first.find("beta=0.3 moments=4 ") == 0 ||
+      overall[k].first.find("beta=0.5 moments=6 ") == 0)
     {
       std::cout << "  paper default " << overall[k].first << ": rank " << k + 1 << " of "
                 << overall.size() << ", mean SSIM " << overall[k].second << "\n";

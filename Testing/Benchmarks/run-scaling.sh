@@ -13,7 +13,7 @@
 # meaningful at every N; the times of N > 2 are not weak-scaling times (ranks share cores).
 set -euo pipefail
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
-bash "$top/.ci/build"
+[ -n "${APC_NO_BUILD:-}" ] || bash "$top/.ci/build"
 program="$top/build/bin/apcScalingBenchmark"
 if [ ! -x "$program" ]; then
   echo "error: $program was not built (is Testing/Benchmarks added to the build?)" >&2

@@ -3,6 +3,7 @@
 // a 1 x 1 window, the camera inside the volume, an invalid number of moments, an input that
 // is not an unstructured grid, fully opaque transfer functions, NaN point coordinates.
 
+#include "apcMomentTransmittance.h"
 #include "apcTestGrids.h"
 
 #include "vtkCommand.h"
@@ -371,6 +372,18 @@ TEST(VolumeMapperErrors, CameraInsideTheVolume)
   }
   std::cout << "eye inside: max |alpha MBOIT - alpha EXACT| = " << alphaDiff << "\n";
   EXPECT_LE(alphaDiff, 1e-5);
+}
+
+// The defaults chosen from the quality evaluation (docs/evaluation.md): 6 moments, the core's
+// overestimation (the mapper's header repeats it as a literal), MBOIT's renormalised resolve.
+TEST(VolumeMapperErrors, Defaults)
+{
+  vtkNew<vtkAPCVolumeMapper> mapper;
+  EXPECT_EQ(mapper->GetMode(), vtkAPCVolumeMapper::MBOIT);
+  EXPECT_EQ(mapper->GetNumberOfMoments(), 6);
+  EXPECT_EQ(mapper->GetOverestimation(), apc::kDefaultOverestimation);
+  EXPECT_EQ(apc::kDefaultOverestimation, 0.5);
+  EXPECT_EQ(mapper->GetResolveMode(), vtkAPCVolumeMapper::RENORMALISED);
 }
 
 TEST(VolumeMapperErrors, NumberOfMoments)
