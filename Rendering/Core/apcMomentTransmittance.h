@@ -42,11 +42,9 @@ namespace apc
 // -ln(0.999): MBOIT's threshold below which a pixel holds nothing worth reconstructing.
 constexpr double kEmptyPixelAbsorbance = 1.00050033e-3;
 
-// Overestimation beta by default. The APC paper uses 0.3 and MBOIT's own implementations mostly
-// 0.25; 0.5 had the best mean and worst-case SSIM against the exact render over this project's
-// four evaluation scenes (docs/evaluation.md, section 4), the opaque slabs of the gear teeth
-// and sandwich most of all.
-constexpr double kDefaultOverestimation = 0.5;
+// The APC paper's overestimation; MBOIT's own implementations mostly use 0.25. Higher values
+// (0.5) fit opaque slabs better but tint translucent shells: docs/evaluation.md, section 4.
+constexpr double kDefaultOverestimation = 0.3;
 
 // The paper's fp32 bias constants. They suffice in double precision as well, where the
 // accumulation and the solve are far more accurate than the fp32 they were tuned for.

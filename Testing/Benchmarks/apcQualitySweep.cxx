@@ -96,6 +96,13 @@ std::vector<Scene> MakeScenes(const std::string& data, const std::string& wanted
   const apctest::View oblique = apctest::ObliqueView(kSize);
   scenes.push_back({ "spheres", Puzzle(vtkAPCPuzzleSource::SPHERES, 4, 4, 32), apctest::SpheresTF(),
     oblique, 0.01 });
+  // The spheres close up (TestVolumeMapperRegression's view): translucent shells filling the
+  // picture in front of the opaque core, where a high beta tints the core.
+  apctest::View close = oblique;
+  close.Position = { 2.2, 1.5, 2.7 };
+  close.ViewAngle = 30;
+  scenes.push_back({ "spheres-close", Puzzle(vtkAPCPuzzleSource::SPHERES, 4, 4, 32),
+    apctest::SpheresTF(), close, 0.01 });
   scenes.push_back(
     { "sandwich", Puzzle(vtkAPCPuzzleSource::SANDWICH, 3, 2, 24), SandwichTF(), oblique, 0.01 });
   scenes.push_back(
@@ -194,7 +201,7 @@ int main(int argc, char* argv[])
     else
     {
       std::cerr << "usage: apcQualitySweep [--out DIR] [--data DIR] [--size S >= 16] "
-                   "[--scenes spheres,sandwich,gearteeth,wind]\n";
+                   "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
       return 1;
     }
   }
@@ -285,8 +292,7 @@ int main(int argc, char* argv[])
             << "\n";
   for (size_t k = 0; k < overall.size(); ++k)
   {
-    if (overall[k].first.find("beta=0.3 moments=4 ") == 0 ||
-      overall[k].first.find("beta=0.5 moments=6 ") == 0)
+    if (overall[k].first.find("beta=0.3 moments=4 ") == 0)
     {
       std::cout << "  paper default " << overall[k].first << ": rank " << k + 1 << " of "
                 << overall.size() << ", mean SSIM " << overall[k].second << "\n";

@@ -374,15 +374,15 @@ TEST(VolumeMapperErrors, CameraInsideTheVolume)
   EXPECT_LE(alphaDiff, 1e-5);
 }
 
-// The defaults chosen from the quality evaluation (docs/evaluation.md): 6 moments, the core's
+// The defaults chosen from the quality evaluation (docs/evaluation.md): 4 moments, the core's
 // overestimation (the mapper's header repeats it as a literal), MBOIT's renormalised resolve.
 TEST(VolumeMapperErrors, Defaults)
 {
   vtkNew<vtkAPCVolumeMapper> mapper;
   EXPECT_EQ(mapper->GetMode(), vtkAPCVolumeMapper::MBOIT);
-  EXPECT_EQ(mapper->GetNumberOfMoments(), 6);
+  EXPECT_EQ(mapper->GetNumberOfMoments(), 4);
   EXPECT_EQ(mapper->GetOverestimation(), apc::kDefaultOverestimation);
-  EXPECT_EQ(apc::kDefaultOverestimation, 0.5);
+  EXPECT_EQ(apc::kDefaultOverestimation, 0.3);
   EXPECT_EQ(mapper->GetResolveMode(), vtkAPCVolumeMapper::RENORMALISED);
 }
 
