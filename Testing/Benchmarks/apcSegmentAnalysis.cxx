@@ -295,23 +295,9 @@ int main(int argc, char* argv[])
       }
       // The transfer function of apcTestScenes.h's WindTF (paraview_vs_apc.py's opacity).
       vtkNew<vtkAPCVolumeMapper> mapper;
-      vtkNew<vtkColorTransferFunction> colour;
-      for (const auto& c : tf.Colours)
-      {
-        colour->AddRGBPoint(c[0], c[1], c[2], c[3]);
-      }
-      vtkNew<vtkPiecewiseFunction> opacity;
-      for (const auto& o : tf.Opacities)
-      {
-        opacity->AddPoint(o[0], o[1]);
-      }
-      vtkNew<vtkVolumeProperty> property;
-      property->SetColor(colour);
-      property->SetScalarOpacity(opacity);
-      property->SetScalarOpacityUnitDistance(tf.UnitDistance);
       vtkNew<vtkVolume> volume;
       volume->SetMapper(mapper);
-      volume->SetProperty(property);
+      volume->SetProperty(apctest::MakeVolumeProperty(tf));
       for (size_t d = 0; d < distances.size(); ++d)
       {
         vtkCamera* camera = analysis.GetRenderer()->GetActiveCamera();

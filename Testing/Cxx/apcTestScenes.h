@@ -172,6 +172,26 @@ struct Frame
   std::vector<std::array<double, 6>> Rays;
 };
 
+// The VTK volume property of a transfer function.
+inline vtkSmartPointer<vtkVolumeProperty> MakeVolumeProperty(const TransferFunction& tf)
+{
+  vtkNew<vtkColorTransferFunction> colour;
+  for (const auto& c : tf.Colours)
+  {
+    colour->AddRGBPoint(c[0], c[1], c[2], c[3]);
+  }
+  vtkNew<vtkPiecewiseFunction> opacity;
+  for (const auto& o : tf.Opacities)
+  {
+    opacity->AddPoint(o[0], o[1]);
+  }
+  vtkNew<vtkVolumeProperty> property;
+  property->SetColor(colour);
+  property->SetScalarOpacity(opacity);
+  property->SetScalarOpacityUnitDistance(tf.UnitDistance);
+  return property;
+}
+
 // Renders grid with a configured mapper in an off-screen window; extra actors (opaque
 // geometry) optional.
 inline Frame Render(vtkDataSet* grid, const std::function<void(vtkAPCVolumeMapper*)>& configure,
@@ -188,23 +208,9 @@ inline Frame Render(vtkDataSet* grid, const std::function<void(vtkAPCVolumeMappe
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(grid);
   configure(mapper);
-  vtkNew<vtkColorTransferFunction> colour;
-  for (const auto& c : tf.Colours)
-  {
-    colour->AddRGBPoint(c[0], c[1], c[2], c[3]);
-  }
-  vtkNew<vtkPiecewiseFunction> opacity;
-  for (const auto& o : tf.Opacities)
-  {
-    opacity->AddPoint(o[0], o[1]);
-  }
-  vtkNew<vtkVolumeProperty> property;
-  property->SetColor(colour);
-  property->SetScalarOpacity(opacity);
-  property->SetScalarOpacityUnitDistance(tf.UnitDistance);
   vtkNew<vtkVolume> volume;
   volume->SetMapper(mapper);
-  volume->SetProperty(property);
+  volume->SetProperty(MakeVolumeProperty(tf));
   renderer->AddVolume(volume);
   for (vtkActor* actor : actors)
   {
