@@ -337,7 +337,6 @@ class Report:
             self.add("## 3. Real data\n\nNo results.\n")
             return
         self.add("## 3. Real data: OpenFOAM windAroundBuildings in ParaView\n")
-        cells = rows[0]["cells_per_rank_before"]
         self.add(
             "`paraview_vs_apc.py` in pvbatch under `mpirun`: the 331,699-cell mesh in 8 Scotch "
             "pieces (read by ParaView's own reader: pieces shared out to the ranks), field "
@@ -541,7 +540,7 @@ class Report:
         for ax, s in zip(axes[0], panels):
             grid = np.array([[mean[(b, m, res)] if s == "mean" else
                               num(get[(s, b, m, res)]["ssim"]) for b in betas] for m in moments])
-            im = ax.imshow(grid, cmap="viridis", aspect="auto", origin="lower")
+            ax.imshow(grid, cmap="viridis", aspect="auto", origin="lower")
             ax.set_xticks(range(len(betas)))
             ax.set_xticklabels(["%g" % b for b in betas])
             ax.set_yticks(range(len(moments)))

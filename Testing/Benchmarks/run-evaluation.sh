@@ -16,7 +16,7 @@
 #
 # Results go to $APC_EVAL_OUT (default out/evaluation), the report to $APC_EVAL_DOCS (default
 # docs). --quick runs every step at toy sizes (a minute or two; what ctest's EvaluationQuick
-# runs, into a temporary folder); the full run takes about half an hour here.
+# runs, into a temporary folder); the full run took 25 minutes here.
 #
 # This machine has 2 cores: runs on more than 2 ranks are oversubscribed (mpirun
 # --oversubscribe). Bytes and message counts do not depend on the cores; times above 2 ranks

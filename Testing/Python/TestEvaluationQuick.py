@@ -12,7 +12,6 @@ scratch folder and checks what it produced, so the one-command benchmark cannot 
 """
 
 import csv
-import glob
 import os
 import re
 import subprocess
