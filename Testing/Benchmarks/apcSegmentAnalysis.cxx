@@ -11,8 +11,8 @@
 // Configurations: the gear teeth of apcScalingBenchmark (one piece per rank, 4 orbit cameras)
 // and the real wind data (8 Scotch pieces shared out to the ranks as ParaView's reader does,
 // the camera of paraview_vs_apc.py moved to each distance factor along its line of sight).
-// Writes DIR/segment_transfer.csv and, for the first camera of each configuration, the
-// per-pixel segment count over all ranks as DIR/heatmap_<case>_np<N>.pgm (16-bit binary PGM,
+// Writes (creating DIR) DIR/segment_transfer.csv and, for the first camera of each configuration,
+// the per-pixel segment count over all ranks as DIR/heatmap_<case>_np<N>.pgm (16-bit binary PGM,
 // top row first). APC's bytes are the pass's payload for the same rectangle: every rank sends
 // (moments + 1 + 4 colour) doubles per pixel, the display rank also 4 bytes of depth.
 // Not run by ctest; run-evaluation.sh runs it.
@@ -35,6 +35,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -230,6 +231,13 @@ int main(int argc, char* argv[])
   {
     Usage(argv[0]);
     return 2;
+  }
+  std::error_code made;
+  std::filesystem::create_directories(out, made);
+  if (made)
+  {
+    std::cerr << "error: cannot create " << out << ": " << made.message() << "\n";
+    return 1;
   }
 
   std::ostringstream rows;
