@@ -52,6 +52,12 @@
 
 #include <memory> // for std::unique_ptr
 
+namespace apc
+{
+struct CompositeFrame;
+struct FrameResult;
+struct ProcessGroup;
+}
 class vtkImageData;
 class vtkMultiProcessController;
 class vtkRenderer;
@@ -65,7 +71,6 @@ public:
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   void Render(const vtkRenderState* s) override;
-  void ReleaseGraphicsResources(vtkWindow* w) override;
 
   ///@{
   /**
@@ -128,18 +133,10 @@ public:
 
   ///@{
   /**
-   * Shorthand for CompositeMode LOCAL_EXACT (on) or APC (off).
+   * 0: silent; 1: the display process prints the stage timings and bytes of every frame
+   * (every mode).
    */
-  void SetLocalExact(bool localExact);
-  bool GetLocalExact() const { return this->CompositeMode == LOCAL_EXACT; }
-  vtkBooleanMacro(LocalExact, bool);
-  ///@}
-
-  ///@{
-  /**
-   * 0: silent; 1: the display process prints the stage timings and bytes of every frame.
-   */
-  vtkSetClampMacro(Verbosity, int, 0, 2);
+  vtkSetClampMacro(Verbosity, int, 0, 1);
   vtkGetMacro(Verbosity, int);
   ///@}
 
@@ -220,8 +217,9 @@ private:
   void operator=(const vtkAPCCompositePass&) = delete;
 
   void WriteImage();
-  void CompositeSegmentsFrame(vtkRenderer* ren, const int rect[4], int width, int height);
-  void ReportFrame(size_t pixels);
+  // Stores, blends and writes the display process's image, and reports the frame.
+  void FinishFrame(const apc::ProcessGroup& group, const apc::CompositeFrame& frame,
+    const apc::FrameResult& result);
 
   struct Internals;
   std::unique_ptr<Internals> Internal;

@@ -50,7 +50,8 @@ class vtkImageData;
 class vtkUnstructuredGridBase;
 namespace apc
 {
-struct SegmentImage;
+class FrameEngine;
+struct MomentParameters;
 }
 
 class APCRENDERING_EXPORT vtkAPCVolumeMapper : public vtkUnstructuredGridVolumeMapper
@@ -104,10 +105,10 @@ public:
 
   ///@{
   /**
-   * MBOIT moment bias epsilon; a negative value (default) uses the published constant for the
-   * number of moments (5e-7, 5e-6, 5e-5 for 4, 6, 8).
+   * MBOIT moment bias epsilon in [0,1]; a negative value (default) uses the published constant
+   * for the number of moments (5e-7, 5e-6, 5e-5 for 4, 6, 8).
    */
-  vtkSetMacro(MomentBias, double);
+  vtkSetClampMacro(MomentBias, double, -1.0, 1.0);
   vtkGetMacro(MomentBias, double);
   ///@}
 
@@ -139,7 +140,7 @@ public:
   ///@{
   /**
    * Also compute the per-pixel number of disjoint ray segments through the cells (the
-   * APC paper's heatmap) into GetSegmentCountImage(). Off by default.
+   * APC paper's heatmap) into GetLastImage()'s "SegmentCount" array. Off by default.
    */
   vtkSetMacro(ComputeSegmentCount, bool);
   vtkGetMacro(ComputeSegmentCount, bool);
@@ -171,58 +172,19 @@ public:
   double GetLastSampleDistance() const;
 
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
-  void ReleaseGraphicsResources(vtkWindow*) override;
-
-  ///@{
-  /**
-   * The frame stage by stage, for a compositing pass that sums the moment and colour
-   * images across processes (vtkAPCCompositePass) between the stages. Render() is
-   * PrepareFrame, then RenderExactImage or RenderMoments + RenderColour + ResolveImage, then
-   * BlendIntoWindow.
-   *
-   * PrepareFrame copies the input if it changed, samples the transfer function and sets up
-   * the rays of ren's viewport. globalBounds (xmin..zmax of all processes' cells) fixes the
-   * depth warp and the default sample spacing, globalSampleDistance (> 0) the spacing, so
-   * that every process uses the same ones; null / 0 use this process's data. depthBuffer
-   * (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays; null reads
-   * ren's window. Returns false, with an error where the input is at fault, if there is
-   * nothing this process can render; the buffers of the other stages are then left alone,
-   * so an empty process still takes part in the sums with zeros.
-   *
-   * Buffers are W*H pixels (GetFrameWidth/Height), row 0 at the bottom; moments hold
-   * NumberOfMoments+1 doubles per pixel, colour sums 4, images 4 floats (premultiplied
-   * RGBA). Moment and colour buffers are accumulated into (+=).
-   */
-  bool PrepareFrame(vtkRenderer* ren, vtkVolume* vol, const double* globalBounds,
-    const float* depthBuffer, double globalSampleDistance);
-  int GetFrameWidth() const;
-  int GetFrameHeight() const;
-  void RenderMoments(double* moments);
-  void RenderColour(const double* moments, double* colourSums);
-  void RenderExactImage(float* rgba);
-  void CountSegments(int* counts);
-  /// This process's sort-last segments of every pixel (apc::RaySegment: runs of consecutive
-  /// lattice samples, pre-blended), for exact compositing across processes.
-  void RenderSegments(apc::SegmentImage& segments);
-  void ResolveImage(const double* moments, const double* colourSums, float* rgba) const;
-  void BlendIntoWindow(vtkRenderer* ren, const float* rgba);
-  /// Keeps the given buffers (any may be null) as GetLastImage()'s arrays.
-  void StoreImages(
-    const float* rgba, const double* moments, const double* colourSums, const int* segments);
-  ///@}
 
   /**
-   * Copies the input for the ray marcher if it changed. False, with an error, if the input is
-   * unusable (cells but no scalars to render, a broken mesh); an empty or missing input is
-   * usable and renders nothing.
+   * The MBOIT settings (NumberOfMoments, Overestimation, MomentBias, ResolveMode) as the one
+   * value the frame stages take.
    */
-  bool UpdateInput();
+  apc::MomentParameters GetMomentParameters() const;
 
   /**
-   * Bounds of this process's renderable cells (after ghost and type filtering, as of the last
-   * UpdateInput or PrepareFrame); false if there are none.
+   * @internal The frame engine that runs this mapper's frame stage by stage
+   * (apcFrameEngine.h): vtkAPCCompositePass puts its collectives between the stages. Not
+   * for applications.
    */
-  bool GetLocalBounds(double bounds[6]) const;
+  apc::FrameEngine* GetFrameEngine();
 
 protected:
   vtkAPCVolumeMapper();
@@ -230,8 +192,8 @@ protected:
 
   int Mode = MBOIT;
   int NumberOfMoments = 4;
-  double Overestimation = 0.3; // apc::kDefaultOverestimation (TestVolumeMapperErrors checks)
-  double MomentBias = -1.0;
+  double Overestimation; // apc::kDefaultOverestimation, set by the constructor
+  double MomentBias;     // apc::kUseDefaultMomentBias
   int ResolveMode = RENORMALISED;
   double SampleDistance = 0.0;
   int NumberOfThreads = 0;

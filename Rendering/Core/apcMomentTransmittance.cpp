@@ -53,7 +53,8 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
   : B0(sums[0])
 {
   this->Beta = SanitiseUnit(settings.Overestimation, kDefaultOverestimation);
-  const double eps = SanitiseUnit(settings.Bias, DefaultMomentBias<N>());
+  const double eps = settings.Bias < 0.0 ? DefaultMomentBias<N>()
+                                         : SanitiseUnit(settings.Bias, DefaultMomentBias<N>());
   this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
 
   // Written so that NaN lands in the degenerate branch, not in the empty one.

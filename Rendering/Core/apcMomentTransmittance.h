@@ -85,12 +85,15 @@ constexpr std::array<double, N> DefaultBiasVector()
   }
 }
 
+// A negative (or NaN) bias means the published constant for the number of moments.
+constexpr double kUseDefaultMomentBias = -1.0;
+
 template <int N>
 struct MomentSettings
 {
   // beta in [0,1]; out-of-range values are clamped, NaN means the default.
   double Overestimation = kDefaultOverestimation;
-  // epsilon in [0,1]; out-of-range values are clamped, NaN means the default.
+  // epsilon in [0,1]; above 1 is clamped, negative or NaN means DefaultMomentBias<N>().
   double Bias = DefaultMomentBias<N>();
   std::array<double, N> BiasVector = DefaultBiasVector<N>();
 };

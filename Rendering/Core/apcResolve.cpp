@@ -1,22 +1,10 @@
 #include "apcResolve.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace apc
 {
-
-void ColourSums::Add(double weight, const RGB& colour)
-{
-  if (!(weight > 0.0))
-  {
-    return;
-  }
-  for (int k = 0; k < 3; ++k)
-  {
-    this->Sums[k] += weight * colour[k];
-  }
-  this->Sums[3] += weight;
-}
 
 ColourSums& ColourSums::operator+=(const ColourSums& other)
 {
@@ -59,6 +47,21 @@ RGBA Resolve(ResolveMode mode, const ColourSums& sums, double b0)
     out[k] = sums.Sums[k] * scale;
   }
   return out;
+}
+
+void ResolveImage(ResolveMode mode, size_t pixels, const double* moments, int momentStride,
+  const double* colourSums, float* rgba)
+{
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    ColourSums sums;
+    std::copy(colourSums + 4 * p, colourSums + 4 * p + 4, sums.Data());
+    const RGBA out = Resolve(mode, sums, moments[p * momentStride]);
+    for (int c = 0; c < 4; ++c)
+    {
+      rgba[4 * p + c] = static_cast<float>(out[c]);
+    }
+  }
 }
 
 RGB BlendOverBackground(const RGBA& premultiplied, const RGB& background)

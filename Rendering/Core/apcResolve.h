@@ -6,6 +6,7 @@
 #define apcResolve_h
 
 #include <array>
+#include <cstddef>
 
 namespace apc
 {
@@ -18,8 +19,20 @@ struct ColourSums
 {
   std::array<double, 4> Sums{};
 
-  // weight = alpha_i * T(z_i). NaN or non-positive weights are skipped.
-  void Add(double weight, const RGB& colour);
+  // weight = alpha_i * T(z_i). NaN or non-positive weights are skipped. Inline: pass 2 calls
+  // it once per sample.
+  void Add(double weight, const RGB& colour)
+  {
+    if (!(weight > 0.0))
+    {
+      return;
+    }
+    for (int k = 0; k < 3; ++k)
+    {
+      this->Sums[k] += weight * colour[k];
+    }
+    this->Sums[3] += weight;
+  }
   ColourSums& operator+=(const ColourSums& other);
 
   double W() const { return this->Sums[3]; }
@@ -44,6 +57,11 @@ constexpr double kMinResolveWeight = 1e-300;
 
 // b0 is the pixel's total (global) absorbance; only Renormalised uses it.
 RGBA Resolve(ResolveMode mode, const ColourSums& sums, double b0);
+
+// Resolve for a whole image: pixel p's b0 is moments[p * momentStride], its colour sums
+// colourSums[4p .. 4p + 3]; writes premultiplied RGBA floats to rgba[4p .. 4p + 3].
+void ResolveImage(ResolveMode mode, size_t pixels, const double* moments, int momentStride,
+  const double* colourSums, float* rgba);
 
 // Premultiplied colour over an opaque background: rgb + (1 - alpha) background.
 RGB BlendOverBackground(const RGBA& premultiplied, const RGB& background);

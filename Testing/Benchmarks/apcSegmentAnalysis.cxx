@@ -17,6 +17,7 @@
 // (moments + 1 + 4 colour) doubles per pixel, the display rank also 4 bytes of depth.
 // Not run by ctest; run-evaluation.sh runs it.
 
+#include "apcFrameEngine.h"
 #include "apcGearTeethScene.h"
 #include "apcSegmentTransfer.h"
 #include "apcTestScenes.h"
@@ -97,9 +98,10 @@ public:
     for (size_t r = 0; r < pieces.size(); ++r)
     {
       mapper->SetInputData(pieces[r]);
-      if (mapper->PrepareFrame(this->Renderer, volume, bounds, depth.data(), 0.0))
+      apc::FrameEngine* engine = mapper->GetFrameEngine();
+      if (engine->Prepare(mapper, this->Renderer, volume, bounds, depth.data()))
       {
-        mapper->RenderSegments(images[r]);
+        engine->RenderSegments(images[r]);
       }
       if (images[r].Width != this->Width || images[r].Height != this->Height)
       {

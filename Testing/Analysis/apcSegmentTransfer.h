@@ -17,7 +17,7 @@
 #ifndef apcSegmentTransfer_h
 #define apcSegmentTransfer_h
 
-#include "apcVolumeRayMarcher.h"
+#include "apcRaySegments.h"
 
 #include <cstdint>
 #include <vector>

@@ -120,11 +120,11 @@ SegmentTransferCounts CountSegmentTransfer(
   const int64_t regionPixels = static_cast<int64_t>(rows) * width;
   std::vector<std::pair<int64_t, int64_t>> scratch;
 
+  const SegmentStrips strips{ rowBegin, rows, n };
   int owner = 0;
   for (int j = rowBegin; j < rowEnd; ++j)
   {
-    // The strips of vtkAPCCompositePass: rank o owns rows [begin + rows * o / n, ...).
-    while (owner + 1 < n && rowBegin + static_cast<int64_t>(rows) * (owner + 1) / n <= j)
+    while (owner + 1 < n && strips.Begin(owner + 1) <= j)
     {
       ++owner;
     }

@@ -1,0 +1,354 @@
+// What the marcher does with the samples of one tile, one visitor per kind of image: the
+// exact ordered blend, MBOIT's moments (pass 1) and colour sums (pass 2), segment counts and
+// sort-last segments. A visitor sees BeginTile, then Segment (each ray/cell interval) and
+// Sample (each lattice sample, with its transfer-function value) in any order, then EndTile,
+// where it adds its tile into the image. Internal to the core's marcher.
+#ifndef apcRayVisitors_h
+#define apcRayVisitors_h
+
+#include "apcDepthWarp.h"
+#include "apcMomentTransmittance.h"
+#include "apcPowerMoments.h"
+#include "apcRaySegments.h"
+#include "apcResolve.h"
+#include "apcSampleCache.h"
+#include "apcTileBins.h"
+#include "apcTransferTable.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+#include <vector>
+
+namespace apc
+{
+namespace visitors
+{
+
+// What a visitor needs from the walker. Transparent samples are passed on only if asked.
+struct NoSegments
+{
+  static constexpr bool WantsSegments = false;
+  static constexpr bool WantsSamples = true;
+  static constexpr bool WantsTransparentSamples = false;
+  void Segment(int, double, double) {}
+};
+
+struct SampleRecord
+{
+  int64_t K;
+  float Absorbance;
+  std::array<float, 3> Colour;
+};
+
+// Each pixel's samples of one tile, in arrival order; the base of the visitors that need
+// whole rays in depth order.
+struct PixelSampleLists : NoSegments
+{
+  std::vector<std::vector<SampleRecord>> Pixels;
+
+  void BeginTile(const TileRect& tile)
+  {
+    this->Pixels.resize(tile.Pixels());
+    for (auto& p : this->Pixels)
+    {
+      p.clear();
+    }
+  }
+  void Sample(int pixel, int64_t k, double, double, const TransferSample& s)
+  {
+    this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
+  }
+  // Pixel p's samples in depth (lattice) order.
+  std::vector<SampleRecord>& Sorted(int p)
+  {
+    auto& samples = this->Pixels[p];
+    std::sort(samples.begin(), samples.end(),
+      [](const SampleRecord& a, const SampleRecord& b) { return a.K < b.K; });
+    return samples;
+  }
+};
+
+// Front-to-back blending of samples in depth order: the exact reference arithmetic, shared by
+// the exact mode and the segments so that one segment equals the exact blend of its run.
+struct FrontToBack
+{
+  double Transmittance = 1.0;
+  double Colour[3] = { 0, 0, 0 };
+
+  void Add(const SampleRecord& s)
+  {
+    const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
+    for (int c = 0; c < 3; ++c)
+    {
+      this->Colour[c] += this->Transmittance * alpha * s.Colour[c];
+    }
+    this->Transmittance *= 1.0 - alpha;
+  }
+};
+
+// Exact mode: each pixel's samples, sorted by lattice index and blended front to back.
+struct Exact : PixelSampleLists
+{
+  float* Output;
+  int Width;
+
+  Exact(float* output, int width)
+    : Output(output)
+    , Width(width)
+  {
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      if (this->Pixels[p].empty())
+      {
+        continue;
+      }
+      FrontToBack blend;
+      for (const SampleRecord& s : this->Sorted(p))
+      {
+        blend.Add(s);
+      }
+      float* out = this->Output + 4 * tile.ImagePixel(p, this->Width);
+      for (int c = 0; c < 3; ++c)
+      {
+        out[c] += static_cast<float>(blend.Colour[c]);
+      }
+      out[3] += static_cast<float>(1.0 - blend.Transmittance);
+    }
+  }
+};
+
+// MBOIT pass 1: power moments of the warped depth, and the samples kept for pass 2.
+template <int N>
+struct Moments : NoSegments
+{
+  double* Output;
+  int Width;
+  const LogDepthWarp* Warp;
+  SampleCache* Cache;
+  std::vector<double> Sums;
+  std::vector<CachedSample>* Recorded = nullptr;
+
+  Moments(double* output, int width, const LogDepthWarp* warp, SampleCache* cache)
+    : Output(output)
+    , Width(width)
+    , Warp(warp)
+    , Cache(cache)
+  {
+  }
+  void BeginTile(const TileRect& tile)
+  {
+    this->Sums.assign(tile.Pixels() * (N + 1), 0.0);
+    this->Recorded = this->Cache ? &this->Cache->Tiles[tile.Index] : nullptr;
+  }
+  void Sample(int pixel, int64_t, double t, double scalar, const TransferSample& s)
+  {
+    const double z = (*this->Warp)(t);
+    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
+    if (this->Cache && this->Cache->Record)
+    {
+      this->Recorded->push_back(
+        { static_cast<float>(z), static_cast<float>(scalar), static_cast<uint16_t>(pixel) });
+    }
+  }
+  void EndTile(const TileRect& tile)
+  {
+    if (this->Recorded && this->Cache->Record)
+    {
+      this->Cache->Charge(*this->Recorded);
+    }
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      AddPowerMoments<N>(
+        this->Output + (N + 1) * tile.ImagePixel(p, this->Width), this->Sums.data() + p * (N + 1));
+    }
+  }
+};
+
+// MBOIT pass 2: colour weighted by alpha * T(z), T reconstructed from the global moments.
+template <int N>
+struct Colour : NoSegments
+{
+  double* Output;
+  int Width;
+  const LogDepthWarp* Warp;
+  const double* GlobalMoments;
+  MomentSettings<N> Settings;
+  std::vector<MomentTransmittance<N>> Transmittance;
+  std::vector<ColourSums> Sums;
+
+  Colour(double* output, int width, const LogDepthWarp* warp, const double* moments,
+    const MomentSettings<N>& settings)
+    : Output(output)
+    , Width(width)
+    , Warp(warp)
+    , GlobalMoments(moments)
+    , Settings(settings)
+  {
+  }
+  void BeginTile(const TileRect& tile)
+  {
+    this->Transmittance.clear();
+    this->Transmittance.reserve(tile.Pixels());
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      this->Transmittance.emplace_back(
+        this->GlobalMoments + (N + 1) * tile.ImagePixel(p, this->Width), this->Settings);
+    }
+    this->Sums.assign(tile.Pixels(), ColourSums());
+  }
+  void Sample(int pixel, int64_t, double t, double, const TransferSample& s)
+  {
+    this->Add(pixel, (*this->Warp)(t), s);
+  }
+  void Add(int pixel, double z, const TransferSample& s)
+  {
+    const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
+    this->Sums[pixel].Add(alpha * this->Transmittance[pixel](z),
+      { static_cast<double>(s.Colour[0]), static_cast<double>(s.Colour[1]),
+        static_cast<double>(s.Colour[2]) });
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      double* out = this->Output + 4 * tile.ImagePixel(p, this->Width);
+      for (int c = 0; c < 4; ++c)
+      {
+        out[c] += this->Sums[p].Sums[c];
+      }
+    }
+  }
+};
+
+// Number of disjoint intervals of each ray inside the cells.
+struct SegmentCounts
+{
+  static constexpr bool WantsSegments = true;
+  static constexpr bool WantsSamples = false;
+  static constexpr bool WantsTransparentSamples = false;
+  int32_t* Output;
+  int Width;
+  double Tolerance;
+  std::vector<std::vector<std::pair<double, double>>> Pixels;
+
+  SegmentCounts(int32_t* output, int width, double tolerance)
+    : Output(output)
+    , Width(width)
+    , Tolerance(tolerance)
+  {
+  }
+  void BeginTile(const TileRect& tile)
+  {
+    this->Pixels.resize(tile.Pixels());
+    for (auto& p : this->Pixels)
+    {
+      p.clear();
+    }
+  }
+  void Segment(int pixel, double tin, double tout) { this->Pixels[pixel].emplace_back(tin, tout); }
+  void Sample(int, int64_t, double, double, const TransferSample&) {}
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      auto& intervals = this->Pixels[p];
+      std::sort(intervals.begin(), intervals.end());
+      int32_t count = 0;
+      double end = -std::numeric_limits<double>::infinity();
+      for (const auto& interval : intervals)
+      {
+        // Neighbouring cells share their face planes exactly, so a gap below a tiny fraction
+        // of the mesh size is rounding, not empty space.
+        if (interval.first > end + this->Tolerance)
+        {
+          ++count;
+        }
+        end = std::max(end, interval.second);
+      }
+      this->Output[tile.ImagePixel(p, this->Width)] += count;
+    }
+  }
+};
+
+// The segments of one tile, pixel by pixel in the tile's order.
+struct TileSegments
+{
+  std::vector<int32_t> Counts;
+  std::vector<RaySegment> Segments;
+};
+
+// Sort-last segments: each pixel's samples sorted by k and cut into runs of consecutive k.
+// Transparent samples are taken too (they keep a run going), so that a run ends only where
+// the ray leaves this mesh's cells, whatever the transfer function.
+struct Runs : PixelSampleLists
+{
+  static constexpr bool WantsTransparentSamples = true;
+  std::vector<TileSegments>* Tiles;
+
+  explicit Runs(std::vector<TileSegments>* tiles)
+    : Tiles(tiles)
+  {
+  }
+  void EndTile(const TileRect& tile)
+  {
+    TileSegments& out = (*this->Tiles)[tile.Index];
+    out.Counts.assign(tile.Pixels(), 0);
+    out.Segments.clear();
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      if (!this->Pixels[p].empty())
+      {
+        out.Counts[p] = this->CutRuns(this->Sorted(p), out.Segments);
+      }
+    }
+  }
+  // Appends the visible runs of one pixel's sorted samples; returns how many.
+  static int32_t CutRuns(const std::vector<SampleRecord>& samples, std::vector<RaySegment>& out)
+  {
+    int32_t count = 0;
+    RaySegment run{ samples.front().K, samples.front().K, { 0, 0, 0 }, 1.0f };
+    FrontToBack blend;
+    bool visible = false;
+    auto flush = [&]
+    {
+      if (visible)
+      {
+        run.Colour = { static_cast<float>(blend.Colour[0]), static_cast<float>(blend.Colour[1]),
+          static_cast<float>(blend.Colour[2]) };
+        run.Transmittance = static_cast<float>(blend.Transmittance);
+        out.push_back(run);
+        ++count;
+      }
+    };
+    for (const SampleRecord& s : samples)
+    {
+      if (s.K > run.KLast + 1)
+      {
+        flush();
+        run.KFirst = s.K;
+        blend = FrontToBack();
+        visible = false;
+      }
+      run.KLast = s.K;
+      // Not (a > 0) also covers NaN scalars, whose colour must not reach the sums.
+      if (!(s.Absorbance > 0))
+      {
+        continue;
+      }
+      blend.Add(s);
+      visible = true;
+    }
+    flush();
+    return count;
+  }
+};
+
+} // namespace visitors
+} // namespace apc
+
+#endif

@@ -1,0 +1,71 @@
+// Screen tiles and the cells each one must march: the marcher's per-view set-up. Work is
+// organised by cell, not by ray: every cell is binned once per view into the tiles its
+// projection covers, so no per-ray cell search is needed (a VTK cell locator query per ray,
+// FindCellsAlongLine, measured 200-360 us per ray on a 330k-cell mesh here: minutes per
+// 1024^2 frame).
+#ifndef apcTileBins_h
+#define apcTileBins_h
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace apc
+{
+
+class CellMesh;
+class RayCamera;
+
+// Pixel rectangle [I0, I1) x [J0, J1) of tile Index, and where its pixels live in the image.
+struct TileRect
+{
+  int I0, J0, I1, J1;
+  int64_t Index;
+
+  int Width() const { return this->I1 - this->I0; }
+  int Pixels() const { return (this->I1 - this->I0) * (this->J1 - this->J0); }
+  // The image index (j * imageWidth + i) of the tile's local pixel p (row-major in the tile).
+  int64_t ImagePixel(int p, int imageWidth) const
+  {
+    const int i = this->I0 + p % this->Width();
+    const int j = this->J0 + p / this->Width();
+    return static_cast<int64_t>(j) * imageWidth + i;
+  }
+};
+
+// Square tiles of Size pixels over a Width x Height image, row-major from the bottom left.
+struct TileGrid
+{
+  int Size = 16;
+  int Width = 0;
+  int Height = 0;
+  int TilesX = 0;
+  int TilesY = 0;
+
+  TileGrid() = default;
+  TileGrid(int size, int width, int height);
+  int64_t Count() const { return static_cast<int64_t>(this->TilesX) * this->TilesY; }
+  TileRect Tile(int64_t index) const;
+};
+
+// Cells per tile for one view.
+struct TileBins
+{
+  TileGrid Grid;
+  // Per cell: the covered pixel centres i0, j0, i1, j1 (inclusive); empty if i0 > i1.
+  std::vector<std::array<int, 4>> Rects;
+  // Compressed rows: tile t's cells are Cells[Start[t] .. Start[t + 1]).
+  std::vector<int64_t> Start{ 0 };
+  std::vector<int64_t> Cells;
+
+  bool Empty(int64_t tile) const { return this->Start[tile] == this->Start[tile + 1]; }
+};
+
+// Bins mesh's cells for camera into tiles of tileSize pixels. A cell reaching behind the eye
+// gets the whole screen (conservative), one wholly behind it none. threads: 0 = TBB's choice.
+void BinCells(
+  const CellMesh* mesh, const RayCamera& camera, int tileSize, int threads, TileBins& bins);
+
+} // namespace apc
+
+#endif

@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What vtkAPCCompositePass's compositing modes share for one frame: the processes (derived
+// once from the controller), the agreed frame (viewport, screen rectangle, moment
+// parameters, the visible volumes' engines), what the frame records (stage times, bytes,
+// messages), and the display process's result. Internal to APC's rendering module.
+#ifndef apcCompositeFrame_h
+#define apcCompositeFrame_h
+
+#include "apcMomentParameters.h"
+#include "apcRaySegments.h"
+#include "apcScreenRect.h"
+#include "apcStageClock.h"
+
+#include "vtkType.h"
+
+#include <vector>
+
+class vtkMultiProcessController;
+class vtkRenderer;
+
+namespace apc
+{
+class FrameEngine;
+
+// The processes rendering together, as this process sees them.
+struct ProcessGroup
+{
+  vtkMultiProcessController* Controller = nullptr;
+  bool Parallel = false; // more than one process: the collectives run
+  int Processes = 1;
+  int Rank = 0;
+  int Display = 0; // the process that shows the image
+
+  ProcessGroup(vtkMultiProcessController* controller, int displayProcess);
+  bool IsDisplay() const { return this->Rank == this->Display; }
+};
+
+// One agreed frame: the same on every process except Engines (this process's volumes).
+struct CompositeFrame
+{
+  vtkRenderer* Renderer = nullptr;
+  int Width = 0; // the viewport (a tile of a large screenshot)
+  int Height = 0;
+  int X0 = 0;
+  int Y0 = 0;
+  double Bounds[6] = { 0, 0, 0, 0, 0, 0 }; // all processes' cells
+  ScreenRect Rect;                         // the pixels whose rays can meet Bounds
+  MomentParameters Moments;
+  std::vector<FrameEngine*> Engines;
+
+  size_t Pixels() const { return static_cast<size_t>(this->Width) * this->Height; }
+};
+
+// What the last frame cost, for GetLast*() and the verbose report.
+struct FrameRecord
+{
+  StageClock Clock;
+  double BytesSent = 0;
+  vtkIdType MessagesSent = 0;
+  vtkIdType Pixels = 0;
+  SegmentStatistics Segments;
+  bool Failed = false;
+};
+
+// The display process's final image of the volumes (W x H premultiplied RGBA) and, in APC
+// mode, the global moments and colour sums it was resolved from.
+struct FrameResult
+{
+  std::vector<float> RGBA;
+  std::vector<double> Moments;
+  std::vector<double> ColourSums;
+};
+
+// The modes: each runs the frame's stages and collectives on every process and fills
+// result on the display process.
+void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame, bool inDouble,
+  FrameRecord& record, FrameResult& result);
+void RunSegmentCompositing(
+  const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result);
+
+} // namespace apc
+
+#endif

@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What every process must agree on before a frame's collectives, settled in one small
+// allreduce: the union of the data bounds (depth warp, sample spacing, screen rectangle),
+// failures, the number of visible APC volumes and of moments, and the viewport size. A
+// process that cannot render, has no volume while others have, or disagrees on a size makes
+// every process skip the frame instead of waiting forever in a later collective.
+#ifndef apcFrameAgreement_h
+#define apcFrameAgreement_h
+
+#include <string>
+
+namespace apc
+{
+struct ProcessGroup;
+
+// This process's side of the agreement.
+struct LocalFrame
+{
+  double Bounds[6]; // of this process's renderable cells; empty (min > max) if none
+  bool Failed = false;
+  int Volumes = 0;    // visible APC volumes
+  int MinMoments = 0; // over those volumes (0 and 0 if none)
+  int MaxMoments = 0;
+  int Width = 0;
+  int Height = 0;
+
+  LocalFrame();
+  void AddBounds(const double bounds[6]);
+  void AddMoments(int moments);
+};
+
+// The agreed frame, the same on every process.
+struct FrameAgreement
+{
+  double Bounds[6]; // union over all processes; empty if no cells anywhere
+  bool AnyFailed = false;
+  int MinVolumes = 0;
+  int MaxVolumes = 0;
+  int MinMoments = 0;
+  int MaxMoments = 0;
+  bool SizesDiffer = false;
+  int Width = 0;
+  int Height = 0;
+
+  static FrameAgreement Agree(const ProcessGroup& group, const LocalFrame& local);
+
+  bool NoVolumes() const { return this->MaxVolumes == 0; }
+  bool HasCells() const;
+  // Empty if the frame can be rendered; otherwise why every process skips it.
+  std::string Problem() const;
+};
+
+} // namespace apc
+
+#endif

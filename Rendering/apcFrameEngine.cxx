@@ -1,0 +1,219 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "apcFrameEngine.h"
+
+#include "vtkAPCVolumeMapper.h"
+#include "vtkCamera.h"
+#include "vtkDataArray.h"
+#include "vtkRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkUnstructuredGridBase.h"
+#include "vtkVolume.h"
+
+#include "apcCellMeshFromVTK.h"
+#include "apcDepthWarp.h"
+#include "apcFrameInputsFromVTK.h"
+#include "apcRayCamera.h"
+#include "apcTransferTable.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+namespace apc
+{
+
+FrameEngine::FrameEngine() = default;
+FrameEngine::~FrameEngine() = default;
+
+//------------------------------------------------------------------------------
+bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
+{
+  vtkUnstructuredGridBase* input = mapper->GetInput();
+  if (!input || input->GetNumberOfCells() == 0)
+  {
+    // An empty piece renders nothing, silently: in parallel that is a normal rank.
+    this->Mesh = CellMesh();
+    this->Mesh.Finalize();
+    this->MeshValid = true;
+    this->MeshScalarKey.clear();
+    return true;
+  }
+  int cellFlag = 0;
+  vtkDataArray* scalars = vtkAbstractMapper::GetScalars(input, mapper->GetScalarMode(),
+    mapper->GetArrayAccessMode(), mapper->GetArrayId(), mapper->GetArrayName(), cellFlag);
+  if (!scalars)
+  {
+    vtkErrorWithObjectMacro(mapper,
+      "The input has no scalars to render (ScalarMode "
+        << mapper->GetScalarModeAsString() << ", array "
+        << (mapper->GetArrayName() ? mapper->GetArrayName() : "<none>") << ").");
+    this->MeshValid = false;
+    return false;
+  }
+  // Rebuild the ray marcher's mesh only when the data or the scalar selection changed.
+  std::ostringstream key;
+  key << scalars << ' ' << scalars->GetMTime() << ' ' << cellFlag;
+  if (this->MeshValid && this->MeshInputTime >= input->GetMTime() &&
+    this->MeshScalarKey == key.str())
+  {
+    return true;
+  }
+  std::string message;
+  this->MeshValid = CellMeshFromVTK(input, scalars, cellFlag == 1, this->Mesh, message);
+  if (!message.empty())
+  {
+    vtkErrorWithObjectMacro(mapper, << message);
+  }
+  this->MeshInputTime = input->GetMTime();
+  this->MeshScalarKey = key.str();
+  this->Clock.Lap("mesh");
+  return this->MeshValid;
+}
+
+//------------------------------------------------------------------------------
+bool FrameEngine::GetLocalBounds(double bounds[6]) const
+{
+  if (!this->MeshValid || this->Mesh.GetNumberOfCells() == 0)
+  {
+    return false;
+  }
+  const auto& b = this->Mesh.GetBounds();
+  std::copy(b.begin(), b.end(), bounds);
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
+  const double* globalBounds, const float* depthBuffer)
+{
+  this->Clock.Restart();
+  this->Ready = false;
+  ren->GetTiledSizeAndOrigin(&this->Width, &this->Height, &this->X0, &this->Y0);
+  if (this->Width < 1 || this->Height < 1 || !this->UpdateInput(mapper))
+  {
+    return false;
+  }
+
+  // Everything that must agree between processes comes from the global bounds: the sample
+  // spacing (the lattice) and the depth range of the warp (the moments' axis).
+  std::array<double, 6> bounds = this->Mesh.GetBounds();
+  if (globalBounds)
+  {
+    std::copy(globalBounds, globalBounds + 6, bounds.begin());
+  }
+  if (!(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
+  {
+    return false; // no cells anywhere
+  }
+  const double diagonal = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
+    (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
+    (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
+  this->Spacing = mapper->GetSampleDistance() > 0 ? mapper->GetSampleDistance() : diagonal / 256.0;
+  if (!(this->Spacing > 0))
+  {
+    return false; // a mesh with no extent
+  }
+  this->Table = TransferTableFromVTK(vol->GetProperty(), this->Spacing);
+  this->Camera = RayCameraFromVTK(ren, this->Width, this->Height);
+  double clip[2];
+  ren->GetActiveCamera()->GetClippingRange(clip);
+  double tmin = 0;
+  double tmax = 0;
+  this->Camera->DistanceRange(bounds, tmin, tmax);
+  this->Warp.reset(new LogDepthWarp(std::max(tmin, clip[0]), tmax));
+
+  // Rays end at the opaque geometry: the given depth buffer, or this window's.
+  std::vector<float> depth;
+  if (!depthBuffer)
+  {
+    depth.assign(this->GetPixels(), 1.0f);
+    ren->GetRenderWindow()->GetZbufferData(
+      this->X0, this->Y0, this->X0 + this->Width - 1, this->Y0 + this->Height - 1, depth.data());
+    depthBuffer = depth.data();
+  }
+  std::vector<float> rayEnds(this->GetPixels());
+  for (int j = 0; j < this->Height; ++j)
+  {
+    for (int i = 0; i < this->Width; ++i)
+    {
+      const size_t p = static_cast<size_t>(j) * this->Width + i;
+      rayEnds[p] = static_cast<float>(this->Camera->DistanceFromDepth(i, j, depthBuffer[p]));
+    }
+  }
+  this->Marcher.SetNumberOfThreads(mapper->GetNumberOfThreads());
+  this->Marcher.SetMesh(&this->Mesh);
+  this->Marcher.SetView(*this->Camera, rayEnds.data());
+  this->Samples = 0;
+  this->Ready = true;
+  this->Clock.Lap("setup");
+  return true;
+}
+
+//------------------------------------------------------------------------------
+void FrameEngine::RenderMoments(const MomentParameters& parameters, double* moments)
+{
+  if (!this->Ready)
+  {
+    return;
+  }
+  DispatchMoments(parameters.Moments,
+    [&](auto n) { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments); });
+  this->Samples = this->Marcher.GetLastSampleCount();
+  this->Clock.Lap("moments");
+}
+
+//------------------------------------------------------------------------------
+void FrameEngine::RenderColour(
+  const MomentParameters& parameters, const double* moments, double* colourSums)
+{
+  if (!this->Ready)
+  {
+    return;
+  }
+  DispatchMoments(parameters.Moments,
+    [&](auto n)
+    {
+      this->Marcher.AccumulateColour<n()>(
+        *this->Table, *this->Warp, moments, parameters.Settings<n()>(), colourSums);
+    });
+  this->Clock.Lap("colour");
+}
+
+//------------------------------------------------------------------------------
+void FrameEngine::RenderExact(float* rgba)
+{
+  if (!this->Ready)
+  {
+    return;
+  }
+  this->Marcher.RenderExact(*this->Table, rgba);
+  this->Samples = this->Marcher.GetLastSampleCount();
+  this->Clock.Lap("exact");
+}
+
+//------------------------------------------------------------------------------
+void FrameEngine::CountSegments(int* counts)
+{
+  if (!this->Ready)
+  {
+    return;
+  }
+  this->Marcher.CountSegments(counts);
+  this->Clock.Lap("segments");
+}
+
+//------------------------------------------------------------------------------
+void FrameEngine::RenderSegments(SegmentImage& segments)
+{
+  if (!this->Ready)
+  {
+    segments.Reset(this->Width, this->Height);
+    return;
+  }
+  this->Marcher.RenderSegments(*this->Table, segments);
+  this->Samples = this->Marcher.GetLastSampleCount();
+  this->Clock.Lap("segments");
+}
+
+} // namespace apc

@@ -1,0 +1,107 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// One process's frame of one APC volume, stage by stage: what vtkAPCVolumeMapper::Render runs
+// in one go, and what vtkAPCCompositePass runs with its collectives between the stages.
+// Internal to APC's rendering module (not installed, not for applications).
+//
+// Buffers are W x H pixels of the prepared viewport (GetWidth/GetHeight), row 0 at the
+// bottom; moments hold MomentParameters::Moments + 1 doubles per pixel, colour sums 4, images
+// 4 floats (premultiplied RGBA). Moment, colour and image buffers are accumulated into (+=),
+// so several volumes sum into one. Stages before a successful Prepare do nothing, so a
+// process with nothing to render still takes part in the sums with zeros.
+#ifndef apcFrameEngine_h
+#define apcFrameEngine_h
+
+#include "APCRenderingModule.h" // for export macro
+#include "apcCellMesh.h"
+#include "apcMomentParameters.h"
+#include "apcStageClock.h"
+#include "apcVolumeRayMarcher.h"
+
+#include "vtkType.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+class vtkAPCVolumeMapper;
+class vtkRenderer;
+class vtkVolume;
+
+namespace apc
+{
+class LogDepthWarp;
+class RayCamera;
+class TransferTable;
+
+class APCRENDERING_EXPORT FrameEngine
+{
+public:
+  FrameEngine();
+  ~FrameEngine();
+
+  /**
+   * Copies mapper's input for the ray marcher if it or its scalar selection changed. False,
+   * with an error on mapper, if the input is unusable (cells but no scalars, a broken mesh);
+   * an empty or missing input is usable and renders nothing.
+   */
+  bool UpdateInput(vtkAPCVolumeMapper* mapper);
+
+  /// Bounds of the renderable cells as of the last UpdateInput; false if there are none.
+  bool GetLocalBounds(double bounds[6]) const;
+  int64_t GetNumberOfCells() const { return this->Mesh.GetNumberOfCells(); }
+
+  /**
+   * Updates the input, samples the transfer function and sets up the rays of ren's viewport.
+   * globalBounds (xmin..zmax of all processes' cells) fix the depth warp and the default
+   * sample spacing so that every process uses the same ones; null uses this process's cells.
+   * depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays;
+   * null reads ren's window. False if there is nothing this process can render.
+   */
+  bool Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
+    const double* globalBounds, const float* depthBuffer);
+
+  int GetWidth() const { return this->Width; }
+  int GetHeight() const { return this->Height; }
+  size_t GetPixels() const { return static_cast<size_t>(this->Width) * this->Height; }
+  /// The viewport's origin in the window (tiles of a large screenshot are offset).
+  int GetX0() const { return this->X0; }
+  int GetY0() const { return this->Y0; }
+  double GetSampleDistance() const { return this->Spacing; }
+  /// Lattice samples taken by the last marching stage.
+  int64_t GetSampleCount() const { return this->Samples; }
+  StageClock& GetClock() { return this->Clock; }
+  const StageClock& GetClock() const { return this->Clock; }
+
+  void RenderMoments(const MomentParameters& parameters, double* moments);
+  void RenderColour(const MomentParameters& parameters, const double* moments, double* colourSums);
+  void RenderExact(float* rgba);
+  void CountSegments(int* counts);
+  /// This process's sort-last segments of every pixel, replacing segments' content.
+  void RenderSegments(SegmentImage& segments);
+
+private:
+  FrameEngine(const FrameEngine&) = delete;
+  FrameEngine& operator=(const FrameEngine&) = delete;
+
+  CellMesh Mesh;
+  bool MeshValid = false;
+  vtkMTimeType MeshInputTime = 0;
+  std::string MeshScalarKey;
+  VolumeRayMarcher Marcher;
+
+  bool Ready = false;
+  int Width = 0;
+  int Height = 0;
+  int X0 = 0;
+  int Y0 = 0;
+  double Spacing = 0.0;
+  std::unique_ptr<TransferTable> Table;
+  std::unique_ptr<RayCamera> Camera;
+  std::unique_ptr<LogDepthWarp> Warp;
+  int64_t Samples = 0;
+  StageClock Clock;
+};
+
+} // namespace apc
+
+#endif

@@ -1,0 +1,89 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "apcFrameInputsFromVTK.h"
+
+#include "vtkCamera.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkRenderer.h"
+#include "vtkVolumeProperty.h"
+
+#include "apcRayCamera.h"
+#include "apcTransferTable.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace
+{
+// Transfer functions are sampled this finely; finer than 8-bit colour and far finer than
+// the opacity ramps of typical volume renderings.
+constexpr int kTableSize = 1024;
+}
+
+namespace apc
+{
+
+std::unique_ptr<TransferTable> TransferTableFromVTK(vtkVolumeProperty* property, double spacing)
+{
+  // Tables over the union of the colour and opacity ranges.
+  vtkPiecewiseFunction* opacity = property->GetScalarOpacity(0);
+  double range[2];
+  opacity->GetRange(range);
+  std::vector<double> rgb(3 * kTableSize);
+  if (property->GetColorChannels(0) == 1)
+  {
+    vtkPiecewiseFunction* gray = property->GetGrayTransferFunction(0);
+    double grayRange[2];
+    gray->GetRange(grayRange);
+    range[0] = std::min(range[0], grayRange[0]);
+    range[1] = std::max(range[1], grayRange[1]);
+    std::vector<double> g(kTableSize);
+    gray->GetTable(range[0], range[1], kTableSize, g.data());
+    for (int i = 0; i < kTableSize; ++i)
+    {
+      rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = g[i];
+    }
+  }
+  else
+  {
+    vtkColorTransferFunction* colour = property->GetRGBTransferFunction(0);
+    const double* colourRange = colour->GetRange();
+    range[0] = std::min(range[0], colourRange[0]);
+    range[1] = std::max(range[1], colourRange[1]);
+    colour->GetTable(range[0], range[1], kTableSize, rgb.data());
+  }
+  std::vector<std::array<float, 3>> colours(kTableSize);
+  for (int i = 0; i < kTableSize; ++i)
+  {
+    colours[i] = { static_cast<float>(rgb[3 * i]), static_cast<float>(rgb[3 * i + 1]),
+      static_cast<float>(rgb[3 * i + 2]) };
+  }
+  std::vector<double> alphas(kTableSize);
+  opacity->GetTable(range[0], range[1], kTableSize, alphas.data());
+  return std::unique_ptr<TransferTable>(new TransferTable(
+    range[0], range[1], colours, alphas, spacing, property->GetScalarOpacityUnitDistance(0)));
+}
+
+std::unique_ptr<RayCamera> RayCameraFromVTK(vtkRenderer* ren, int width, int height)
+{
+  vtkCamera* cam = ren->GetActiveCamera();
+  double clip[2];
+  cam->GetClippingRange(clip);
+  double viewAngle = cam->GetViewAngle();
+  if (cam->GetUseHorizontalViewAngle())
+  {
+    const double pi = 3.14159265358979323846;
+    viewAngle =
+      2.0 * std::atan(std::tan(0.5 * viewAngle * pi / 180.0) * height / width) * 180.0 / pi;
+  }
+  const double* p = cam->GetPosition();
+  const double* f = cam->GetFocalPoint();
+  const double* u = cam->GetViewUp();
+  return std::unique_ptr<RayCamera>(
+    new RayCamera({ p[0], p[1], p[2] }, { f[0], f[1], f[2] }, { u[0], u[1], u[2] }, viewAngle,
+      cam->GetParallelProjection() != 0, cam->GetParallelScale(), width, height, clip[0], clip[1]));
+}
+
+} // namespace apc

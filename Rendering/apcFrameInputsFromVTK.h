@@ -1,0 +1,25 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The view state of a VTK frame in the core's terms: the renderer's camera as an
+// apc::RayCamera and the volume property's transfer functions as an apc::TransferTable.
+#ifndef apcFrameInputsFromVTK_h
+#define apcFrameInputsFromVTK_h
+
+#include <memory>
+
+class vtkRenderer;
+class vtkVolumeProperty;
+
+namespace apc
+{
+class RayCamera;
+class TransferTable;
+
+// The rays of ren's active camera through the pixels of a width x height viewport.
+std::unique_ptr<RayCamera> RayCameraFromVTK(vtkRenderer* ren, int width, int height);
+
+// The first component's colour (or gray) and opacity functions, sampled over the union of
+// their ranges; opacity corrected for samples spacing apart.
+std::unique_ptr<TransferTable> TransferTableFromVTK(vtkVolumeProperty* property, double spacing);
+}
+
+#endif

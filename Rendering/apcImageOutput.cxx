@@ -1,0 +1,101 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "apcImageOutput.h"
+
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
+#include "vtkIntArray.h"
+#include "vtkNew.h"
+#include "vtkOpenGLQuadHelper.h"
+#include "vtkOpenGLRenderUtilities.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLShaderCache.h"
+#include "vtkOpenGLState.h"
+#include "vtkPointData.h"
+#include "vtkRenderer.h"
+#include "vtkShaderProgram.h"
+#include "vtkTextureObject.h"
+#include "vtk_glew.h"
+
+#include <algorithm>
+#include <string>
+
+namespace apc
+{
+
+void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, const float* rgba)
+{
+  // A float texture on a viewport quad, blended premultiplied-over into whatever framebuffer
+  // is bound: the window's in plain VTK, the one IceT composited into in ParaView (its
+  // result is captured from there, so drawing anywhere else would be lost). Float keeps
+  // the 8-bit quantisation of glDrawPixels out of the volume's colours.
+  auto* window = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
+  if (!window || width < 1 || height < 1)
+  {
+    return;
+  }
+  vtkNew<vtkTextureObject> texture;
+  texture->SetContext(window);
+  texture->Create2DFromRaw(width, height, 4, VTK_FLOAT,
+    const_cast<float*>(rgba)); // only read, despite the signature
+  texture->SetMinificationFilter(vtkTextureObject::Nearest);
+  texture->SetMagnificationFilter(vtkTextureObject::Nearest);
+  std::string fragment = vtkOpenGLRenderUtilities::GetFullScreenQuadFragmentShaderTemplate();
+  vtkShaderProgram::Substitute(fragment, "//VTK::FSQ::Decl", "uniform sampler2D volumeImage;");
+  vtkShaderProgram::Substitute(
+    fragment, "//VTK::FSQ::Impl", "gl_FragData[0] = texture2D(volumeImage, texCoord);");
+  {
+    vtkOpenGLQuadHelper quad(window,
+      vtkOpenGLRenderUtilities::GetFullScreenQuadVertexShader().c_str(), fragment.c_str(), "");
+    window->GetShaderCache()->ReadyShaderProgram(quad.Program);
+    texture->Activate();
+    quad.Program->SetUniformi("volumeImage", texture->GetTextureUnit());
+    vtkOpenGLState* state = window->GetState();
+    vtkOpenGLState::ScopedglEnableDisable blend(state, GL_BLEND);
+    vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
+    vtkOpenGLState::ScopedglBlendFuncSeparate blendFunction(state);
+    vtkOpenGLState::ScopedglDepthMask depthMask(state);
+    vtkOpenGLState::ScopedglViewport viewport(state);
+    vtkOpenGLState::ScopedglEnableDisable scissor(state, GL_SCISSOR_TEST);
+    state->vtkglEnable(GL_BLEND);
+    state->vtkglBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    state->vtkglDisable(GL_DEPTH_TEST);
+    state->vtkglDisable(GL_SCISSOR_TEST);
+    state->vtkglDepthMask(GL_FALSE);
+    state->vtkglViewport(x0, y0, width, height);
+    quad.Render();
+    texture->Deactivate();
+    quad.ReleaseGraphicsResources(window);
+  }
+  texture->ReleaseGraphicsResources(window);
+}
+
+void StoreFloatImages(vtkImageData* image, int width, int height, const FloatImages& images)
+{
+  image->Initialize();
+  image->SetDimensions(width, height, 1);
+  const vtkIdType pixels = static_cast<vtkIdType>(width) * height;
+  auto add = [&](auto array, const char* name, int components, const auto* values)
+  {
+    if (!values)
+    {
+      return;
+    }
+    array->SetName(name);
+    array->SetNumberOfComponents(components);
+    array->SetNumberOfTuples(pixels);
+    std::copy(values, values + components * pixels, array->GetPointer(0));
+    image->GetPointData()->AddArray(array);
+  };
+  add(vtkNew<vtkFloatArray>().Get(), "RGBA", 4, images.RGBA);
+  add(vtkNew<vtkFloatArray>().Get(), "Moments", images.MomentComponents, images.Moments);
+  add(vtkNew<vtkFloatArray>().Get(), "ColourSums", 4, images.ColourSums);
+  add(vtkNew<vtkIntArray>().Get(), "SegmentCount", 1, images.SegmentCount);
+  vtkNew<vtkDoubleArray> sampleCount;
+  sampleCount->SetName("SampleCount");
+  sampleCount->InsertNextValue(static_cast<double>(images.SampleCount));
+  image->GetFieldData()->AddArray(sampleCount);
+}
+
+} // namespace apc
