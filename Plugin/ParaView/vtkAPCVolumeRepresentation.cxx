@@ -4,6 +4,8 @@
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCVolumeMapper.h"
 
+#include "apcPassInstaller.h"
+
 #include "vtkAlgorithmOutput.h"
 #include "vtkAppendFilter.h"
 #include "vtkCompositeDataIterator.h"
@@ -11,63 +13,17 @@
 #include "vtkDataObject.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
-#include "vtkMultiProcessController.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPVRenderView.h"
-#include "vtkPVSession.h"
-#include "vtkPVSynchronizedRenderer.h"
-#include "vtkProcessModule.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 
 #include <algorithm>
-#include <map>
-#include <set>
 
 vtkStandardNewMacro(vtkAPCVolumeRepresentation);
-
-namespace
-{
-// vtkPVRenderView keeps its vtkPVSynchronizedRenderer protected, and only a view subclass
-// (like the Eye-Dome-Lighting view) is meant to install an image processing pass. Naming the
-// member through a derived class is the one standard-conforming way to reach it, and it
-// lets "APC Volume" work in the standard Render View instead of a view of its own.
-struct ViewAccess : public vtkPVRenderView
-{
-  static vtkPVSynchronizedRenderer* SynchronizedRenderer(vtkPVRenderView* view)
-  {
-    return view->*(&ViewAccess::SynchronizedRenderers);
-  }
-};
-
-// One vtkAPCCompositePass per view, shared by the APC volumes shown in it, installed while
-// at least one is visible; the pass it replaced comes back afterwards.
-struct Installation
-{
-  vtkSmartPointer<vtkAPCCompositePass> Pass;
-  vtkSmartPointer<vtkImageProcessingPass> Previous;
-  std::set<vtkAPCVolumeRepresentation*> Users;
-};
-
-std::map<vtkPVRenderView*, Installation>& Installations()
-{
-  static std::map<vtkPVRenderView*, Installation> installations;
-  return installations;
-}
-
-// Rendering happens where the render server lives: on the pvserver / pvbatch ranks and in
-// builtin sessions, not on a client connected to a remote server (it shows the server's
-// image).
-bool RendersHere()
-{
-  vtkProcessModule* pm = vtkProcessModule::GetProcessModule();
-  auto* session = pm ? vtkPVSession::SafeDownCast(pm->GetActiveSession()) : nullptr;
-  return !session || session->HasProcessRole(vtkPVSession::RENDER_SERVER);
-}
-}
 
 //------------------------------------------------------------------------------
 vtkAPCVolumeRepresentation::vtkAPCVolumeRepresentation()
@@ -191,56 +147,17 @@ void vtkAPCVolumeRepresentation::UpdateMapperArray()
 //------------------------------------------------------------------------------
 void vtkAPCVolumeRepresentation::Attach(bool attach)
 {
-  vtkPVRenderView* view = this->View;
-  auto& installations = Installations();
   if (!attach)
   {
-    for (auto it = installations.begin(); it != installations.end();)
-    {
-      Installation& installation = it->second;
-      if (installation.Users.erase(this))
-      {
-        installation.Pass->RemoveVolume(this->APCVolume);
-        if (installation.Users.empty())
-        {
-          vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(it->first);
-          sync->SetImageProcessingPass(installation.Previous);
-          sync->SetUseDepthBuffer(installation.Previous != nullptr);
-          it = installations.erase(it);
-          continue;
-        }
-      }
-      ++it;
-    }
+    apc::DetachVolume(this, this->APCVolume);
     return;
   }
-  if (!view || !RendersHere())
+  if (vtkAPCCompositePass* pass = apc::AttachVolume(this->View, this, this->APCVolume))
   {
-    return;
+    pass->SetCompositeMode(this->Mode);
+    pass->SetVerbosity(this->Verbosity);
+    pass->SetImageFileName(this->ImageFileName.c_str());
   }
-  if (view->InTileDisplayMode() || view->InCaveDisplayMode())
-  {
-    vtkWarningMacro("APC Volume does not render in tile-display or CAVE mode.");
-    return;
-  }
-  Installation& installation = installations[view];
-  if (!installation.Pass)
-  {
-    vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
-    installation.Previous = sync->GetImageProcessingPass();
-    installation.Pass = vtkSmartPointer<vtkAPCCompositePass>::New();
-    installation.Pass->SetController(vtkMultiProcessController::GetGlobalController());
-    sync->SetImageProcessingPass(installation.Pass);
-    // IceT then leaves the composited depth in the display rank's framebuffer.
-    sync->SetUseDepthBuffer(true);
-  }
-  installation.Users.insert(this);
-  installation.Pass->AddVolume(this->APCVolume);
-  installation.Pass->SetCompositeMode(this->Mode == 2
-      ? vtkAPCCompositePass::SEGMENTS
-      : (this->Mode == 1 ? vtkAPCCompositePass::LOCAL_EXACT : vtkAPCCompositePass::APC));
-  installation.Pass->SetVerbosity(this->Verbosity);
-  installation.Pass->SetImageFileName(this->ImageFileName.c_str());
 }
 
 //------------------------------------------------------------------------------
@@ -286,30 +203,18 @@ void vtkAPCVolumeRepresentation::SetOverestimation(double beta)
   this->MarkModified();
 }
 
-void vtkAPCVolumeRepresentation::SetMomentBias(double bias)
-{
-  this->Mapper->SetMomentBias(bias);
-  this->MarkModified();
-}
-
 void vtkAPCVolumeRepresentation::SetResolveMode(int mode)
 {
   this->Mapper->SetResolveMode(mode);
   this->MarkModified();
 }
 
-void vtkAPCVolumeRepresentation::SetNumberOfThreads(int threads)
-{
-  this->Mapper->SetNumberOfThreads(threads);
-  this->MarkModified();
-}
-
 void vtkAPCVolumeRepresentation::SetMode(int mode)
 {
+  // The pass clamps it, where it is used: this only passes it on.
   if (this->Mode != mode)
   {
     this->Mode = mode;
-    this->Mapper->SetMode(mode != 0 ? vtkAPCVolumeMapper::EXACT : vtkAPCVolumeMapper::MBOIT);
     this->MarkModified();
   }
 }
@@ -330,21 +235,17 @@ void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
 double* vtkAPCVolumeRepresentation::GetLastTimings()
 {
   std::fill(this->LastTimings, this->LastTimings + 11, 0.0);
-  for (const auto& entry : Installations())
+  if (const vtkAPCCompositePass* pass = apc::FindPass(this))
   {
-    if (entry.second.Users.count(this))
+    const char* stages[] = { "agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve",
+      "blend" };
+    for (int s = 0; s < 8; ++s)
     {
-      const vtkAPCCompositePass* pass = entry.second.Pass;
-      const char* stages[] = { "agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve",
-        "blend" };
-      for (int s = 0; s < 8; ++s)
-      {
-        this->LastTimings[s] = pass->GetLastStageSeconds(stages[s]);
-      }
-      this->LastTimings[8] = pass->GetLastStageSeconds(nullptr);
-      this->LastTimings[9] = pass->GetLastBytesSent();
-      this->LastTimings[10] = static_cast<double>(pass->GetLastCompositedPixels());
+      this->LastTimings[s] = pass->GetLastStageSeconds(stages[s]);
     }
+    this->LastTimings[8] = pass->GetLastStageSeconds(nullptr);
+    this->LastTimings[9] = pass->GetLastBytesSent();
+    this->LastTimings[10] = static_cast<double>(pass->GetLastCompositedPixels());
   }
   return this->LastTimings;
 }
@@ -352,20 +253,16 @@ double* vtkAPCVolumeRepresentation::GetLastTimings()
 double* vtkAPCVolumeRepresentation::GetLastSegmentStatistics()
 {
   std::fill(this->LastSegmentStatistics, this->LastSegmentStatistics + 7, 0.0);
-  for (const auto& entry : Installations())
+  if (const vtkAPCCompositePass* pass = apc::FindPass(this))
   {
-    if (entry.second.Users.count(this))
+    const char* stages[] = { "segments", "exchange", "blend_segments", "gather" };
+    for (int s = 0; s < 4; ++s)
     {
-      const vtkAPCCompositePass* pass = entry.second.Pass;
-      const char* stages[] = { "segments", "exchange", "blend_segments", "gather" };
-      for (int s = 0; s < 4; ++s)
-      {
-        this->LastSegmentStatistics[s] = pass->GetLastStageSeconds(stages[s]);
-      }
-      this->LastSegmentStatistics[4] = static_cast<double>(pass->GetLastMessagesSent());
-      this->LastSegmentStatistics[5] = pass->GetLastAverageSegmentsPerPixel();
-      this->LastSegmentStatistics[6] = static_cast<double>(pass->GetLastMaxSegmentsPerPixel());
+      this->LastSegmentStatistics[s] = pass->GetLastStageSeconds(stages[s]);
     }
+    this->LastSegmentStatistics[4] = static_cast<double>(pass->GetLastMessagesSent());
+    this->LastSegmentStatistics[5] = pass->GetLastAverageSegmentsPerPixel();
+    this->LastSegmentStatistics[6] = static_cast<double>(pass->GetLastMaxSegmentsPerPixel());
   }
   return this->LastSegmentStatistics;
 }
@@ -374,8 +271,6 @@ double* vtkAPCVolumeRepresentation::GetLastSegmentStatistics()
 void vtkAPCVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent
-     << "Mode: " << (this->Mode == 2 ? "exact segments" : (this->Mode == 1 ? "local exact" : "APC"))
-     << "\n";
+  os << indent << "Mode: " << this->Mode << " (vtkAPCCompositePass::CompositeModeType)\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
 }

@@ -59,16 +59,15 @@ public:
   void SetSampleDistance(double distance);
   void SetNumberOfMoments(int moments);
   void SetOverestimation(double beta);
-  void SetMomentBias(double bias);
   void SetResolveMode(int mode);
-  void SetNumberOfThreads(int threads);
   ///@}
 
   ///@{
   /**
-   * 0: APC (default); 1: each rank's own cells in exact mode, without compositing (a local
-   * reference, for comparison); 2: the exact sort-last baseline (vtkAPCCompositePass
-   * SEGMENTS: ray segments sent to their pixel's owner, sorted and blended).
+   * How the ranks' volumes are combined, vtkAPCCompositePass::CompositeModeType: APC (0,
+   * default); SEGMENTS (1), the exact sort-last baseline (ray segments sent to their pixel's
+   * owner, sorted and blended); LOCAL_EXACT (2), each rank's own cells in exact mode, without
+   * compositing (a local reference, for comparison).
    */
   void SetMode(int mode);
   vtkGetMacro(Mode, int);

@@ -322,6 +322,30 @@ void CellInterpolator::Evaluate(const double p[3], double offset[3], double J[3]
   }
 }
 
+namespace
+{
+// The parametric size of a Newton step d that ended at p: in a pyramid the r and s steps are
+// scaled by the cross-section at t, which shrinks to the apex.
+double NewtonStepSize(const double d[3], const double p[3], bool pyramid)
+{
+  const double section = pyramid ? std::abs(1.0 - p[2]) : 1.0;
+  const double rs = std::max(std::abs(d[0]), std::abs(d[1]));
+  return std::max(std::abs(d[2]), pyramid ? section * rs : rs);
+}
+
+bool Converged(const double p[3], int steps, double pcoords[3], int* iterations)
+{
+  pcoords[0] = p[0];
+  pcoords[1] = p[1];
+  pcoords[2] = p[2];
+  if (iterations)
+  {
+    *iterations = steps;
+  }
+  return true;
+}
+}
+
 bool CellInterpolator::ParametricCoordinates(
   const double x[3], double pcoords[3], int* iterations, double tolerance) const
 {
@@ -385,14 +409,7 @@ bool CellInterpolator::ParametricCoordinates(
       if (residual <= kResidualTolerance * this->Size)
       {
         // On the solution already (e.g. a pyramid's apex, t = 1).
-        pcoords[0] = p[0];
-        pcoords[1] = p[1];
-        pcoords[2] = p[2];
-        if (iterations)
-        {
-          *iterations = steps;
-        }
-        return true;
+        return Converged(p, steps, pcoords, iterations);
       }
       if (restarted)
       {
@@ -414,26 +431,9 @@ bool CellInterpolator::ParametricCoordinates(
     {
       break;
     }
-    double change = std::abs(d[2]);
-    if (pyramid)
+    if (NewtonStepSize(d, p, pyramid) < tolerance)
     {
-      const double section = std::abs(1.0 - p[2]);
-      change = std::max(change, section * std::max(std::abs(d[0]), std::abs(d[1])));
-    }
-    else
-    {
-      change = std::max(change, std::max(std::abs(d[0]), std::abs(d[1])));
-    }
-    if (change < tolerance)
-    {
-      pcoords[0] = p[0];
-      pcoords[1] = p[1];
-      pcoords[2] = p[2];
-      if (iterations)
-      {
-        *iterations = steps;
-      }
-      return true;
+      return Converged(p, steps, pcoords, iterations);
     }
     for (int i = 0; i < 3; ++i)
     {

@@ -74,10 +74,11 @@ def table(header, rows):
 
 
 def mapper_defaults():
-    """The mapper's defaults, read from its header so the report cannot drift from the code."""
+    """The mapper's defaults, read from the code so the report cannot drift from it."""
     text = open(os.path.join(TOP, "Rendering", "vtkAPCVolumeMapper.h")).read()
+    core = open(os.path.join(TOP, "Rendering", "Core", "apcMomentTransmittance.h")).read()
     moments = int(re.search(r"int NumberOfMoments = (\d+);", text).group(1))
-    beta = float(re.search(r"double Overestimation = ([0-9.]+);", text).group(1))
+    beta = float(re.search(r"double kDefaultOverestimation = ([0-9.]+);", core).group(1))
     resolve = re.search(r"int ResolveMode = (\w+);", text).group(1)
     return beta, moments, resolve
 
