@@ -14,6 +14,7 @@
 
 #include "apcGearTeethScene.h"
 #include "apcMPITest.h"
+#include "apcTestCompositePass.h"
 #include "apcTestStatistics.h"
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCVolumeMapper.h"
@@ -24,7 +25,6 @@
 #include "vtkMPIController.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
-#include "vtkRenderStepsPass.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
@@ -147,15 +147,9 @@ int main(int argc, char* argv[])
   vtkSmartPointer<vtkUnstructuredGrid> piece = apcbench::GearTeethPiece(rank, ranks);
 
   vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetSize(size, size);
   vtkNew<vtkRenderer> renderer;
-  window->AddRenderer(renderer);
   vtkNew<vtkAPCCompositePass> pass;
-  vtkNew<vtkRenderStepsPass> opaque;
-  pass->SetDelegatePass(opaque);
-  pass->SetController(controller);
-  renderer->SetPass(pass);
+  apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(piece);
   vtkNew<vtkVolume> volume;

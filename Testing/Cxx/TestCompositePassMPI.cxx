@@ -6,6 +6,7 @@
 // on the gear teeth seen down the slab axis its segment count must be the analytic one.
 
 #include "apcMPITest.h"
+#include "apcTestCompositePass.h"
 #include "apcTestPuzzles.h"
 #include "apcTestScenes.h"
 #include "vtkAPCCompositePass.h"
@@ -22,7 +23,6 @@
 #include "vtkPointData.h"
 #include "vtkPolyDataMapper.h"
 #include "vtkProperty.h"
-#include "vtkRenderStepsPass.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
@@ -59,14 +59,8 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const apctest
   vtkAPCCompositePass* pass, bool withVolume = true)
 {
   vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetSize(size, size);
   vtkNew<vtkRenderer> renderer;
-  window->AddRenderer(renderer);
-  vtkNew<vtkRenderStepsPass> opaque;
-  pass->SetDelegatePass(opaque);
-  pass->SetController(controller);
-  renderer->SetPass(pass);
+  apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(piece);
   vtkNew<vtkVolume> volume;
