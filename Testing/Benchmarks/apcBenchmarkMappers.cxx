@@ -13,11 +13,14 @@
 #include "vtkAPCVolumeMapper.h"
 
 #include "apcImageMetrics.h"
+#include "apcTestImages.h"
+#include "apcTestPuzzles.h"
+#include "apcTestScenes.h"
+#include "apcTestStatistics.h"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCamera.h"
 #include "vtkCellData.h"
-#include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
 #include "vtkDataSetTriangleFilter.h"
 #include "vtkDoubleArray.h"
@@ -25,8 +28,6 @@
 #include "vtkImageData.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
-#include "vtkPNGWriter.h"
-#include "vtkPiecewiseFunction.h"
 #include "vtkPointData.h"
 #include "vtkProjectedTetrahedraMapper.h"
 #include "vtkRenderWindow.h"
@@ -136,22 +137,17 @@ struct Options
   double SpacingScale = 1.0;
 };
 
-struct Scene
+// A shared scene (its Grid: the original cells, what APC renders) plus what VTK's mappers
+// need and how the camera frames the data (Camera.Position is only the direction from the
+// focal point towards the eye: ResetCamera sets the distance).
+struct MapperScene : apctest::Scene
 {
-  std::string Name;
-  vtkSmartPointer<vtkUnstructuredGrid> Grid; // what APC renders: the original cells
   vtkSmartPointer<vtkUnstructuredGrid> Tets; // what Bunyk, ZSweep and PT render
   double TetSeconds = 0;
   std::string Field;
-  std::vector<std::array<double, 4>> Colours; // scalar, r, g, b
-  std::vector<std::array<double, 2>> Opacities;
-  double UnitDistance = 1;
-  std::array<double, 3> ViewDirection = { 0, 0, 1 }; // from the focal point towards the eye
-  std::array<double, 3> ViewUp = { 0, 1, 0 };
   double Azimuth = 30;
   double Elevation = 25;
   double Dolly = 1.0;
-  double Spacing = 0; // APC's SampleDistance
   std::string Note;
 };
 
@@ -189,17 +185,6 @@ std::vector<std::string> Split(const std::string& text)
     }
   }
   return parts;
-}
-
-double Median(std::vector<double> values)
-{
-  if (values.empty())
-  {
-    return NAN;
-  }
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 // Cell size whose cube fills the bounding box evenly: about the distance between cell faces
@@ -255,25 +240,23 @@ vtkSmartPointer<vtkUnstructuredGrid> KeepField(vtkUnstructuredGrid* in, const st
   return out;
 }
 
-Scene MakeScene(const std::string& name, const Options& options, bool tetrahedra)
+MapperScene MakeScene(const std::string& name, const Options& options, bool tetrahedra)
 {
-  Scene scene;
+  MapperScene scene;
   scene.Name = name;
+  scene.Camera.Position = { 0, 0, 1 };
   if (name == "gear")
   {
     // The APC paper's gear teeth: 4 pieces x 4 slabs x 64 x 64 x 2 hexahedra in [-1,1]^3,
     // a red core (1) inside a blue shell (0.5).
-    vtkNew<vtkAPCPuzzleSource> source;
-    source->SetField(vtkAPCPuzzleSource::SPHERES);
-    source->SetNumberOfPuzzlePieces(4);
-    source->SetSlabsPerPiece(4);
-    source->SetResolution(64);
-    source->Update();
-    scene.Field = source->GetFieldName();
-    scene.Grid = KeepField(source->GetOutput(), scene.Field);
-    scene.Colours = { { 0.0, 0.2, 0.3, 1.0 }, { 0.5, 0.2, 0.4, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
-    scene.Opacities = { { 0.0, 0.0 }, { 0.25, 0.0 }, { 0.5, 0.25 }, { 0.75, 0.05 }, { 1.0, 0.8 } };
-    scene.UnitDistance = 0.1;
+    vtkSmartPointer<vtkUnstructuredGrid> puzzle =
+      apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 4, 64);
+    scene.Field = puzzle->GetPointData()->GetScalars()->GetName();
+    scene.Grid = KeepField(puzzle, scene.Field);
+    scene.TF.Colours = { { 0.0, 0.2, 0.3, 1.0 }, { 0.5, 0.2, 0.4, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
+    scene.TF.Opacities = { { 0.0, 0.0 }, { 0.25, 0.0 }, { 0.5, 0.25 }, { 0.75, 0.05 },
+      { 1.0, 0.8 } };
+    scene.TF.UnitDistance = 0.1;
     scene.Dolly = 1.5; // the spheres, not the clear corners of the box
   }
   else if (name == "wind")
@@ -290,15 +273,15 @@ Scene MakeScene(const std::string& name, const Options& options, bool tetrahedra
     clean->SetInputData(KeepField(raw, scene.Field));
     clean->Update();
     scene.Grid = clean->GetOutput();
-    scene.Colours = { { -125.0, 0.1, 0.2, 0.9 }, { -20.0, 0.5, 0.7, 1.0 }, { 0.0, 0.9, 0.9, 0.9 },
-      { 30.0, 1.0, 0.75, 0.4 }, { 196.0, 0.85, 0.05, 0.05 } };
+    scene.TF.Colours = { { -125.0, 0.1, 0.2, 0.9 }, { -20.0, 0.5, 0.7, 1.0 },
+      { 0.0, 0.9, 0.9, 0.9 }, { 30.0, 1.0, 0.75, 0.4 }, { 196.0, 0.85, 0.05, 0.05 } };
     // About 3 % of the points on either side are visible (p percentiles: 5 % below -25,
     // 5 % above 62), so the upstream over-pressure does not hide the buildings.
-    scene.Opacities = { { -125.0, 0.9 }, { -30.0, 0.25 }, { -20.0, 0.0 }, { 60.0, 0.0 },
+    scene.TF.Opacities = { { -125.0, 0.9 }, { -30.0, 0.25 }, { -20.0, 0.0 }, { 60.0, 0.0 },
       { 100.0, 0.3 }, { 196.0, 0.9 } };
-    scene.UnitDistance = 4.0;
-    scene.ViewDirection = { 0.0, -1.0, 0.0 };
-    scene.ViewUp = { 0.0, 0.0, 1.0 };
+    scene.TF.UnitDistance = 4.0;
+    scene.Camera.Position = { 0.0, -1.0, 0.0 };
+    scene.Camera.ViewUp = { 0.0, 0.0, 1.0 };
     scene.Azimuth = -35;
     scene.Elevation = 35;
     scene.Dolly = 1.3; // the buildings sit low in the middle of the domain
@@ -308,12 +291,12 @@ Scene MakeScene(const std::string& name, const Options& options, bool tetrahedra
   {
     scene.Field = "T";
     scene.Grid = KeepField(ReadGrid(options.Data + "/flange/flange.vtu"), scene.Field);
-    scene.Colours = { { 273.0, 0.23, 0.3, 0.75 }, { 423.0, 0.87, 0.87, 0.87 },
+    scene.TF.Colours = { { 273.0, 0.23, 0.3, 0.75 }, { 423.0, 0.87, 0.87, 0.87 },
       { 573.0, 0.7, 0.02, 0.15 } };
-    scene.Opacities = { { 273.0, 0.15 }, { 423.0, 0.02 }, { 573.0, 0.6 } };
-    scene.UnitDistance = 0.002;
-    scene.ViewDirection = { 0.0, -1.0, 0.0 };
-    scene.ViewUp = { 0.0, 0.0, 1.0 };
+    scene.TF.Opacities = { { 273.0, 0.15 }, { 423.0, 0.02 }, { 573.0, 0.6 } };
+    scene.TF.UnitDistance = 0.002;
+    scene.Camera.Position = { 0.0, -1.0, 0.0 };
+    scene.Camera.ViewUp = { 0.0, 0.0, 1.0 };
     scene.Azimuth = 35;
     scene.Elevation = 30;
     scene.Dolly = 1.6;
@@ -323,7 +306,7 @@ Scene MakeScene(const std::string& name, const Options& options, bool tetrahedra
     std::cerr << "error: unknown dataset " << name << " (gear, wind, flange)\n";
     std::exit(2);
   }
-  scene.Spacing = options.SpacingScale * MeanCellSize(scene.Grid);
+  scene.SampleDistance = options.SpacingScale * MeanCellSize(scene.Grid);
 
   // Bunyk assumes tetrahedra and ZSweep reads only the first three points of every face, so
   // VTK's mappers get VTK's own tetrahedralisation; APC renders the original cells.
@@ -347,15 +330,13 @@ struct Stage
   vtkNew<vtkRenderWindow> Window;
   vtkNew<vtkRenderer> Renderer;
   vtkNew<vtkVolume> Volume;
-  vtkNew<vtkVolumeProperty> Property;
-  vtkNew<vtkColorTransferFunction> Colour;
-  vtkNew<vtkPiecewiseFunction> Opacity;
+  vtkSmartPointer<vtkVolumeProperty> Property;
   Clock::time_point FrameStart = Clock::now();
   double TimeCap = 0;
   bool Aborted = false;
   double LastCpuSeconds = 0;
 
-  Stage(const Scene& scene, int size, double timeCap)
+  Stage(const MapperScene& scene, int size, double timeCap)
     : TimeCap(timeCap)
   {
     this->Window->SetOffScreenRendering(1);
@@ -363,17 +344,7 @@ struct Stage
     this->Window->SetSize(size, size);
     this->Window->AddRenderer(this->Renderer);
     this->Renderer->SetBackground(0.32, 0.34, 0.43); // ParaView's default background
-    for (const auto& c : scene.Colours)
-    {
-      this->Colour->AddRGBPoint(c[0], c[1], c[2], c[3]);
-    }
-    for (const auto& o : scene.Opacities)
-    {
-      this->Opacity->AddPoint(o[0], o[1]);
-    }
-    this->Property->SetColor(this->Colour);
-    this->Property->SetScalarOpacity(this->Opacity);
-    this->Property->SetScalarOpacityUnitDistance(scene.UnitDistance);
+    this->Property = apctest::MakeVolumeProperty(scene.TF);
     this->Property->SetInterpolationTypeToLinear();
     this->Property->ShadeOff();
     this->Volume->SetProperty(this->Property);
@@ -396,13 +367,13 @@ struct Stage
     this->Window->AddObserver(vtkCommand::AbortCheckEvent, abortCheck);
   }
 
-  void SetMapper(vtkAbstractVolumeMapper* mapper, const Scene& scene)
+  void SetMapper(vtkAbstractVolumeMapper* mapper, const MapperScene& scene)
   {
     this->Volume->SetMapper(mapper);
     vtkCamera* camera = this->Renderer->GetActiveCamera();
-    camera->SetFocalPoint(0, 0, 0);
-    camera->SetPosition(scene.ViewDirection.data());
-    camera->SetViewUp(scene.ViewUp.data());
+    camera->SetFocalPoint(scene.Camera.FocalPoint.data());
+    camera->SetPosition(scene.Camera.Position.data());
+    camera->SetViewUp(scene.Camera.ViewUp.data());
     double bounds[6];
     scene.Grid->GetBounds(bounds);
     this->Renderer->ResetCamera(bounds);
@@ -434,18 +405,6 @@ struct Stage
       pixels->GetPointer(0), pixels->GetPointer(0) + 3 * size[0] * size[1]);
   }
 };
-
-void WritePNG(const std::string& path, const std::vector<unsigned char>& rgb, int size)
-{
-  vtkNew<vtkImageData> image;
-  image->SetDimensions(size, size, 1);
-  image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
-  std::copy(rgb.begin(), rgb.end(), static_cast<unsigned char*>(image->GetScalarPointer()));
-  vtkNew<vtkPNGWriter> writer;
-  writer->SetFileName(path.c_str());
-  writer->SetInputData(image);
-  writer->Write();
-}
 
 std::string Format(double value, int precision = 4)
 {
@@ -487,11 +446,11 @@ public:
   void RunDataset(const std::string& name)
   {
     std::cerr << "== " << name << ": preparing\n";
-    const Scene scene = MakeScene(
+    const MapperScene scene = MakeScene(
       name, this->Opt, this->Wants("bunyk") || this->Wants("zsweep") || this->Wants("pt"));
     std::cerr << "   " << scene.Grid->GetNumberOfCells() << " cells, "
               << scene.Tets->GetNumberOfCells() << " tetrahedra (" << Format(scene.TetSeconds, 3)
-              << " s), spacing " << scene.Spacing << "\n";
+              << " s), spacing " << scene.SampleDistance << "\n";
     const size_t first = this->Rows.size();
     const int maxThreads = *std::max_element(this->Opt.Threads.begin(), this->Opt.Threads.end());
 
@@ -510,7 +469,7 @@ public:
       }
       for (int threads : this->Opt.Threads)
       {
-        this->RunAPC(scene, mode, threads, threads == maxThreads, scene.Spacing, "");
+        this->RunAPC(scene, mode, threads, threads == maxThreads, scene.SampleDistance, "");
       }
     }
     // The mean-cell-size spacing takes one sample per original cell, but Bunyk integrates one
@@ -521,7 +480,7 @@ public:
     if (bunykSamples > 0 && apcSamples > 0)
     {
       this->RunAPC(scene, vtkAPCVolumeMapper::MBOIT, maxThreads, true,
-        scene.Spacing * apcSamples / bunykSamples, "mboit-matched");
+        scene.SampleDistance * apcSamples / bunykSamples, "mboit-matched");
     }
     if (this->Wants("zsweep"))
     {
@@ -586,7 +545,7 @@ private:
       this->Opt.Mappers.end();
   }
 
-  Row NewRow(const Scene& scene, vtkIdType cells, const std::string& mapper,
+  Row NewRow(const MapperScene& scene, vtkIdType cells, const std::string& mapper,
     const std::string& mode, const std::string& threads)
   {
     Row row;
@@ -599,7 +558,7 @@ private:
     return row;
   }
 
-  std::string TetNote(const Scene& scene) const
+  std::string TetNote(const MapperScene& scene) const
   {
     return "tetrahedralized by vtkDataSetTriangleFilter (" + Format(scene.TetSeconds, 3) +
       " s, not timed)";
@@ -633,8 +592,8 @@ private:
       cpu.push_back(stage.LastCpuSeconds);
       perFrame(f);
     }
-    row.Frame = Median(frames);
-    row.Cpu = Median(cpu);
+    row.Frame = apctest::Median(frames);
+    row.Cpu = apctest::Median(cpu);
     if (repeats != this->Opt.Repeats)
     {
       row.Note += std::string(row.Note.empty() ? "" : "; ") + "1 timed frame (slow)";
@@ -650,7 +609,7 @@ private:
               << std::right << "\n";
   }
 
-  void KeepImage(const Scene& scene, const std::string& tag, Stage& stage)
+  void KeepImage(const MapperScene& scene, const std::string& tag, Stage& stage)
   {
     if (stage.Aborted)
     {
@@ -659,19 +618,19 @@ private:
     std::vector<unsigned char> pixels = stage.Pixels();
     if (this->Opt.Images)
     {
-      WritePNG(this->Opt.Out + "/" + scene.Name + "_" + tag + ".png", pixels, this->Opt.Size);
+      apctest::WritePNG(this->Opt.Out + "/" + scene.Name + "_" + tag + ".png", pixels,
+        this->Opt.Size, this->Opt.Size);
     }
     this->Images[tag] = std::move(pixels);
   }
 
-  void RunBunyk(const Scene& scene, int threads, bool keepImage)
+  // Bunyk and ZSweep (no common base class with these setters): the tetrahedra, one ray per
+  // pixel, and the integrated cell segments counted as their samples.
+  template <class RayIntegratingMapper>
+  void TimeCountingSegments(
+    Stage& stage, Row& row, RayIntegratingMapper* mapper, const MapperScene& scene)
   {
-    Row row = NewRow(scene, scene.Tets->GetNumberOfCells(), "bunyk", "", std::to_string(threads));
-    row.BunykThreads = threads;
-    Stage stage(scene, this->Opt.Size, this->Opt.TimeCap);
-    vtkNew<vtkUnstructuredGridVolumeRayCastMapper> mapper;
     mapper->SetInputData(scene.Tets);
-    mapper->SetNumberOfThreads(threads);
     mapper->AutoAdjustSampleDistancesOff();
     mapper->SetImageSampleDistance(1.0);
     vtkNew<CountingRayIntegrator> counter;
@@ -687,7 +646,17 @@ private:
           samples.push_back(static_cast<double>(count));
         }
       });
-    row.Samples = Median(samples);
+    row.Samples = apctest::Median(samples);
+  }
+
+  void RunBunyk(const MapperScene& scene, int threads, bool keepImage)
+  {
+    Row row = NewRow(scene, scene.Tets->GetNumberOfCells(), "bunyk", "", std::to_string(threads));
+    row.BunykThreads = threads;
+    Stage stage(scene, this->Opt.Size, this->Opt.TimeCap);
+    vtkNew<vtkUnstructuredGridVolumeRayCastMapper> mapper;
+    mapper->SetNumberOfThreads(threads);
+    this->TimeCountingSegments(stage, row, mapper.GetPointer(), scene);
     row.Note += std::string(row.Note.empty() ? "" : "; ") + TetNote(scene) +
       "; samples = cell segments integrated (early ray termination at alpha 0.99)";
     if (keepImage)
@@ -713,7 +682,7 @@ private:
   }
 
   // label: the mode column, if not the mode's own name.
-  void RunAPC(const Scene& scene, int mode, int threads, bool keepImage, double spacing,
+  void RunAPC(const MapperScene& scene, int mode, int threads, bool keepImage, double spacing,
     const std::string& label)
   {
     const bool mboit = mode == vtkAPCVolumeMapper::MBOIT;
@@ -747,10 +716,10 @@ private:
         vtkDataArray* count = mapper->GetLastImage()->GetFieldData()->GetArray("SampleCount");
         samples.push_back(count ? count->GetTuple1(0) : NAN);
       });
-    row.Pass1 = Median(pass1);
-    row.Pass2 = Median(pass2);
-    row.Setup = Median(setup);
-    row.Samples = Median(samples);
+    row.Pass1 = apctest::Median(pass1);
+    row.Pass2 = apctest::Median(pass2);
+    row.Setup = apctest::Median(setup);
+    row.Samples = apctest::Median(samples);
     row.Spacing = mapper->GetLastSampleDistance();
     std::ostringstream note;
     note << "original cells; mesh build " << Format(mesh, 3) << " s in first frame";
@@ -767,7 +736,7 @@ private:
     this->Rows.push_back(row);
   }
 
-  void RunZSweep(const Scene& scene)
+  void RunZSweep(const MapperScene& scene)
   {
     Row row = NewRow(scene, scene.Tets->GetNumberOfCells(), "zsweep", "", "1");
     row.BunykThreads = 1;
@@ -782,23 +751,7 @@ private:
     }
     Stage stage(scene, this->Opt.Size, this->Opt.TimeCap);
     vtkNew<vtkUnstructuredGridVolumeZSweepMapper> mapper;
-    mapper->SetInputData(scene.Tets);
-    mapper->AutoAdjustSampleDistancesOff();
-    mapper->SetImageSampleDistance(1.0);
-    vtkNew<CountingRayIntegrator> counter;
-    mapper->SetRayIntegrator(counter);
-    stage.SetMapper(mapper, scene);
-    std::vector<double> samples;
-    this->Time(stage, row,
-      [&](int frame)
-      {
-        const int64_t count = counter->TakeCount();
-        if (frame >= 0)
-        {
-          samples.push_back(static_cast<double>(count));
-        }
-      });
-    row.Samples = Median(samples);
+    this->TimeCountingSegments(stage, row, mapper.GetPointer(), scene);
     row.Note += std::string(row.Note.empty() ? "" : "; ") + TetNote(scene) +
       "; single-threaded; samples = cell segments integrated";
     this->KeepImage(scene, "zsweep", stage);
@@ -806,7 +759,7 @@ private:
     this->Rows.push_back(row);
   }
 
-  void RunPT(const Scene& scene, int bunykThreads)
+  void RunPT(const MapperScene& scene, int bunykThreads)
   {
     Row row = NewRow(scene, scene.Tets->GetNumberOfCells(), "pt", "", "gl");
     row.BunykThreads = bunykThreads;
@@ -838,7 +791,7 @@ private:
 
   // How alike APC's images and Bunyk's are, as a viewer sees them (SSIM/PSNR of the 8-bit RGB
   // windows); goes into the note of the APC rows with the most threads.
-  void CompareImages(const Scene& scene)
+  void CompareImages(const MapperScene& scene)
   {
     auto bunyk = this->Images.find("bunyk");
     if (bunyk == this->Images.end())

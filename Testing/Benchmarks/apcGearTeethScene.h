@@ -5,20 +5,17 @@
 #ifndef apcGearTeethScene_h
 #define apcGearTeethScene_h
 
+#include "apcTestPuzzles.h"
+#include "apcTestTransferFunctions.h"
 #include "vtkAPCPuzzleSource.h"
 #include "vtkAPCVolumeMapper.h"
 
 #include "vtkCamera.h"
-#include "vtkColorTransferFunction.h"
-#include "vtkNew.h"
-#include "vtkPiecewiseFunction.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
-#include "vtkVolumeProperty.h"
 
-#include <algorithm>
 #include <cmath>
 
 namespace apcbench
@@ -31,38 +28,16 @@ constexpr double kGearBounds[6] = { -1, 1, -1, 1, -1, 1 };
 inline vtkSmartPointer<vtkUnstructuredGrid> GearTeethPiece(
   int piece, int pieces, int numberOfPieces = -1)
 {
-  vtkNew<vtkAPCPuzzleSource> source;
-  source->SetNumberOfPuzzlePieces(pieces);
-  source->SetSlabsPerPiece(4);
-  source->SetResolution(32);
-  source->SetField(vtkAPCPuzzleSource::SANDWICH);
-  source->UpdatePiece(piece, numberOfPieces < 0 ? pieces : numberOfPieces, 0);
-  return source->GetOutput();
+  return apctest::PuzzlePiece(vtkAPCPuzzleSource::SANDWICH, pieces, 4, 32, piece, 2,
+    numberOfPieces < 0 ? pieces : numberOfPieces);
 }
 
-// One colour per puzzle piece (the Sandwich field is piece / max(pieces - 1, 1)), all fairly
-// opaque, as TestVolumeMapperQuality's SandwichTF.
+// One colour per puzzle piece, as TestVolumeMapperQuality's gear teeth.
 inline void ConfigureGearTeethVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, int pieces)
 {
-  static const double palette[8][3] = { { 0.9, 0.1, 0.1 }, { 0.1, 0.8, 0.1 }, { 0.1, 0.2, 0.9 },
-    { 0.9, 0.8, 0.1 }, { 0.8, 0.1, 0.8 }, { 0.1, 0.8, 0.8 }, { 0.9, 0.5, 0.1 }, { 0.6, 0.6, 0.6 } };
-  vtkNew<vtkColorTransferFunction> colour;
-  const double denominator = std::max(pieces - 1, 1);
-  for (int p = 0; p < pieces; ++p)
-  {
-    const double* c = palette[p % 8];
-    colour->AddRGBPoint(p / denominator, c[0], c[1], c[2]);
-  }
-  vtkNew<vtkPiecewiseFunction> opacity;
-  opacity->AddPoint(0.0, 0.6);
-  opacity->AddPoint(1.0, 0.6);
-  vtkNew<vtkVolumeProperty> property;
-  property->SetColor(colour);
-  property->SetScalarOpacity(opacity);
-  property->SetScalarOpacityUnitDistance(0.1);
   mapper->SetSampleDistance(kGearSampleDistance);
   volume->SetMapper(mapper);
-  volume->SetProperty(property);
+  volume->SetProperty(apctest::MakeVolumeProperty(apctest::SandwichTF(pieces)));
 }
 
 // Camera `camera` (0-3) of the orbit: 30 degrees above the equator, azimuth kGearAzimuths.

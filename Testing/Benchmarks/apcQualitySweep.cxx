@@ -10,7 +10,9 @@
 // DIR/quality.csv gets the rows, DIR/<scene>_exact.png the reference pictures and
 // DIR/<scene>_b<beta>_m<moments>_<resolve>.png every MBOIT picture (over black, as compared).
 
-#include "apcTestScenes.h"
+#include "apcTestImages.h"
+#include "apcTestPuzzles.h"
+#include "apcTestRender.h"
 
 #include "apcImageMetrics.h"
 #include "vtkAPCPuzzleSource.h"
@@ -48,15 +50,6 @@ const char* ResolveName(int resolve)
   return resolve == vtkAPCVolumeMapper::PAPER_SUM ? "PAPER_SUM" : "RENORMALISED";
 }
 
-struct Scene
-{
-  std::string Name;
-  vtkSmartPointer<vtkDataSet> Grid;
-  apctest::TransferFunction TF;
-  apctest::View View;
-  double SampleDistance = 0.0;
-};
-
 struct Row
 {
   std::string Scene;
@@ -66,47 +59,24 @@ struct Row
   apc::ImageComparison C;
 };
 
-// One colour per puzzle piece (Sandwich = piece / max(pieces - 1, 1)), all fairly opaque;
-// the transfer function of TestVolumeMapperQuality's gear-teeth test.
-apctest::TransferFunction SandwichTF()
+std::vector<apctest::Scene> MakeScenes(const std::string& data, const std::string& wanted)
 {
-  apctest::TransferFunction tf;
-  tf.Colours = { { 0.0, 0.9, 0.1, 0.1 }, { 1.0 / 3, 0.1, 0.8, 0.1 }, { 2.0 / 3, 0.1, 0.2, 0.9 },
-    { 1.0, 0.9, 0.8, 0.1 } };
-  tf.Opacities = { { 0.0, 0.6 }, { 1.0, 0.6 } };
-  tf.UnitDistance = 0.1;
-  return tf;
-}
-
-vtkSmartPointer<vtkDataSet> Puzzle(int field, int pieces, int slabs, int resolution)
-{
-  vtkNew<vtkAPCPuzzleSource> source;
-  source->SetField(field);
-  source->SetNumberOfPuzzlePieces(pieces);
-  source->SetSlabsPerPiece(slabs);
-  source->SetResolution(resolution);
-  source->Update();
-  return source->GetOutput();
-}
-
-std::vector<Scene> MakeScenes(const std::string& data, const std::string& wanted)
-{
-  std::vector<Scene> scenes;
+  std::vector<apctest::Scene> scenes;
   // Synthetic scenes: the lattice spacing of TestVolumeMapperQuality.
   const apctest::View oblique = apctest::ObliqueView(kSize);
-  scenes.push_back({ "spheres", Puzzle(vtkAPCPuzzleSource::SPHERES, 4, 4, 32), apctest::SpheresTF(),
-    oblique, 0.01 });
+  scenes.push_back({ "spheres", apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 4, 32),
+    apctest::SpheresTF(), oblique, 0.01 });
   // The spheres close up (TestVolumeMapperRegression's view): translucent shells filling the
   // picture in front of the opaque core, where a high beta tints the core.
   apctest::View close = oblique;
   close.Position = { 2.2, 1.5, 2.7 };
   close.ViewAngle = 30;
-  scenes.push_back({ "spheres-close", Puzzle(vtkAPCPuzzleSource::SPHERES, 4, 4, 32),
+  scenes.push_back({ "spheres-close", apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 4, 32),
     apctest::SpheresTF(), close, 0.01 });
-  scenes.push_back(
-    { "sandwich", Puzzle(vtkAPCPuzzleSource::SANDWICH, 3, 2, 24), SandwichTF(), oblique, 0.01 });
-  scenes.push_back(
-    { "gearteeth", Puzzle(vtkAPCPuzzleSource::SANDWICH, 4, 4, 24), SandwichTF(), oblique, 0.01 });
+  scenes.push_back({ "sandwich", apctest::PuzzleGrid(vtkAPCPuzzleSource::SANDWICH, 3, 2, 24),
+    apctest::SandwichTF(4), oblique, 0.01 });
+  scenes.push_back({ "gearteeth", apctest::PuzzleGrid(vtkAPCPuzzleSource::SANDWICH, 4, 4, 24),
+    apctest::SandwichTF(4), oblique, 0.01 });
 
   // OpenFOAM's windAroundBuildings, 8 Scotch pieces read as one grid; transfer function and
   // camera of TestVolumeMapperRegression's WindAroundBuildings test.
@@ -125,16 +95,17 @@ std::vector<Scene> MakeScenes(const std::string& data, const std::string& wanted
   if (!wanted.empty())
   {
     const std::string list = "," + wanted + ",";
-    scenes.erase(
-      std::remove_if(scenes.begin(), scenes.end(),
-        [&](const Scene& scene) { return list.find("," + scene.Name + ",") == std::string::npos; }),
+    scenes.erase(std::remove_if(scenes.begin(), scenes.end(),
+                   [&](const apctest::Scene& scene)
+                   { return list.find("," + scene.Name + ",") == std::string::npos; }),
       scenes.end());
   }
   return scenes;
 }
 
 // The volume alone, premultiplied RGB over black, of one frame.
-std::vector<float> RenderRGB(const Scene& scene, int mode, double beta, int moments, int resolve)
+std::vector<float> RenderRGB(
+  const apctest::Scene& scene, int mode, double beta, int moments, int resolve)
 {
   const apctest::Frame frame = apctest::Render(
     scene.Grid,
@@ -146,7 +117,7 @@ std::vector<float> RenderRGB(const Scene& scene, int mode, double beta, int mome
       m->SetNumberOfMoments(moments);
       m->SetResolveMode(resolve);
     },
-    scene.TF, scene.View);
+    scene.TF, scene.Camera);
   if (frame.RGBA.size() != static_cast<size_t>(4 * kSize * kSize))
   {
     std::cerr << "error: no image for " << scene.Name << "\n";
@@ -214,13 +185,13 @@ int main(int argc, char* argv[])
   std::cout << header << std::endl;
 
   std::vector<Row> rows;
-  const std::vector<Scene> scenes = MakeScenes(data, wanted);
+  const std::vector<apctest::Scene> scenes = MakeScenes(data, wanted);
   if (scenes.empty())
   {
     std::cerr << "error: no scene matches --scenes " << wanted << "\n";
     return 1;
   }
-  for (const Scene& scene : scenes)
+  for (const apctest::Scene& scene : scenes)
   {
     const auto exact = RenderRGB(scene, vtkAPCVolumeMapper::EXACT, 0.3, 4, 0);
     // PNGs for a look, over black like the comparison.
@@ -258,7 +229,7 @@ int main(int argc, char* argv[])
 
   std::cout << "\nbest by SSIM per scene (rank of the paper's default beta=0.3, 4 moments):\n";
   std::map<std::string, double> meanSsim;
-  for (const Scene& scene : scenes)
+  for (const apctest::Scene& scene : scenes)
   {
     std::vector<Row> sorted;
     for (const Row& r : rows)

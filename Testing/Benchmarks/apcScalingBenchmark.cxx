@@ -13,6 +13,9 @@
 // Not run by ctest; see run-scaling.sh.
 
 #include "apcGearTeethScene.h"
+#include "apcMPITest.h"
+#include "apcTestCompositePass.h"
+#include "apcTestStatistics.h"
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCVolumeMapper.h"
 
@@ -22,7 +25,6 @@
 #include "vtkMPIController.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
-#include "vtkRenderStepsPass.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
@@ -48,17 +50,6 @@ const char* const APCStages[] = { "pass1", "allreduce", "pass2", "reduce", "reso
 const char* const SegmentStages[] = { "segments", "exchange", "blend_segments", "gather" };
 constexpr int NumberOfAPCStages = 5;
 constexpr int NumberOfSegmentStages = 4;
-
-double Median(std::vector<double> values)
-{
-  if (values.empty())
-  {
-    return 0;
-  }
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 // Rank 0's one-process render of all pieces (its own window, no pass) in the given mode.
 vtkSmartPointer<vtkFloatArray> OneProcessImage(int pieces, int size, int camera, int mode)
@@ -110,9 +101,7 @@ void Usage(const char* program)
 
 int main(int argc, char* argv[])
 {
-  vtkNew<vtkMPIController> controller;
-  controller->Initialize(&argc, &argv);
-  vtkMultiProcessController::SetGlobalController(controller);
+  vtkSmartPointer<vtkMPIController> controller = apctest::StartMPI(&argc, &argv);
   const int rank = controller->GetLocalProcessId();
   const int ranks = controller->GetNumberOfProcesses();
 
@@ -158,15 +147,9 @@ int main(int argc, char* argv[])
   vtkSmartPointer<vtkUnstructuredGrid> piece = apcbench::GearTeethPiece(rank, ranks);
 
   vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetSize(size, size);
   vtkNew<vtkRenderer> renderer;
-  window->AddRenderer(renderer);
   vtkNew<vtkAPCCompositePass> pass;
-  vtkNew<vtkRenderStepsPass> opaque;
-  pass->SetDelegatePass(opaque);
-  pass->SetController(controller);
-  renderer->SetPass(pass);
+  apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(piece);
   vtkNew<vtkVolume> volume;
@@ -225,7 +208,7 @@ int main(int argc, char* argv[])
       {
         char line[1024];
         std::snprintf(line, sizeof(line), "%d,%s,%d,%g,%d,%d,%.6f", ranks, apc ? "APC" : "SEGMENTS",
-          camera, apcbench::kGearAzimuths[camera], size, frames, Median(maxima[0]));
+          camera, apcbench::kGearAzimuths[camera], size, frames, apctest::Median(maxima[0], 0));
         rows << line;
         // Stage columns: the APC ones, then the SEGMENTS ones; the other mode's are empty.
         for (int s = 0; s < NumberOfAPCStages; ++s)
@@ -233,7 +216,7 @@ int main(int argc, char* argv[])
           rows << ',';
           if (apc)
           {
-            std::snprintf(line, sizeof(line), "%.6f", Median(maxima[1 + s]));
+            std::snprintf(line, sizeof(line), "%.6f", apctest::Median(maxima[1 + s], 0));
             rows << line;
           }
         }
@@ -242,7 +225,7 @@ int main(int argc, char* argv[])
           rows << ',';
           if (!apc)
           {
-            std::snprintf(line, sizeof(line), "%.6f", Median(maxima[1 + s]));
+            std::snprintf(line, sizeof(line), "%.6f", apctest::Median(maxima[1 + s], 0));
             rows << line;
           }
         }

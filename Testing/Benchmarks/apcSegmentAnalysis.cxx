@@ -303,7 +303,7 @@ int main(int argc, char* argv[])
         }
         pieces.push_back(piece);
       }
-      // The transfer function of apcTestScenes.h's WindTF (paraview_vs_apc.py's opacity).
+      // The transfer function of apctest::WindTF (paraview_vs_apc.py's opacity).
       vtkNew<vtkAPCVolumeMapper> mapper;
       vtkNew<vtkVolume> volume;
       volume->SetMapper(mapper);

@@ -5,30 +5,29 @@
 // sort-last baseline (CompositeMode SEGMENTS) must equal the one-process EXACT image, and
 // on the gear teeth seen down the slab axis its segment count must be the analytic one.
 
+#include "apcMPITest.h"
+#include "apcTestCompositePass.h"
+#include "apcTestPuzzles.h"
+#include "apcTestScenes.h"
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCPuzzleSource.h"
 #include "vtkAPCVolumeMapper.h"
 
 #include "vtkActor.h"
 #include "vtkAppendFilter.h"
-#include "vtkCamera.h"
-#include "vtkColorTransferFunction.h"
 #include "vtkDataArray.h"
 #include "vtkImageData.h"
 #include "vtkMPIController.h"
 #include "vtkNew.h"
-#include "vtkPiecewiseFunction.h"
 #include "vtkPlaneSource.h"
 #include "vtkPointData.h"
 #include "vtkPolyDataMapper.h"
 #include "vtkProperty.h"
-#include "vtkRenderStepsPass.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
-#include "vtkVolumeProperty.h"
 #include "vtkXMLUnstructuredGridReader.h"
 
 #include <array>
@@ -39,75 +38,29 @@
 
 namespace
 {
-int failures = 0;
+using apctest::Check;
 
-void Check(bool ok, int rank, const std::string& what)
+void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const apctest::Scene& scene)
 {
-  if (!ok)
-  {
-    std::fprintf(stderr, "rank %d: FAILED: %s\n", rank, what.c_str());
-    ++failures;
-  }
-}
-
-struct Scene
-{
-  vtkSmartPointer<vtkUnstructuredGrid> Grid;
-  double Min, Max; // scalar range of the transfer function
-  double Unit;     // opacity unit distance
-  double Spacing;  // sample distance
-  double Position[3];
-  double FocalPoint[3];
-  double ViewUp[3];
-  double ParallelScale = 0; // > 0: parallel projection
-};
-
-void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const Scene& scene)
-{
-  vtkNew<vtkColorTransferFunction> colour;
-  colour->AddRGBPoint(scene.Min, 0.2, 0.3, 1.0);
-  colour->AddRGBPoint(0.5 * (scene.Min + scene.Max), 0.9, 0.9, 0.9);
-  colour->AddRGBPoint(scene.Max, 1.0, 0.2, 0.1);
-  vtkNew<vtkPiecewiseFunction> opacity;
-  opacity->AddPoint(scene.Min, 0.05);
-  opacity->AddPoint(scene.Max, 0.6);
-  vtkNew<vtkVolumeProperty> property;
-  property->SetColor(colour);
-  property->SetScalarOpacity(opacity);
-  property->SetScalarOpacityUnitDistance(scene.Unit);
-  mapper->SetSampleDistance(scene.Spacing);
+  mapper->SetSampleDistance(scene.SampleDistance);
   volume->SetMapper(mapper);
-  volume->SetProperty(property);
+  volume->SetProperty(apctest::MakeVolumeProperty(scene.TF));
 }
 
-void SetCamera(vtkRenderer* renderer, const Scene& scene, const double bounds[6])
+void SetCamera(vtkRenderer* renderer, const apctest::Scene& scene, const double bounds[6])
 {
-  vtkCamera* camera = renderer->GetActiveCamera();
-  camera->SetPosition(scene.Position);
-  camera->SetFocalPoint(scene.FocalPoint);
-  camera->SetViewUp(scene.ViewUp);
-  if (scene.ParallelScale > 0)
-  {
-    camera->ParallelProjectionOn();
-    camera->SetParallelScale(scene.ParallelScale);
-  }
+  apctest::ApplyView(renderer, scene.Camera);
   renderer->ResetCameraClippingRange(bounds);
 }
 
 // The display rank's float RGBA of the distributed render of each rank's piece.
-std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& scene,
+std::vector<float> RenderDistributed(vtkMPIController* controller, const apctest::Scene& scene,
   vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
   vtkAPCCompositePass* pass, bool withVolume = true)
 {
   vtkNew<vtkRenderWindow> window;
-  window->SetOffScreenRendering(1);
-  window->SetSize(size, size);
   vtkNew<vtkRenderer> renderer;
-  window->AddRenderer(renderer);
-  vtkNew<vtkRenderStepsPass> opaque;
-  pass->SetDelegatePass(opaque);
-  pass->SetController(controller);
-  renderer->SetPass(pass);
+  apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(piece);
   vtkNew<vtkVolume> volume;
@@ -149,7 +102,7 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& 
 
 // The one-process image of the whole grid (the reference), MBOIT or EXACT.
 std::vector<float> RenderWhole(
-  const Scene& scene, int size, bool plane, int mode = vtkAPCVolumeMapper::MBOIT)
+  const apctest::Scene& scene, int size, bool plane, int mode = vtkAPCVolumeMapper::MBOIT)
 {
   vtkNew<vtkRenderWindow> window;
   window->SetOffScreenRendering(1);
@@ -210,7 +163,8 @@ void GlobalBounds(vtkMPIController* controller, vtkUnstructuredGrid* piece, doub
 // In SEGMENTS mode the reference is the one-process EXACT image; returns the pass's segment
 // statistics (average, max) on every rank.
 std::array<double, 2> CompareWithWhole(vtkMPIController* controller, const char* name,
-  const Scene& scene, vtkUnstructuredGrid* piece, int size, bool plane, bool segments = false)
+  const apctest::Scene& scene, vtkUnstructuredGrid* piece, int size, bool plane,
+  bool segments = false)
 {
   const int rank = controller->GetLocalProcessId();
   const vtkIdType cellsBefore = piece->GetNumberOfCells();
@@ -285,15 +239,22 @@ std::array<double, 2> CompareWithWhole(vtkMPIController* controller, const char*
     static_cast<double>(pass->GetLastMaxSegmentsPerPixel()) };
 }
 
+// The gear teeth (SANDWICH) or spheres of the puzzle source: piece `piece` of `pieces`.
 vtkSmartPointer<vtkUnstructuredGrid> PuzzlePiece(
   int piece, int pieces, int puzzlePieces, int field = vtkAPCPuzzleSource::SPHERES)
 {
-  vtkNew<vtkAPCPuzzleSource> source;
-  source->SetNumberOfPuzzlePieces(puzzlePieces);
-  source->SetResolution(12);
-  source->SetField(field);
-  source->UpdatePiece(piece, pieces, 0);
-  return source->GetOutput();
+  return apctest::PuzzlePiece(field, puzzlePieces, 4, 12, piece, 2, pieces);
+}
+
+apctest::Scene MakeScene(vtkUnstructuredGrid* grid, const apctest::TransferFunction& tf,
+  double spacing, const apctest::View& view)
+{
+  apctest::Scene scene;
+  scene.Grid = grid;
+  scene.TF = tf;
+  scene.Camera = view;
+  scene.SampleDistance = spacing;
+  return scene;
 }
 
 vtkSmartPointer<vtkUnstructuredGrid> WindPieces(int rank, int ranks)
@@ -322,30 +283,36 @@ vtkSmartPointer<vtkUnstructuredGrid> WindPieces(int rank, int ranks)
 
 int main(int argc, char* argv[])
 {
-  vtkNew<vtkMPIController> controller;
-  controller->Initialize(&argc, &argv);
-  vtkMultiProcessController::SetGlobalController(controller);
+  vtkSmartPointer<vtkMPIController> controller = apctest::StartMPI(&argc, &argv);
   const int rank = controller->GetLocalProcessId();
   const int ranks = controller->GetNumberOfProcesses();
 
   // The gear-teeth puzzle: every rank's bounds overlap every other's.
-  Scene puzzle{ nullptr, 0.0, 1.0, 0.2, 0.02, { 2.5, 1.7, 3.1 }, { 0, 0, 0 }, { 0, 1, 0 } };
-  puzzle.Grid = PuzzlePiece(0, 1, ranks);
+  apctest::View oblique;
+  oblique.Parallel = false;
+  oblique.Position = { 2.5, 1.7, 3.1 };
+  const apctest::Scene puzzle =
+    MakeScene(PuzzlePiece(0, 1, ranks), apctest::BlueToRedTF(0.0, 1.0, 0.2), 0.02, oblique);
   CompareWithWhole(controller, "puzzle", puzzle, PuzzlePiece(rank, ranks, ranks), 96, false);
   CompareWithWhole(controller, "puzzle+plane", puzzle, PuzzlePiece(rank, ranks, ranks), 96, true);
 
   // Fewer pieces than ranks: a rank with no cells at all.
   if (ranks > 1)
   {
-    Scene sparse = puzzle;
+    apctest::Scene sparse = puzzle;
     sparse.Grid = PuzzlePiece(0, 1, ranks - 1);
     CompareWithWhole(
       controller, "empty-rank", sparse, PuzzlePiece(rank, ranks, ranks - 1), 64, false);
   }
 
   // Real data: OpenFOAM windAroundBuildings, Scotch pieces.
-  Scene wind{ nullptr, 0.0, 20.0, 20.0, 2.0, { -120, -260, 420 }, { 155, 90, 40 }, { 0, 0, 1 } };
-  wind.Grid = WindPieces(0, 1);
+  apctest::View windView;
+  windView.Parallel = false;
+  windView.Position = { -120, -260, 420 };
+  windView.FocalPoint = { 155, 90, 40 };
+  windView.ViewUp = { 0, 0, 1 };
+  const apctest::Scene wind =
+    MakeScene(WindPieces(0, 1), apctest::BlueToRedTF(0.0, 20.0, 20.0), 2.0, windView);
   CompareWithWhole(controller, "wind", wind, WindPieces(rank, ranks), 96, false);
 
   // The exact sort-last baseline against the one-process EXACT image.
@@ -355,7 +322,7 @@ int main(int argc, char* argv[])
     controller, "segments puzzle+plane", puzzle, PuzzlePiece(rank, ranks, ranks), 96, true, true);
   if (ranks > 1)
   {
-    Scene sparse = puzzle;
+    apctest::Scene sparse = puzzle;
     sparse.Grid = PuzzlePiece(0, 1, ranks - 1);
     CompareWithWhole(controller, "segments empty-rank", sparse, PuzzlePiece(rank, ranks, ranks - 1),
       64, false, true);
@@ -366,8 +333,10 @@ int main(int argc, char* argv[])
   // ray crosses all K * 4 slabs): each rank's 4 slabs are 4 segments separated by the other
   // ranks' slabs, K * 4 per pixel in all; one rank alone has one (its slabs touch).
   {
-    Scene gear{ nullptr, 0.0, 1.0, 0.2, 0.02, { 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 }, 0.9 };
-    gear.Grid = PuzzlePiece(0, 1, ranks, vtkAPCPuzzleSource::SANDWICH);
+    apctest::View down;
+    down.ParallelScale = 0.9;
+    const apctest::Scene gear = MakeScene(PuzzlePiece(0, 1, ranks, vtkAPCPuzzleSource::SANDWICH),
+      apctest::BlueToRedTF(0.0, 1.0, 0.2), 0.02, down);
     const std::array<double, 2> stats = CompareWithWhole(controller, "segments gear teeth", gear,
       PuzzlePiece(rank, ranks, ranks, vtkAPCPuzzleSource::SANDWICH), 32, false, true);
     const double expected = ranks == 1 ? 1.0 : 4.0 * ranks;
@@ -435,13 +404,5 @@ int main(int argc, char* argv[])
     Check(!pass->GetLastFrameFailed(), rank, "1x1 window renders");
   }
 
-  int globalFailures = 0;
-  controller->AllReduce(&failures, &globalFailures, 1, vtkCommunicator::SUM_OP);
-  if (rank == 0)
-  {
-    std::printf("%s: %d failure(s) on %d ranks\n", globalFailures ? "FAILED" : "PASSED",
-      globalFailures, ranks);
-  }
-  controller->Finalize();
-  return globalFailures == 0 ? 0 : 1;
+  return apctest::FinishMPITest(controller);
 }

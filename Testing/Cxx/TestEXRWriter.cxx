@@ -1,7 +1,9 @@
 // The float images of a frame survive a round trip through OpenEXR (read back with OpenEXR's
 // own reader, not ours): channel names, values bit for bit (float32), orientation.
 
-#include "apcTestScenes.h"
+#include "apcTestGrids.h"
+#include "apcTestImages.h"
+#include "apcTestRender.h"
 
 #include "vtkAPCEXRWriter.h"
 

@@ -4,6 +4,7 @@
 // worst case: the expected cell counts, no cell generated twice, and every pair of
 // non-empty rank bounds overlapping.
 
+#include "apcMPITest.h"
 #include "vtkAPCPuzzleSource.h"
 #include "vtkCellData.h"
 #include "vtkDataArray.h"
@@ -19,16 +20,7 @@
 
 namespace
 {
-int failures = 0;
-
-void Check(bool ok, int rank, const char* what)
-{
-  if (!ok)
-  {
-    std::fprintf(stderr, "rank %d: FAILED: %s\n", rank, what);
-    ++failures;
-  }
-}
+using apctest::Check;
 
 bool Overlap(const double* a, const double* b)
 {
@@ -123,9 +115,7 @@ void RunCase(vtkMPIController* controller, int puzzlePieces, int slabs, int reso
 
 int main(int argc, char* argv[])
 {
-  vtkNew<vtkMPIController> controller;
-  controller->Initialize(&argc, &argv);
-  vtkMultiProcessController::SetGlobalController(controller);
+  vtkSmartPointer<vtkMPIController> controller = apctest::StartMPI(&argc, &argv);
   const int ranks = controller->GetNumberOfProcesses();
 
   RunCase(controller, 0, 4, 8, 2);         // one puzzle piece per rank, the paper's 4 slabs
@@ -134,14 +124,5 @@ int main(int argc, char* argv[])
   RunCase(
     controller, ranks > 1 ? ranks - 1 : 1, 4, 4, 2); // fewer pieces than ranks: one rank empty
 
-  // Every rank must agree on the verdict, so a failure anywhere fails the test.
-  int globalFailures = 0;
-  controller->AllReduce(&failures, &globalFailures, 1, vtkCommunicator::SUM_OP);
-  if (controller->GetLocalProcessId() == 0)
-  {
-    std::printf("%s: %d failure(s) on %d ranks\n", globalFailures ? "FAILED" : "PASSED",
-      globalFailures, ranks);
-  }
-  controller->Finalize();
-  return globalFailures == 0 ? 0 : 1;
+  return apctest::FinishMPITest(controller);
 }

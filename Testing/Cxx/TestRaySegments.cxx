@@ -8,6 +8,9 @@
 //   pixel, K * SlabsPerPiece in all, and the whole grid one.
 
 #include "apcTestGrids.h"
+#include "apcTestImages.h"
+#include "apcTestPuzzles.h"
+#include "apcTestTransferFunctions.h"
 
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
@@ -26,23 +29,6 @@
 
 namespace
 {
-// Colour and opacity ramps over [0,1]; fully transparent below 0.2, so that transparent
-// samples sit inside runs and whole runs can be transparent.
-apc::TransferTable RampTable(double spacing, bool transparentBelow)
-{
-  const int n = 256;
-  std::vector<std::array<float, 3>> colours(n);
-  std::vector<double> opacities(n);
-  for (int i = 0; i < n; ++i)
-  {
-    const double s = i / (n - 1.0);
-    colours[i] = { static_cast<float>(s), static_cast<float>(0.3 + 0.5 * s * (1 - s)),
-      static_cast<float>(1 - s) };
-    opacities[i] = (transparentBelow && s < 0.2) ? 0.0 : 0.02 + 0.5 * (s - 0.2) * (s - 0.2);
-  }
-  return apc::TransferTable(0.0, 1.0, colours, opacities, spacing, 0.1);
-}
-
 struct SplitResult
 {
   double MaxDiff = 0;
@@ -61,7 +47,7 @@ SplitResult CompositeSplit(vtkUnstructuredGrid* whole,
   const auto& b = wholeMesh.GetBounds();
   const double diagonal = std::sqrt(
     (b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) + (b[5] - b[4]) * (b[5] - b[4]));
-  const apc::TransferTable table = RampTable(diagonal / 300, transparentBelow);
+  const apc::TransferTable table = apctest::RampTable(diagonal / 300, transparentBelow);
   const int w = camera.GetWidth();
   const int h = camera.GetHeight();
   const size_t pixels = static_cast<size_t>(w) * h;
@@ -233,7 +219,7 @@ TEST(RaySegments, GearTeethSegmentCounts)
   const int slabs = 3;
   const apc::RayCamera camera(
     { 0, 0, 5 }, { 0, 0, 0 }, { 0, 1, 0 }, 30.0, true, 0.9, size, size, 0.1, 100.0);
-  const apc::TransferTable table = RampTable(0.01, false);
+  const apc::TransferTable table = apctest::RampTable(0.01, false);
   for (int k : { 1, 2, 3, 4, 5 })
   {
     apc::VolumeRayMarcher marcher;

@@ -3,7 +3,8 @@
 // and tetrahedra of the same linear field give the same image, and opaque geometry stops
 // the rays where it is.
 
-#include "apcTestScenes.h"
+#include "apcTestGrids.h"
+#include "apcTestRender.h"
 
 #include "vtkPlaneSource.h"
 #include "vtkPolyDataMapper.h"

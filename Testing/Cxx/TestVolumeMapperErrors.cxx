@@ -5,6 +5,8 @@
 
 #include "apcMomentTransmittance.h"
 #include "apcTestGrids.h"
+#include "apcTestImages.h"
+#include "apcTestRender.h"
 
 #include "vtkCommand.h"
 #include "vtkExecutive.h"

@@ -8,6 +8,9 @@
 // - a ray that lies exactly in a face plane shared by two cells samples it once.
 
 #include "apcTestGrids.h"
+#include "apcTestImages.h"
+#include "apcTestPuzzles.h"
+#include "apcTestRender.h"
 
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
@@ -30,15 +33,6 @@
 namespace
 {
 using apctest::Frame;
-
-apctest::TransferFunction RampTF()
-{
-  apctest::TransferFunction tf;
-  tf.Colours = { { 0.0, 0.1, 0.2, 1.0 }, { 0.5, 0.9, 0.9, 0.2 }, { 1.0, 1.0, 0.1, 0.0 } };
-  tf.Opacities = { { 0.0, 0.02 }, { 0.4, 0.1 }, { 1.0, 0.6 } };
-  tf.UnitDistance = 0.2;
-  return tf;
-}
 
 double Smooth(double x, double y, double z)
 {
@@ -125,27 +119,11 @@ TEST(VolumeMapperInvariance, ShuffledMixedCellsRenderTheSame)
 {
   auto grid = apctest::MixedBlock(8, Smooth);
   std::cout << "mixed block: " << grid->GetNumberOfCells() << " cells\n";
-  ExpectShuffleInvariant(grid, RampTF(), apctest::ObliqueView(96), "mixed cells");
+  ExpectShuffleInvariant(grid, apctest::RampTF(), apctest::ObliqueView(96), "mixed cells");
 }
 
 //------------------------------------------------------------------------------
 // Split sums on the core ray marcher, as distributed APC uses it.
-
-apc::TransferTable RampTable(double spacing)
-{
-  // Colour and opacity ramps over [0,1], 256 entries.
-  const int n = 256;
-  std::vector<std::array<float, 3>> colours(n);
-  std::vector<double> opacities(n);
-  for (int i = 0; i < n; ++i)
-  {
-    const double s = i / (n - 1.0);
-    colours[i] = { static_cast<float>(s), static_cast<float>(0.3 + 0.5 * s * (1 - s)),
-      static_cast<float>(1 - s) };
-    opacities[i] = s < 0.2 ? 0.0 : 0.02 + 0.5 * (s - 0.2) * (s - 0.2);
-  }
-  return apc::TransferTable(0.0, 1.0, colours, opacities, spacing, 0.1);
-}
 
 struct Sums
 {
@@ -244,7 +222,7 @@ SplitErrors CompareSplit(vtkUnstructuredGrid* whole,
   const auto& b = wholeMesh.GetBounds();
   const double diagonal = std::sqrt(
     (b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) + (b[5] - b[4]) * (b[5] - b[4]));
-  const apc::TransferTable table = RampTable(diagonal / 300);
+  const apc::TransferTable table = apctest::RampTable(diagonal / 300, true);
   double tmin = 0;
   double tmax = 0;
   camera.DistanceRange(b, tmin, tmax);
@@ -540,7 +518,7 @@ TEST(VolumeMapperInvariance, HiddenCellsAreSkipped)
   auto grid = apctest::MixedBlock(8, Smooth);
   ExpectGhostsSkipped(
     grid, vtkDataSetAttributes::HIDDENCELL,
-    [grid](vtkIdType c) { return apctest::CellCentre(grid, c)[0] > 0.1; }, RampTF(),
+    [grid](vtkIdType c) { return apctest::CellCentre(grid, c)[0] > 0.1; }, apctest::RampTF(),
     "mixed x > 0.1 HIDDENCELL");
 }
 
@@ -589,7 +567,7 @@ TEST(VolumeMapperInvariance, CachedAndRemarchedPassTwoAgree)
   double tmax = 0;
   camera.DistanceRange(mesh.GetBounds(), tmin, tmax);
   const apc::LogDepthWarp warp(tmin, tmax);
-  const apc::TransferTable table = RampTable(0.01);
+  const apc::TransferTable table = apctest::RampTable(0.01, true);
   const size_t pixels = 64 * 64;
   std::vector<std::vector<double>> colours;
   for (size_t budget : { size_t(1) << 30, size_t(0), size_t(1000) })

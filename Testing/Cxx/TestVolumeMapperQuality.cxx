@@ -2,8 +2,9 @@
 // teeth / sandwich), and the order independence MBOIT promises: a shuffled copy of the mesh
 // renders the same image.
 
-#include "apcTestGrids.h"
-#include "apcTestScenes.h"
+#include "apcTestImages.h"
+#include "apcTestPuzzles.h"
+#include "apcTestRender.h"
 
 #include "apcImageMetrics.h"
 #include "vtkAPCPuzzleSource.h"
@@ -18,18 +19,6 @@
 namespace
 {
 using apctest::Frame;
-
-apctest::TransferFunction SandwichTF()
-{
-  // One colour per puzzle piece (Sandwich = piece / (pieces - 1)), all fairly opaque: the
-  // interleaved slabs must occlude each other in the right order.
-  apctest::TransferFunction tf;
-  tf.Colours = { { 0.0, 0.9, 0.1, 0.1 }, { 1.0 / 3, 0.1, 0.8, 0.1 }, { 2.0 / 3, 0.1, 0.2, 0.9 },
-    { 1.0, 0.9, 0.8, 0.1 } };
-  tf.Opacities = { { 0.0, 0.6 }, { 1.0, 0.6 } };
-  tf.UnitDistance = 0.1;
-  return tf;
-}
 
 apc::ImageComparison CompareRGB(const Frame& a, const Frame& b)
 {
@@ -83,8 +72,8 @@ TEST(VolumeMapperQuality, SpheresMBOITCloseToExact)
 
 TEST(VolumeMapperQuality, GearTeethMBOITCloseToExact)
 {
-  const auto c = RenderBothModes(
-    "gearteeth", apctest::PuzzleGrid(vtkAPCPuzzleSource::SANDWICH, 4, 4, 24), SandwichTF());
+  const auto c = RenderBothModes("gearteeth",
+    apctest::PuzzleGrid(vtkAPCPuzzleSource::SANDWICH, 4, 4, 24), apctest::SandwichTF(4));
   // Thin opaque slabs are MBOIT's hard case (the paper's Fig. on thin structures).
   EXPECT_GE(c.Ssim, 0.95);
   EXPECT_GE(c.Psnr, 25.0);

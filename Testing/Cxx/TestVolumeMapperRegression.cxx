@@ -4,7 +4,9 @@
 // can never quietly encode a wrong picture. APC_UPDATE_BASELINES=1 rewrites the baselines,
 // only after the second check passed; look at every rewritten PNG before committing it.
 
-#include "apcTestScenes.h"
+#include "apcTestImages.h"
+#include "apcTestPuzzles.h"
+#include "apcTestRender.h"
 
 #include "apcImageMetrics.h"
 #include "vtkAPCPuzzleSource.h"
@@ -19,17 +21,14 @@ namespace
 {
 using apctest::Frame;
 
+// What WritePNG writes, as floats in [0, 1].
 std::vector<float> ToRGB8Floats(const std::vector<float>& rgba, int pixels)
 {
-  // The same conversion WritePNG applies: over white, rounded to 8 bits.
-  std::vector<float> rgb(3 * pixels);
-  for (int p = 0; p < pixels; ++p)
+  const std::vector<unsigned char> rgb8 = apctest::ToRGB8(rgba, pixels);
+  std::vector<float> rgb(rgb8.size());
+  for (size_t v = 0; v < rgb8.size(); ++v)
   {
-    for (int c = 0; c < 3; ++c)
-    {
-      const double v = rgba[4 * p + c] + (1.0 - rgba[4 * p + 3]);
-      rgb[3 * p + c] = std::lround(255.0 * std::min(1.0, std::max(0.0, v))) / 255.0f;
-    }
+    rgb[v] = rgb8[v] / 255.0f;
   }
   return rgb;
 }
@@ -120,21 +119,13 @@ void CheckAgainstBaseline(const std::string& name, vtkDataSet* grid,
 
 TEST(VolumeMapperRegression, Spheres)
 {
-  vtkNew<vtkAPCPuzzleSource> source;
-  source->SetField(vtkAPCPuzzleSource::SPHERES);
-  source->SetNumberOfPuzzlePieces(4);
-  source->SetResolution(32);
-  source->Update();
-  apctest::TransferFunction tf;
-  tf.Colours = { { 0.0, 0.0, 0.0, 0.0 }, { 0.5, 0.15, 0.3, 1.0 }, { 1.0, 1.0, 0.15, 0.1 } };
-  tf.Opacities = { { 0.0, 0.0 }, { 0.2, 0.0 }, { 0.5, 0.12 }, { 0.75, 0.05 }, { 1.0, 0.95 } };
-  tf.UnitDistance = 0.1;
   apctest::View view;
   view.Parallel = false;
   view.Position = { 2.2, 1.5, 2.7 };
   view.ViewAngle = 30;
   view.Width = view.Height = 128;
-  CheckAgainstBaseline("spheres_mboit", source->GetOutput(), tf, view, 0.01, 0.99, 38.0);
+  CheckAgainstBaseline("spheres_mboit", apctest::PuzzleGrid(vtkAPCPuzzleSource::SPHERES, 4, 4, 32),
+    apctest::SpheresTF(), view, 0.01, 0.99, 38.0);
 }
 
 TEST(VolumeMapperRegression, WindAroundBuildings)

@@ -4,6 +4,9 @@
 // cached mesh follows changes of the input's points, scalars and pipeline.
 
 #include "apcTestGrids.h"
+#include "apcTestImages.h"
+#include "apcTestPuzzles.h"
+#include "apcTestRender.h"
 
 #include <gtest/gtest.h>
 
@@ -75,7 +78,7 @@ TEST(VolumeMapperThreads, RepeatedRendersAreIdentical)
 {
   auto grid =
     apctest::MixedBlock(8, [](double x, double y, double z) { return 0.5 + 0.4 * x * y * z; });
-  apctest::Scene scene(apctest::SpheresTF(), apctest::ObliqueView(96));
+  apctest::LiveWindow scene(apctest::SpheresTF(), apctest::ObliqueView(96));
   scene.Mapper->SetInputData(grid);
   scene.Mapper->SetSampleDistance(0.01);
   const Frame first = scene.Render();
@@ -97,7 +100,7 @@ TEST(VolumeMapperThreads, CachedMeshFollowsDataChanges)
   auto field = [](double x, double y, double z) { return 0.5 + 0.4 * x * y * z; };
   auto grid = apctest::HexBlock(6, field);
   apctest::TransferFunction tf = apctest::SpheresTF();
-  apctest::Scene scene(tf, apctest::ObliqueView(64));
+  apctest::LiveWindow scene(tf, apctest::ObliqueView(64));
   scene.Mapper->SetInputData(grid);
   scene.Mapper->SetSampleDistance(0.01);
   const Frame before = scene.Render();
@@ -148,7 +151,7 @@ TEST(VolumeMapperThreads, PipelineInputIsUpdated)
   source->SetResolution(8);
   source->SetField(vtkAPCPuzzleSource::SPHERES);
   apctest::TransferFunction tf = apctest::SpheresTF();
-  apctest::Scene scene(tf, apctest::ObliqueView(64));
+  apctest::LiveWindow scene(tf, apctest::ObliqueView(64));
   scene.Mapper->SetInputConnection(source->GetOutputPort());
   scene.Mapper->SetSampleDistance(0.01);
   const Frame spheres = scene.Render();
