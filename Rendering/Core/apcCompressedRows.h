@@ -3,6 +3,7 @@
 #ifndef apcCompressedRows_h
 #define apcCompressedRows_h
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
