@@ -48,19 +48,16 @@ LocalFrame::LocalFrame()
   }
 }
 
-void LocalFrame::AddBounds(const double bounds[6])
+void LocalFrame::AddVolume(int moments, const double* bounds)
 {
-  for (int d = 0; d < 3; ++d)
+  this->MinMoments = this->Volumes == 0 ? moments : std::min(this->MinMoments, moments);
+  this->MaxMoments = this->Volumes == 0 ? moments : std::max(this->MaxMoments, moments);
+  ++this->Volumes;
+  for (int d = 0; bounds && d < 3; ++d)
   {
     this->Bounds[2 * d] = std::min(this->Bounds[2 * d], bounds[2 * d]);
     this->Bounds[2 * d + 1] = std::max(this->Bounds[2 * d + 1], bounds[2 * d + 1]);
   }
-}
-
-void LocalFrame::AddMoments(int moments)
-{
-  this->MinMoments = this->Volumes == 0 ? moments : std::min(this->MinMoments, moments);
-  this->MaxMoments = this->Volumes == 0 ? moments : std::max(this->MaxMoments, moments);
 }
 
 FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame& local)

@@ -25,8 +25,8 @@ struct LocalFrame
   int Height = 0;
 
   LocalFrame();
-  void AddBounds(const double bounds[6]);
-  void AddMoments(int moments);
+  // One visible APC volume: its number of moments and, if it has cells, their bounds.
+  void AddVolume(int moments, const double* bounds);
 };
 
 // The agreed frame, the same on every process.

@@ -84,13 +84,19 @@ bool FrameEngine::GetLocalBounds(double bounds[6]) const
 }
 
 //------------------------------------------------------------------------------
-bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
-  const double* globalBounds, const float* depthBuffer)
+void FrameEngine::BeginFrame()
 {
   this->Clock.Restart();
   this->Ready = false;
+}
+
+//------------------------------------------------------------------------------
+bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
+  const double* globalBounds, const float* depthBuffer)
+{
+  this->Ready = false;
   ren->GetTiledSizeAndOrigin(&this->Width, &this->Height, &this->X0, &this->Y0);
-  if (this->Width < 1 || this->Height < 1 || !this->UpdateInput(mapper))
+  if (this->Width < 1 || this->Height < 1 || !this->MeshValid)
   {
     return false;
   }

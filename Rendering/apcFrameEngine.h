@@ -50,9 +50,12 @@ public:
   bool GetLocalBounds(double bounds[6]) const;
   int64_t GetNumberOfCells() const { return this->Mesh.GetNumberOfCells(); }
 
+  /// Starts a frame: the stage clock and a not-yet-prepared state.
+  void BeginFrame();
+
   /**
-   * Updates the input, samples the transfer function and sets up the rays of ren's viewport.
-   * globalBounds (xmin..zmax of all processes' cells) fix the depth warp and the default
+   * After UpdateInput (once per frame), samples the transfer function and sets up the rays of ren's
+   * viewport. globalBounds (xmin..zmax of all processes' cells) fix the depth warp and the default
    * sample spacing so that every process uses the same ones; null uses this process's cells.
    * depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays;
    * null reads ren's window. False if there is nothing this process can render.

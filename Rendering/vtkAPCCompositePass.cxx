@@ -170,18 +170,16 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
       local.Failed = true;
       continue;
     }
-    if (!mapper->GetFrameEngine()->UpdateInput(mapper))
+    apc::FrameEngine* engine = mapper->GetFrameEngine();
+    engine->BeginFrame();
+    if (!engine->UpdateInput(mapper))
     {
       problem << "unusable input (see the mapper's error); ";
       local.Failed = true;
     }
-    local.AddMoments(mapper->GetNumberOfMoments());
-    ++local.Volumes;
     double bounds[6];
-    if (mapper->GetFrameEngine()->GetLocalBounds(bounds))
-    {
-      local.AddBounds(bounds);
-    }
+    local.AddVolume(
+      mapper->GetNumberOfMoments(), engine->GetLocalBounds(bounds) ? bounds : nullptr);
     mappers.push_back(mapper);
     visible.push_back(volume);
   }

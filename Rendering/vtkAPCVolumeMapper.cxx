@@ -84,7 +84,9 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
 {
   apc::FrameEngine& engine = this->Internal->Engine;
   this->Internal->Image->Initialize();
-  if (!engine.Prepare(this, ren, vol, nullptr, nullptr) || engine.GetNumberOfCells() == 0)
+  engine.BeginFrame();
+  if (!engine.UpdateInput(this) || !engine.Prepare(this, ren, vol, nullptr, nullptr) ||
+    engine.GetNumberOfCells() == 0)
   {
     return;
   }

@@ -20,8 +20,6 @@ struct MomentParameters
   double Bias = kUseDefaultMomentBias;
   ResolveMode Resolve = ResolveMode::Renormalised;
 
-  static bool IsSupported(int moments) { return moments == 4 || moments == 6 || moments == 8; }
-
   // The per-N settings of the transmittance reconstruction.
   template <int N>
   MomentSettings<N> Settings() const

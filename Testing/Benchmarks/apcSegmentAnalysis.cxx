@@ -99,7 +99,9 @@ public:
     {
       mapper->SetInputData(pieces[r]);
       apc::FrameEngine* engine = mapper->GetFrameEngine();
-      if (engine->Prepare(mapper, this->Renderer, volume, bounds, depth.data()))
+      engine->BeginFrame();
+      if (engine->UpdateInput(mapper) &&
+        engine->Prepare(mapper, this->Renderer, volume, bounds, depth.data()))
       {
         engine->RenderSegments(images[r]);
       }
