@@ -113,9 +113,13 @@ struct VolumeRayMarcher::Walker
     int64_t samples = 0;
     bool haveCorners = false;
     double pcoords[3] = { 0, 0, 0 };
-    for (int j = std::max(r[1], tile.J0); j <= std::min(r[3], tile.J1 - 1); ++j)
+    const int i0 = std::max(r[0], tile.I0);
+    const int i1 = std::min(r[2], tile.I1 - 1);
+    const int j0 = std::max(r[1], tile.J0);
+    const int j1 = std::min(r[3], tile.J1 - 1);
+    for (int j = j0; j <= j1; ++j)
     {
-      for (int i = std::max(r[0], tile.I0); i <= std::min(r[2], tile.I1 - 1); ++i)
+      for (int i = i0; i <= i1; ++i)
       {
         const int local = (j - tile.J0) * tile.Width() + (i - tile.I0);
         const RaySetup& ray = rays[local];
@@ -134,13 +138,10 @@ struct VolumeRayMarcher::Walker
           continue;
         }
         // Lattice samples in [tin, tout): t_k = k * spacing, the same points on every rank.
-        for (int64_t k = FirstLatticeIndex(tin, spacing);; ++k)
+        int64_t k = FirstLatticeIndex(tin, spacing);
+        for (double t = static_cast<double>(k) * spacing; t < tout;
+             ++k, t = static_cast<double>(k) * spacing)
         {
-          const double t = static_cast<double>(k) * spacing;
-          if (!(t < tout))
-          {
-            break;
-          }
           TransferSample s = cellSample;
           double scalar = cellScalar;
           if (!cellScalars)
