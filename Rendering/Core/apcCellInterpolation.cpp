@@ -25,6 +25,10 @@ constexpr double kSingularRatio = 1e-12;
 // singular (a pyramid's apex maps from the whole plane t = 1).
 constexpr double kResidualTolerance = 1e-12;
 
+// Newton steps below this (parametric units) are taken to be in the quadratic regime,
+// where a chord step (the same Jacobian, a new residual) is a cheap and sure correction.
+constexpr double kChordRegime = 1e-2;
+
 // Newton iterates are kept in this box around the reference cell so that a wild step (bad
 // guess, badly distorted cell) cannot overflow; a genuine solution lies in [0,1]^3.
 constexpr double kBoxLow = -1.0;
@@ -265,6 +269,28 @@ void ClampToReferenceCell(CellShape shape, double p[3])
   }
 }
 
+bool InsideReferenceCell(CellShape shape, const double p[3], double tolerance)
+{
+  const double low = -tolerance;
+  const double high = 1.0 + tolerance;
+  // Written so that NaN is outside.
+  if (!(p[0] >= low && p[1] >= low && p[2] >= low && p[2] <= high))
+  {
+    return false;
+  }
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      return p[0] + p[1] + p[2] <= high;
+    case CellShape::Wedge:
+      return p[0] + p[1] <= high;
+    case CellShape::Pyramid:
+    case CellShape::Hexahedron:
+      break;
+  }
+  return p[0] <= high && p[1] <= high;
+}
+
 void CellInterpolator::Set(const CellCorners& cell)
 {
   this->CellType = cell.Shape;
@@ -304,6 +330,18 @@ void CellInterpolator::Set(const CellCorners& cell)
       this->Inverse[1][d] = cs[d] / det;
       this->Inverse[2][d] = ct[d] / det;
     }
+  }
+}
+
+void CellInterpolator::Map(const double p[3], double offset[3]) const
+{
+  const double r = p[0], s = p[1], t = p[2];
+  const double rs = r * s, rt = r * t, st = s * t;
+  const auto& c = this->C;
+  for (int d = 0; d < 3; ++d)
+  {
+    offset[d] = r * c[1][d] + s * c[2][d] + t * c[3][d] + rs * c[4][d] + rt * c[5][d] +
+      st * c[6][d] + rs * t * c[7][d];
   }
 }
 
@@ -431,9 +469,28 @@ bool CellInterpolator::ParametricCoordinates(
     {
       break;
     }
-    if (NewtonStepSize(d, p, pyramid) < tolerance)
+    const double step = NewtonStepSize(d, p, pyramid);
+    if (step < tolerance)
     {
       return Converged(p, steps, pcoords, iterations);
+    }
+    if (step < kChordRegime)
+    {
+      // Near the root a chord step, which reuses this Jacobian and only evaluates the map,
+      // costs a third of a Newton step and, once the step is small, usually ends the
+      // search: an image's tolerance is reached after one Newton and one chord step from a
+      // neighbour's guess instead of three Newton steps.
+      double moved[3];
+      this->Map(p, moved);
+      const double G[3] = { moved[0] - y[0], moved[1] - y[1], moved[2] - y[2] };
+      const double e[3] = { Dot(G, cr) * invDet, Dot(G, cs) * invDet, Dot(G, ct) * invDet };
+      p[0] -= e[0];
+      p[1] -= e[1];
+      p[2] -= e[2];
+      if (IsFinite(p) && NewtonStepSize(e, p, pyramid) < tolerance)
+      {
+        return Converged(p, steps, pcoords, iterations);
+      }
     }
     for (int i = 0; i < 3; ++i)
     {

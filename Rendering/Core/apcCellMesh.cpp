@@ -131,6 +131,7 @@ bool CellMesh::Finalize(std::string* error)
   this->Planes.clear();
   this->PlaneOffsets.assign(1, 0);
   this->Bounds.resize(numCells);
+  this->ScalarRanges.resize(numCells);
   const double inf = std::numeric_limits<double>::infinity();
   this->MeshBounds = { inf, -inf, inf, -inf, inf, -inf };
   this->SkippedCells = 0;
@@ -138,6 +139,7 @@ bool CellMesh::Finalize(std::string* error)
   {
     const int64_t* ids = this->GetCellPoints(cell);
     const int corners = static_cast<int>(this->Shapes[cell]);
+    this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
     std::array<double, 6>& b = this->Bounds[cell];
     b = { inf, -inf, inf, -inf, inf, -inf };
     double centroid[3] = { 0, 0, 0 };
@@ -199,6 +201,34 @@ bool CellMesh::Finalize(std::string* error)
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
   }
   return true;
+}
+
+//------------------------------------------------------------------------------
+std::array<float, 2> CellMesh::ScalarRangeOf(int64_t cell) const
+{
+  if (this->HasCellScalars())
+  {
+    return { this->CellScalars[cell], this->CellScalars[cell] };
+  }
+  const int64_t* ids = this->GetCellPoints(cell);
+  float lo = this->PointScalars[ids[0]];
+  float hi = lo;
+  for (int i = 1; i < static_cast<int>(this->Shapes[cell]); ++i)
+  {
+    const float s = this->PointScalars[ids[i]];
+    if (std::isnan(s))
+    {
+      lo = hi = s;
+      break;
+    }
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+  }
+  if (std::isnan(lo))
+  {
+    hi = lo;
+  }
+  return { lo, hi };
 }
 
 //------------------------------------------------------------------------------

@@ -63,6 +63,15 @@ public:
   const std::array<double, 6>& GetCellBounds(int64_t cell) const { return this->Bounds[cell]; }
   const std::array<double, 6>& GetBounds() const { return this->MeshBounds; }
 
+  // The smallest and largest corner scalar of a cell (its own value for cell scalars), NaN
+  // for both if a corner scalar is NaN, which makes every sample of the cell NaN. Computed
+  // by Finalize, once per data change: with it a frame skips the cells its transfer function
+  // hides (TransferTable::MayBeVisible) without interpolating them.
+  const std::array<float, 2>& GetScalarRange(int64_t cell) const
+  {
+    return this->ScalarRanges[cell];
+  }
+
   // Cells Finalize left out: non-finite corners, or too few faces with area to enclose
   // anything (collapsed or flat cells). They have no planes and empty bounds.
   int64_t GetNumberOfSkippedCells() const { return this->SkippedCells; }
@@ -72,6 +81,7 @@ public:
 
 private:
   void SkipCell(int64_t cell);
+  std::array<float, 2> ScalarRangeOf(int64_t cell) const;
 
   std::vector<CellShape> Shapes;
   std::vector<int64_t> Offsets{ 0 };
@@ -80,6 +90,7 @@ private:
   std::vector<FacePlane> Planes;
   std::vector<int64_t> PlaneOffsets;
   std::vector<std::array<double, 6>> Bounds;
+  std::vector<std::array<float, 2>> ScalarRanges;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
   int64_t SkippedCells = 0;
 };

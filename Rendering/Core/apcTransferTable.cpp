@@ -26,6 +26,11 @@ TransferTable::TransferTable(double scalarMin, double scalarMax,
     const double alpha = opacities.empty() ? 0.0 : opacities[o];
     e.Absorbance = static_cast<float>(std::min(kAbsorbanceMax, AbsorbanceFromAlpha(alpha) * scale));
   }
+  this->VisibleBefore.assign(n + 1, 0);
+  for (size_t i = 0; i < n; ++i)
+  {
+    this->VisibleBefore[i + 1] = this->VisibleBefore[i] + (this->Entries[i].Absorbance > 0 ? 1 : 0);
+  }
   const double range = scalarMax - scalarMin;
   this->Last = static_cast<double>(n - 1);
   // A zero-width range maps everything onto the first entry.
@@ -34,8 +39,7 @@ TransferTable::TransferTable(double scalarMin, double scalarMax,
 
 bool TransferTable::IsTransparent() const
 {
-  return std::all_of(this->Entries.begin(), this->Entries.end(),
-    [](const TransferSample& e) { return !(e.Absorbance > 0); });
+  return this->VisibleBefore.back() == 0;
 }
 
 } // namespace apc

@@ -8,6 +8,7 @@
 #ifndef apcTransferTable_h
 #define apcTransferTable_h
 
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -37,8 +38,7 @@ public:
     {
       return { { 0.f, 0.f, 0.f }, 0.f };
     }
-    double x = (scalar - this->Min) * this->Scale;
-    x = x < 0 ? 0 : (x > this->Last ? this->Last : x);
+    const double x = this->Position(scalar);
     const int i = static_cast<int>(x);
     const int j = i + 1 < static_cast<int>(this->Entries.size()) ? i + 1 : i;
     const float f = static_cast<float>(x - i);
@@ -50,16 +50,42 @@ public:
       a.Absorbance + f * (b.Absorbance - a.Absorbance) };
   }
 
+  // False if no scalar in [lo, hi] can give a sample any opacity, so a cell whose scalars
+  // stay in that range may be skipped (a NaN bound: nothing to see). Exact, not a heuristic:
+  // Position is monotonic in floating point, so every scalar of the range interpolates
+  // between entries floor(Position(lo)) and floor(Position(hi)) + 1, and the answer comes
+  // from a count of the non-transparent entries before each index.
+  bool MayBeVisible(double lo, double hi) const
+  {
+    if (!(lo <= hi))
+    {
+      return false;
+    }
+    const int first = static_cast<int>(this->Position(lo));
+    const int last = std::min(static_cast<int>(this->Position(hi)) + 1, this->Count() - 1);
+    return this->VisibleBefore[last + 1] > this->VisibleBefore[first];
+  }
+
   double GetSampleSpacing() const { return this->Spacing; }
   // True if no entry can make a sample visible: nothing to render.
   bool IsTransparent() const;
 
 private:
+  // The continuous table index of a scalar, clamped to the table.
+  double Position(double scalar) const
+  {
+    const double x = (scalar - this->Min) * this->Scale;
+    return x < 0 ? 0 : (x > this->Last ? this->Last : x);
+  }
+  int Count() const { return static_cast<int>(this->Entries.size()); }
+
   double Min;
   double Scale;
   double Last;
   double Spacing;
   std::vector<TransferSample> Entries;
+  // VisibleBefore[i]: how many of the first i entries have a positive absorbance.
+  std::vector<int> VisibleBefore;
 };
 
 } // namespace apc

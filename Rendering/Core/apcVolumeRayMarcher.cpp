@@ -32,47 +32,106 @@ inline bool InPositiveHalf(const std::array<float, 3>& n)
   return n[0] != 0 ? n[0] > 0 : (n[1] != 0 ? n[1] > 0 : n[2] > 0);
 }
 
-// Clips a ray against a cell's face planes: [tin, tout) is the part inside the cell. Every
-// cell evaluates a shared face with the same numbers (up to an exact sign flip), so the
-// intervals of neighbours meet exactly.
-inline void ClipRay(
-  const RaySetup& ray, const FacePlane* planes, int count, double& tin, double& tout)
+// A cell's face planes, set up once per cell and tile. Every ray of a perspective camera
+// starts at the eye, so each plane's distance from it is computed here once, not per ray
+// (with the same expression, so the numbers are the ones a per-ray evaluation gives).
+struct CellPlanes
 {
-  for (int p = 0; p < count && tin < tout; ++p)
-  {
-    const double nx = planes[p].Normal[0];
-    const double ny = planes[p].Normal[1];
-    const double nz = planes[p].Normal[2];
-    const double denom = nx * ray.D[0] + ny * ray.D[1] + nz * ray.D[2];
-    const double num = planes[p].Offset - (nx * ray.O[0] + ny * ray.O[1] + nz * ray.O[2]);
-    if (denom < 0)
-    {
-      tin = std::max(tin, num / denom);
-    }
-    else if (denom > 0)
-    {
-      tout = std::min(tout, num / denom);
-    }
-    else if (num < 0 || (num == 0 && !InPositiveHalf(planes[p].Normal)))
-    {
-      // The ray is outside this plane, or runs inside it. A plane shared by two cells
-      // appears in both with exactly opposite normals, so letting only the copy whose normal
-      // points into the "positive" half-space keep such a ray gives it to exactly one cell.
-      tout = -std::numeric_limits<double>::infinity();
-    }
-  }
-}
+  static constexpr int kMaxPlanes = 6;
+  int Count = 0;
+  bool SharedOrigin = false;
+  double N[kMaxPlanes][3];
+  double Offset[kMaxPlanes];
+  double Num[kMaxPlanes];
+  bool KeepsParallelRays[kMaxPlanes];
 
-// The first lattice index k with k * spacing >= t.
-inline int64_t FirstLatticeIndex(double t, double spacing)
-{
-  int64_t k = static_cast<int64_t>(std::ceil(t / spacing));
-  if (static_cast<double>(k) * spacing < t)
+  void Set(const FacePlane* planes, int count, const RaySetup& anyRay, bool sharedOrigin)
   {
-    ++k;
+    this->Count = std::min(count, kMaxPlanes);
+    this->SharedOrigin = sharedOrigin;
+    for (int p = 0; p < this->Count; ++p)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        this->N[p][d] = planes[p].Normal[d];
+      }
+      this->Offset[p] = planes[p].Offset;
+      this->KeepsParallelRays[p] = InPositiveHalf(planes[p].Normal);
+      if (sharedOrigin)
+      {
+        this->Num[p] = this->Numerator(p, anyRay);
+      }
+    }
   }
-  return k;
-}
+  double Numerator(int p, const RaySetup& ray) const
+  {
+    return this->Offset[p] -
+      (this->N[p][0] * ray.O[0] + this->N[p][1] * ray.O[1] + this->N[p][2] * ray.O[2]);
+  }
+
+  // Clips a ray against the planes: [tin, tout) is the part inside the cell. Every cell
+  // evaluates a shared face with the same numbers (up to an exact sign flip), so the
+  // intervals of neighbours meet exactly.
+  void Clip(const RaySetup& ray, double& tin, double& tout) const
+  {
+    for (int p = 0; p < this->Count && tin < tout; ++p)
+    {
+      const double denom =
+        this->N[p][0] * ray.D[0] + this->N[p][1] * ray.D[1] + this->N[p][2] * ray.D[2];
+      const double num = this->SharedOrigin ? this->Num[p] : this->Numerator(p, ray);
+      if (denom < 0)
+      {
+        tin = std::max(tin, num / denom);
+      }
+      else if (denom > 0)
+      {
+        tout = std::min(tout, num / denom);
+      }
+      else if (num < 0 || (num == 0 && !this->KeepsParallelRays[p]))
+      {
+        // The ray is outside this plane, or runs inside it. A plane shared by two cells
+        // appears in both with exactly opposite normals, so letting only the copy whose
+        // normal points into the "positive" half-space keep such a ray gives it to exactly
+        // one cell.
+        tout = -std::numeric_limits<double>::infinity();
+      }
+    }
+  }
+};
+
+// How far (parametric units) outside the reference cell Newton's answer for a point inside
+// the cell's planes may lie before it is taken for a wrong root: rounding on faces, and
+// non-planar faces replaced by planes, move it far less.
+constexpr double kOutsideTolerance = 1e-3;
+
+// The lattice t_k = k * spacing. A sample belongs to the cell whose [tin, tout) holds the
+// rounded product k * spacing, so the first index of an interval must be the smallest k
+// whose product is >= tin, exactly; a quotient only gives a first guess, which rounding can
+// leave one off in either direction.
+struct Lattice
+{
+  double Spacing;
+  double InverseSpacing;
+
+  explicit Lattice(double spacing)
+    : Spacing(spacing)
+    , InverseSpacing(1.0 / spacing)
+  {
+  }
+  int64_t First(double t) const
+  {
+    int64_t k = static_cast<int64_t>(std::ceil(t * this->InverseSpacing));
+    while (static_cast<double>(k - 1) * this->Spacing >= t)
+    {
+      --k;
+    }
+    while (static_cast<double>(k) * this->Spacing < t)
+    {
+      ++k;
+    }
+    return k;
+  }
+};
 }
 
 //------------------------------------------------------------------------------
@@ -83,26 +142,39 @@ struct VolumeRayMarcher::Walker
   const TileBins& Bins;
   const TransferTable& Table;
   double FarLimit;
+  bool SharedOrigin; // a perspective camera: every ray starts at the eye
+
+  // What a cell needs while its rays are marched; reused from cell to cell.
+  struct CellState
+  {
+    CellPlanes Planes;
+    CellCorners Corners;
+    CellInterpolator Interpolator;
+  };
 
   // One cell against the tile's rays; returns the lattice samples taken.
   template <class Visitor>
   int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRect& tile,
-    Visitor& visitor, CellCorners& corners, CellInterpolator& interpolator) const
+    Visitor& visitor, CellState& state) const
   {
-    const double spacing = this->Table.GetSampleSpacing();
+    constexpr bool keepsTransparent = Visitor::WantsSegments || Visitor::WantsTransparentSamples;
     const bool cellScalars = this->Mesh.HasCellScalars();
-    const auto& r = this->Bins.Rects[cell];
+    const auto& range = this->Mesh.GetScalarRange(cell);
+    const double lo = range[0];
+    const double hi = range[1];
+    // A cell whose scalars all map to zero opacity adds nothing: skip it, unless the visitor
+    // needs its extent (segment runs go on through transparent cells).
+    const bool visible = this->Table.MayBeVisible(lo, hi);
+    if (!visible && !keepsTransparent)
+    {
+      return 0;
+    }
     TransferSample cellSample{};
-    double cellScalar = 0.0;
-    if (cellScalars)
+    double cellScalar = std::numeric_limits<double>::quiet_NaN();
+    if (cellScalars && visible)
     {
       cellScalar = this->Mesh.CellScalars[cell];
       cellSample = this->Table.Lookup(cellScalar);
-      if (!(cellSample.Absorbance > 0) && !Visitor::WantsSegments &&
-        !Visitor::WantsTransparentSamples)
-      {
-        return 0; // an invisible cell
-      }
     }
     int planeCount = 0;
     const FacePlane* planes = this->Mesh.GetPlanes(cell, planeCount);
@@ -110,13 +182,19 @@ struct VolumeRayMarcher::Walker
     {
       return 0; // a cell the mesh left out (see CellMesh::GetNumberOfSkippedCells)
     }
-    int64_t samples = 0;
-    bool haveCorners = false;
-    double pcoords[3] = { 0, 0, 0 };
+    const auto& r = this->Bins.Rects[cell];
     const int i0 = std::max(r[0], tile.I0);
     const int i1 = std::min(r[2], tile.I1 - 1);
     const int j0 = std::max(r[1], tile.J0);
     const int j1 = std::min(r[3], tile.J1 - 1);
+    state.Planes.Set(planes, planeCount, rays.front(), this->SharedOrigin);
+    const bool interpolate = visible && !cellScalars;
+    const Lattice lattice(this->Table.GetSampleSpacing());
+    int64_t samples = 0;
+    bool haveCorners = false;
+    // Newton's first guess for a ray: the coordinates of the first sample of the cell's
+    // previous ray, a neighbouring pixel at about the same depth; then the previous sample.
+    double firstGuess[3] = { 0, 0, 0 };
     for (int j = j0; j <= j1; ++j)
     {
       for (int i = i0; i <= i1; ++i)
@@ -127,7 +205,7 @@ struct VolumeRayMarcher::Walker
         // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes
         // fail to enclose it (rounding on a nearly flat cell) from sampling forever.
         double tout = std::min(ray.End, this->FarLimit);
-        ClipRay(ray, planes, planeCount, tin, tout);
+        state.Planes.Clip(ray, tin, tout);
         if (!(tin < tout))
         {
           continue;
@@ -137,31 +215,48 @@ struct VolumeRayMarcher::Walker
         {
           continue;
         }
+        if (interpolate && !haveCorners)
+        {
+          // Set up lazily: most binned cells miss most of their rectangle's rays.
+          this->Mesh.GetCorners(cell, state.Corners);
+          state.Interpolator.Set(state.Corners);
+          ParametricCenter(state.Corners.Shape, firstGuess);
+          haveCorners = true;
+        }
+        double pcoords[3] = { firstGuess[0], firstGuess[1], firstGuess[2] };
+        bool first = true;
         // Lattice samples in [tin, tout): t_k = k * spacing, the same points on every rank.
-        int64_t k = FirstLatticeIndex(tin, spacing);
-        for (double t = static_cast<double>(k) * spacing; t < tout;
-             ++k, t = static_cast<double>(k) * spacing)
+        int64_t k = lattice.First(tin);
+        for (double t = static_cast<double>(k) * lattice.Spacing; t < tout;
+             ++k, t = static_cast<double>(k) * lattice.Spacing)
         {
           TransferSample s = cellSample;
           double scalar = cellScalar;
-          if (!cellScalars)
+          if (interpolate)
           {
-            if (!haveCorners)
-            {
-              // Set up lazily: most binned cells miss most of their rectangle's rays.
-              this->Mesh.GetCorners(cell, corners);
-              interpolator.Set(corners);
-              ParametricCenter(corners.Shape, pcoords);
-              haveCorners = true;
-            }
             const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
               ray.O[2] + t * ray.D[2] };
-            // The previous sample's coordinates are a close first guess for Newton (an
-            // extrapolated guess was tried: it can leave the cell and converge to another
-            // root of a non-affine map). Scalars need about single precision: 1e-7 in
-            // parametric units is ample and saves Newton steps on distorted cells.
-            interpolator.ParametricCoordinates(x, pcoords, nullptr, 1e-7);
-            scalar = interpolator.InterpolateScalar(pcoords);
+            // Scalars need about single precision: 1e-7 in parametric units is ample and
+            // saves Newton steps on distorted cells. (An extrapolated guess was tried: it
+            // can leave the cell and converge to another root of a non-affine map.)
+            if (!state.Interpolator.ParametricCoordinates(x, pcoords, nullptr, 1e-7) ||
+              !InsideReferenceCell(state.Corners.Shape, pcoords, kOutsideTolerance))
+            {
+              // The point is inside the cell's planes, yet Newton converged outside the cell:
+              // another root of a non-affine map (pyramids, from a neighbour's guess). The
+              // root inside is found from the cell's centre.
+              ParametricCenter(state.Corners.Shape, pcoords);
+              state.Interpolator.ParametricCoordinates(x, pcoords, nullptr, 1e-7);
+            }
+            if (first)
+            {
+              std::copy(pcoords, pcoords + 3, firstGuess);
+              first = false;
+            }
+            // Clamped to the cell's range: a point inside the planes but outside the
+            // interpolating map's cell (non-planar faces) must not extrapolate past the
+            // corners, and it is what makes skipping by range exact.
+            scalar = std::min(std::max(state.Interpolator.InterpolateScalar(pcoords), lo), hi);
             s = this->Table.Lookup(scalar);
           }
           ++samples;
@@ -179,12 +274,11 @@ struct VolumeRayMarcher::Walker
   int64_t Tile(const std::vector<RaySetup>& rays, const TileRect& tile, Visitor& visitor) const
   {
     int64_t samples = 0;
-    CellCorners corners;
-    CellInterpolator interpolator;
+    CellState state;
     visitor.BeginTile(tile);
     for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
     {
-      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, corners, interpolator);
+      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state);
     }
     visitor.EndTile(tile);
     return samples;
@@ -239,7 +333,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
   double nearLimit = 0;
   double farLimit = 0;
   this->Camera->DistanceRange(this->Mesh->GetBounds(), nearLimit, farLimit);
-  const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300 };
+  const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
+    !this->Camera->IsParallel() };
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;

@@ -1,0 +1,148 @@
+// What empty-space skipping rests on: a cell's scalar range (CellMesh) and the transfer
+// table's answer to "can any scalar of this range be seen?", checked against looking every
+// scalar up, and the test that tells a wrong Newton root from a point in the cell.
+#include "apcCellInterpolation.h"
+#include "apcCellMesh.h"
+#include "apcTransferTable.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace
+{
+// Opacity zero except on a few islands, some one entry wide: the edges are where an
+// off-by-one in the index range would show.
+apc::TransferTable IslandTable(int entries)
+{
+  std::vector<std::array<float, 3>> colours(entries, { 1.f, 0.5f, 0.25f });
+  std::vector<double> opacities(entries, 0.0);
+  for (int i : { 3, 17, 18, 40, entries - 1 })
+  {
+    opacities[i] = 0.5;
+  }
+  return apc::TransferTable(-2.0, 3.0, colours, opacities, 0.1, 1.0);
+}
+
+bool AnyVisibleByLookup(const apc::TransferTable& table, double lo, double hi)
+{
+  // Both ends, their neighbours in double and a dense sweep in between.
+  const double ends[] = { lo, hi, std::nextafter(lo, hi), std::nextafter(hi, lo) };
+  for (double s : ends)
+  {
+    if (s >= lo && s <= hi && table.Lookup(s).Absorbance > 0)
+    {
+      return true;
+    }
+  }
+  for (int k = 0; k <= 4000; ++k)
+  {
+    if (table.Lookup(lo + (hi - lo) * k / 4000.0).Absorbance > 0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+}
+
+TEST(EmptySpaceSkipping, TableNeverHidesAVisibleScalar)
+{
+  const apc::TransferTable table = IslandTable(64);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-3.0, 4.0);
+  int hidden = 0;
+  for (int trial = 0; trial < 20000; ++trial)
+  {
+    double lo = u(rng);
+    double hi = trial % 3 == 0 ? lo : u(rng);
+    if (lo > hi)
+    {
+      std::swap(lo, hi);
+    }
+    const bool visible = AnyVisibleByLookup(table, lo, hi);
+    if (visible)
+    {
+      ASSERT_TRUE(table.MayBeVisible(lo, hi)) << "[" << lo << ", " << hi << "]";
+    }
+    else
+    {
+      hidden += table.MayBeVisible(lo, hi) ? 0 : 1;
+    }
+  }
+  // And it does skip: most ranges that lie between the islands are found invisible.
+  EXPECT_GT(hidden, 2000);
+}
+
+TEST(EmptySpaceSkipping, TableEdgesAndSpecialRanges)
+{
+  const apc::TransferTable table = IslandTable(64);
+  const double step = 5.0 / 63; // scalar per entry
+  // Between the islands at entries 3 and 17 nothing is visible, up to the entry before 17
+  // (which interpolates towards 17).
+  EXPECT_FALSE(table.MayBeVisible(-2.0 + 4.5 * step, -2.0 + 15.5 * step));
+  EXPECT_TRUE(table.MayBeVisible(-2.0 + 4.5 * step, -2.0 + 16.5 * step));
+  // Beyond the range the end entries apply (VTK's clamping); the last entry is visible.
+  EXPECT_TRUE(table.MayBeVisible(10.0, 20.0));
+  EXPECT_FALSE(table.MayBeVisible(-20.0, -19.0));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(table.MayBeVisible(nan, nan));
+  EXPECT_FALSE(table.MayBeVisible(1.0, 0.0)); // an empty range
+  EXPECT_TRUE(table.MayBeVisible(-inf, inf));
+
+  const apc::TransferTable transparent(0.0, 1.0, { { 1.f, 1.f, 1.f } }, { 0.0 }, 0.1, 1.0);
+  EXPECT_TRUE(transparent.IsTransparent());
+  EXPECT_FALSE(transparent.MayBeVisible(-inf, inf));
+}
+
+TEST(EmptySpaceSkipping, CellScalarRanges)
+{
+  apc::CellMesh mesh;
+  mesh.Points = { { 0, 0, 0 }, { 1, 0, 0 }, { 0, 1, 0 }, { 0, 0, 1 }, { 1, 1, 1 } };
+  mesh.PointScalars = { 2.f, -1.f, 5.f, 0.5f, std::numeric_limits<float>::quiet_NaN() };
+  const int64_t a[] = { 0, 1, 2, 3 };
+  const int64_t b[] = { 1, 2, 3, 4 };
+  mesh.AddCell(apc::CellShape::Tetra, a);
+  mesh.AddCell(apc::CellShape::Tetra, b);
+  ASSERT_TRUE(mesh.Finalize());
+  EXPECT_EQ(mesh.GetScalarRange(0)[0], -1.f);
+  EXPECT_EQ(mesh.GetScalarRange(0)[1], 5.f);
+  // A NaN corner makes every sample NaN (transparent): the range says so.
+  EXPECT_TRUE(std::isnan(mesh.GetScalarRange(1)[0]));
+  EXPECT_TRUE(std::isnan(mesh.GetScalarRange(1)[1]));
+
+  mesh.PointScalars.clear();
+  mesh.CellScalars = { 7.f, 3.f };
+  ASSERT_TRUE(mesh.Finalize());
+  EXPECT_EQ(mesh.GetScalarRange(1)[0], 3.f);
+  EXPECT_EQ(mesh.GetScalarRange(1)[1], 3.f);
+}
+
+TEST(EmptySpaceSkipping, InsideReferenceCell)
+{
+  using apc::CellShape;
+  const double centre[3] = { 0.2, 0.2, 0.2 };
+  for (CellShape shape :
+    { CellShape::Tetra, CellShape::Pyramid, CellShape::Wedge, CellShape::Hexahedron })
+  {
+    EXPECT_TRUE(apc::InsideReferenceCell(shape, centre, 0.0));
+    for (const auto& corner : apc::ReferenceCorners(shape))
+    {
+      EXPECT_TRUE(apc::InsideReferenceCell(shape, corner.data(), 1e-12));
+    }
+    const double below[3] = { 0.2, -0.01, 0.2 };
+    EXPECT_FALSE(apc::InsideReferenceCell(shape, below, 1e-3));
+    EXPECT_TRUE(apc::InsideReferenceCell(shape, below, 0.02));
+    const double nan[3] = { std::nan(""), 0.2, 0.2 };
+    EXPECT_FALSE(apc::InsideReferenceCell(shape, nan, 1.0));
+  }
+  const double offDiagonal[3] = { 0.6, 0.6, 0.0 }; // outside the triangle r + s <= 1
+  EXPECT_FALSE(apc::InsideReferenceCell(CellShape::Tetra, offDiagonal, 1e-3));
+  EXPECT_FALSE(apc::InsideReferenceCell(CellShape::Wedge, offDiagonal, 1e-3));
+  EXPECT_TRUE(apc::InsideReferenceCell(CellShape::Hexahedron, offDiagonal, 1e-3));
+  EXPECT_TRUE(apc::InsideReferenceCell(CellShape::Pyramid, offDiagonal, 1e-3));
+}
