@@ -2,6 +2,7 @@
 
 #include "apcPolynomialRoots.h"
 
+#include <array>
 #include <cmath>
 
 namespace apc
@@ -69,7 +70,8 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
     return;
   }
 
-  this->Moments[0] = 1.0;
+  std::array<double, N + 1> moments; // normalised and biased, moments[0] = 1
+  moments[0] = 1.0;
   for (int k = 1; k <= N; ++k)
   {
     const double normalised = sums[k] / this->B0;
@@ -78,35 +80,41 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
       this->State = PixelState::Degenerate;
       return;
     }
-    this->Moments[k] = (1.0 - eps) * normalised + eps * settings.BiasVector[k - 1];
+    moments[k] = (1.0 - eps) * normalised + eps * settings.BiasVector[k - 1];
   }
 
   // LDL^T of the Hankel matrix H_ij = b_{i+j}. Without pivoting: a positive definite
   // matrix needs none, and a pivot that is not positive means the bias failed to make it
-  // so, which is exactly when the reconstruction cannot be trusted.
+  // so, which is exactly when the reconstruction cannot be trusted. D is kept while factorising
+  // (the pivots' own rounding is the old one) and only inverted at the end.
+  std::array<double, M + 1> d;
   for (int j = 0; j <= M; ++j)
   {
-    double dj = this->Moments[2 * j];
+    double dj = moments[2 * j];
     for (int k = 0; k < j; ++k)
     {
-      dj -= this->L[j * (M + 1) + k] * this->L[j * (M + 1) + k] * this->D[k];
+      dj -= this->L[j * (M + 1) + k] * this->L[j * (M + 1) + k] * d[k];
     }
     if (!(dj > 0.0) || !std::isfinite(dj))
     {
       this->State = PixelState::Degenerate;
       return;
     }
-    this->D[j] = dj;
+    d[j] = dj;
     this->L[j * (M + 1) + j] = 1.0;
     for (int i = j + 1; i <= M; ++i)
     {
-      double lij = this->Moments[i + j];
+      double lij = moments[i + j];
       for (int k = 0; k < j; ++k)
       {
-        lij -= this->L[i * (M + 1) + k] * this->L[j * (M + 1) + k] * this->D[k];
+        lij -= this->L[i * (M + 1) + k] * this->L[j * (M + 1) + k] * d[k];
       }
       this->L[i * (M + 1) + j] = lij / dj;
     }
+  }
+  for (int j = 0; j <= M; ++j)
+  {
+    this->InvD[j] = 1.0 / d[j];
   }
 }
 
@@ -124,8 +132,11 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
   }
   z = z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
 
-  // Solve B c = (1, z, ..., z^M) with the stored factors.
+  // The kernel polynomial's coefficients c = B^-1 e(z), e(z) = (1, z, ..., z^M), as
+  // y = L^-1 e(z), u = D^-1 y, c = L^-T u. The Christoffel kernel at z, y^T D^-1 y, falls
+  // out of the forward pass for free (the same sum of positive terms ChristoffelKernel forms).
   std::array<double, M + 1> c;
+  double kernelAtZ = 0.0;
   double power = 1.0;
   for (int i = 0; i <= M; ++i)
   {
@@ -139,7 +150,9 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
   }
   for (int i = 0; i <= M; ++i)
   {
-    c[i] /= this->D[i];
+    const double ui = c[i] * this->InvD[i];
+    kernelAtZ += c[i] * ui;
+    c[i] = ui;
   }
   for (int i = M - 1; i >= 0; --i)
   {
@@ -157,9 +170,8 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
   {
     --degree;
   }
-  std::array<double, M + 1> x;
-  x[0] = z;
-  const int count = KernelRoots<M>(c.data(), x.data() + 1);
+  std::array<double, M> roots;
+  const int count = KernelRoots<M>(c.data(), roots.data());
   if (count != degree)
   {
     return fallback;
@@ -173,19 +185,23 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
   // Newton divided differences compute, but as a sum of positive terms: no cancellation,
   // A stays in [0,1] up to rounding, and a root near infinity (leading coefficient ~ 0, e.g. z = 0
   // for symmetric moments) simply gets weight ~ 0 instead of wrecking a monomial expansion.
-  double absorbance = 0.0;
-  for (int i = 0; i <= count; ++i)
+  // Support points behind z have f_i = 0, so their kernels are never formed; a non-finite
+  // root still fails the query wherever it lies.
+  double absorbance = this->Beta == 0.0 ? 0.0 : this->Beta / kernelAtZ;
+  for (int i = 0; i < count; ++i)
   {
-    if (!std::isfinite(x[i]))
+    if (!std::isfinite(roots[i]))
     {
       return fallback;
     }
-    const double target = i == 0 ? this->Beta : (x[i] < z ? 1.0 : 0.0);
-    if (target == 0.0)
+    if (roots[i] < z)
     {
-      continue;
+      absorbance += 1.0 / this->ChristoffelKernel(roots[i]);
     }
-    absorbance += target / this->ChristoffelKernel(x[i]);
+  }
+  if (absorbance == 0.0)
+  {
+    return { 1.0, false }; // exp(-b0 * 0), b0 being finite here
   }
   const double t = std::exp(-this->B0 * absorbance);
   if (!std::isfinite(absorbance) || std::isnan(t))
@@ -210,7 +226,7 @@ double MomentTransmittance<N>::ChristoffelKernel(double x) const
       yi -= this->L[i * (M + 1) + k] * y[k];
     }
     y[i] = yi;
-    kernel += yi * yi / this->D[i];
+    kernel += yi * yi * this->InvD[i];
     power *= x;
   }
   return kernel;

@@ -144,9 +144,10 @@ private:
   double B0 = 0.0;
   double Beta = kDefaultOverestimation;
   double Fallback = 1.0;
-  std::array<double, N + 1> Moments{};       // normalised and biased, Moments[0] = 1
+  // B = L D L^T of the normalised, biased Hankel matrix. D is kept inverted: every query
+  // scales by it M+1 times per support point, and a multiply is far cheaper than a divide.
   std::array<double, (M + 1) * (M + 1)> L{}; // unit lower triangular, row major
-  std::array<double, M + 1> D{};
+  std::array<double, M + 1> InvD{};
 };
 
 extern template class MomentTransmittance<4>;

@@ -9,9 +9,7 @@ namespace apc
 namespace
 {
 
-// A discriminant that is negative by no more than this fraction of the magnitude of its
-// terms is rounding noise around a double root.
-constexpr double kDiscriminantTolerance = 64.0 * std::numeric_limits<double>::epsilon();
+using detail::kDiscriminantTolerance;
 
 void Polish(const double* c, int degree, double* roots, int count)
 {
@@ -45,16 +43,6 @@ void Polish(const double* c, int degree, double* roots, int count)
   std::sort(roots, roots + count);
 }
 
-int SolveLinear(double c0, double c1, double roots[1])
-{
-  if (c1 == 0.0)
-  {
-    return 0;
-  }
-  roots[0] = -c0 / c1;
-  return 1;
-}
-
 } // namespace
 
 double EvaluatePolynomial(const double* c, int degree, double x)
@@ -65,39 +53,6 @@ double EvaluatePolynomial(const double* c, int degree, double x)
     p = p * x + c[k];
   }
   return p;
-}
-
-int SolveQuadratic(const double c[3], double roots[2])
-{
-  if (c[2] == 0.0)
-  {
-    return SolveLinear(c[0], c[1], roots);
-  }
-  double disc = c[1] * c[1] - 4.0 * c[0] * c[2];
-  if (disc < 0.0)
-  {
-    const double scale = c[1] * c[1] + 4.0 * std::abs(c[0] * c[2]);
-    if (disc < -kDiscriminantTolerance * scale)
-    {
-      return 0;
-    }
-    disc = 0.0;
-  }
-  // Citardauq form: never subtracts two numbers of similar size.
-  const double q = -0.5 * (c[1] + std::copysign(std::sqrt(disc), c[1]));
-  if (q == 0.0)
-  {
-    // Only when c1 = 0 and disc = 0, hence c0 = 0: a double root at 0.
-    roots[0] = roots[1] = 0.0;
-    return 2;
-  }
-  roots[0] = q / c[2];
-  roots[1] = c[0] / q;
-  if (roots[0] > roots[1])
-  {
-    std::swap(roots[0], roots[1]);
-  }
-  return 2;
 }
 
 int SolveCubic(const double c[4], double roots[3])
