@@ -2,8 +2,11 @@
 
 #include "apcPolynomialRoots.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace apc
 {
@@ -27,6 +30,17 @@ double AllAtQueryDepth(double beta, double b0)
     return 1.0;
   }
   return std::exp(-beta * b0);
+}
+
+// value if keep, else +0, by masking its bits: compilers turn a plain ?: into a branch (and
+// sink the division into it), and that branch mispredicts on about every other query.
+double KeepIf(bool keep, double value)
+{
+  std::uint64_t bits;
+  std::memcpy(&bits, &value, sizeof bits);
+  bits &= std::uint64_t{ 0 } - static_cast<std::uint64_t>(keep);
+  std::memcpy(&value, &bits, sizeof bits);
+  return value;
 }
 
 template <int M>
@@ -88,12 +102,13 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
   // so, which is exactly when the reconstruction cannot be trusted. D is kept while factorising
   // (the pivots' own rounding is the old one) and only inverted at the end.
   std::array<double, M + 1> d;
+  std::array<double, (M + 1) * (M + 1)> l{}; // unit lower triangular, row major
   for (int j = 0; j <= M; ++j)
   {
     double dj = moments[2 * j];
     for (int k = 0; k < j; ++k)
     {
-      dj -= this->L[j * (M + 1) + k] * this->L[j * (M + 1) + k] * d[k];
+      dj -= l[j * (M + 1) + k] * l[j * (M + 1) + k] * d[k];
     }
     if (!(dj > 0.0) || !std::isfinite(dj))
     {
@@ -101,20 +116,46 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
       return;
     }
     d[j] = dj;
-    this->L[j * (M + 1) + j] = 1.0;
+    l[j * (M + 1) + j] = 1.0;
     for (int i = j + 1; i <= M; ++i)
     {
       double lij = moments[i + j];
       for (int k = 0; k < j; ++k)
       {
-        lij -= this->L[i * (M + 1) + k] * this->L[j * (M + 1) + k] * d[k];
+        lij -= l[i * (M + 1) + k] * l[j * (M + 1) + k] * d[k];
       }
-      this->L[i * (M + 1) + j] = lij / dj;
+      l[i * (M + 1) + j] = lij / dj;
     }
   }
   for (int j = 0; j <= M; ++j)
   {
     this->InvD[j] = 1.0 / d[j];
+  }
+  // L^-1 row by row (forward substitution on the identity).
+  for (int i = 0; i <= M; ++i)
+  {
+    this->LInv[i * (M + 1) + i] = 1.0;
+    for (int j = 0; j < i; ++j)
+    {
+      double sum = 0.0;
+      for (int k = j; k < i; ++k)
+      {
+        sum -= l[i * (M + 1) + k] * this->LInv[k * (M + 1) + j];
+      }
+      this->LInv[i * (M + 1) + j] = sum;
+    }
+  }
+  for (int a = 0; a <= M; ++a)
+  {
+    for (int b = 0; b <= M; ++b)
+    {
+      double sum = 0.0;
+      for (int i = std::max(a, b); i <= M; ++i)
+      {
+        sum += this->LInv[i * (M + 1) + a] * this->InvD[i] * this->LInv[i * (M + 1) + b];
+      }
+      this->BInv[a * (M + 1) + b] = sum;
+    }
   }
 }
 
@@ -132,36 +173,57 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
   }
   z = z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
 
-  // The kernel polynomial's coefficients c = B^-1 e(z), e(z) = (1, z, ..., z^M), as
-  // y = L^-1 e(z), u = D^-1 y, c = L^-T u. The Christoffel kernel at z, y^T D^-1 y, falls
-  // out of the forward pass for free (the same sum of positive terms ChristoffelKernel forms).
+  // The kernel polynomial's coefficients c = B^-1 e(z), e(z) = (1, z, ..., z^M), and the
+  // Christoffel kernel at z, |L^-1 e(z)|^2 in the D^-1 norm (a sum of positive terms, see
+  // below). Both are polynomials in z with precomputed coefficients; their Horner chains are
+  // independent, which keeps the latency down.
   std::array<double, M + 1> c;
-  double kernelAtZ = 0.0;
-  double power = 1.0;
-  for (int i = 0; i <= M; ++i)
+  for (int k = 0; k <= M; ++k)
   {
-    double yi = power;
-    for (int k = 0; k < i; ++k)
-    {
-      yi -= this->L[i * (M + 1) + k] * c[k];
-    }
-    c[i] = yi;
-    power *= z;
+    c[k] = EvaluatePolynomial(&this->BInv[k * (M + 1)], M, z);
   }
-  for (int i = 0; i <= M; ++i)
-  {
-    const double ui = c[i] * this->InvD[i];
-    kernelAtZ += c[i] * ui;
-    c[i] = ui;
-  }
-  for (int i = M - 1; i >= 0; --i)
-  {
-    for (int k = i + 1; k <= M; ++k)
-    {
-      c[i] -= this->L[k * (M + 1) + i] * c[k];
-    }
-  }
+  const double kernelAtZ = this->ChristoffelKernel(z);
 
+  if constexpr (M == 2)
+  {
+    // The common case of 4 moments, written out: two real roots from the stable quadratic
+    // formula (the same arithmetic as SolveQuadratic), and no data-dependent branch between
+    // them and the result. Which roots lie in front of z is a coin flip per query, and a
+    // mispredicted branch there costs more than forming both kernels. Everything unusual
+    // (degree drop, discriminant <= 0, a zero or non-finite root) takes the general path.
+    const double disc = c[1] * c[1] - 4.0 * c[0] * c[2];
+    if (c[2] != 0.0 && disc > 0.0)
+    {
+      const double q = -0.5 * (c[1] + std::copysign(std::sqrt(disc), c[1]));
+      const double r0 = q / c[2];
+      const double r1 = c[0] / q;
+      const double lo = std::min(r0, r1);
+      const double hi = std::max(r1, r0);
+      if (q != 0.0 && std::isfinite(lo) && std::isfinite(hi))
+      {
+        const double wLo = 1.0 / this->ChristoffelKernel(lo);
+        const double wHi = 1.0 / this->ChristoffelKernel(hi);
+        // Summed in the general path's order. The selects keep a (pathological) NaN weight
+        // behind z out of the sum, as the general path never forms it.
+        double absorbance = this->Beta / kernelAtZ;
+        absorbance += KeepIf(lo < z, wLo);
+        absorbance += KeepIf(hi < z, wHi);
+        const double t = std::exp(-this->B0 * absorbance);
+        if (std::isfinite(absorbance) && !std::isnan(t))
+        {
+          return { t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t), false };
+        }
+      }
+    }
+  }
+  return this->GeneralQuery(z, kernelAtZ, c.data());
+}
+
+template <int N>
+TransmittanceQuery MomentTransmittance<N>::GeneralQuery(
+  double z, double kernelAtZ, const double* c) const
+{
+  const TransmittanceQuery fallback{ this->Fallback, true };
   // Support points: z plus the real roots of the kernel polynomial. A vanishing leading
   // coefficient (exactly 0 e.g. at z = 0 for moments symmetric about 0) moves a support
   // point to infinity, where its weight is 0: such a root is missing, not an error.
@@ -171,7 +233,7 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
     --degree;
   }
   std::array<double, M> roots;
-  const int count = KernelRoots<M>(c.data(), roots.data());
+  const int count = KernelRoots<M>(c, roots.data());
   if (count != degree)
   {
     return fallback;
@@ -185,7 +247,7 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
   // Newton divided differences compute, but as a sum of positive terms: no cancellation,
   // A stays in [0,1] up to rounding, and a root near infinity (leading coefficient ~ 0, e.g. z = 0
   // for symmetric moments) simply gets weight ~ 0 instead of wrecking a monomial expansion.
-  // Support points behind z have f_i = 0, so their kernels are never formed; a non-finite
+  // Support points behind z have f_i = 0, so their kernels are not formed; a non-finite
   // root still fails the query wherever it lies.
   double absorbance = this->Beta == 0.0 ? 0.0 : this->Beta / kernelAtZ;
   for (int i = 0; i < count; ++i)
@@ -214,20 +276,12 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
 template <int N>
 double MomentTransmittance<N>::ChristoffelKernel(double x) const
 {
-  // e(x)^T (L D L^T)^-1 e(x) = |L^-1 e(x)|^2 in the D^-1 norm.
-  std::array<double, M + 1> y;
-  double power = 1.0;
+  // e(x)^T (L D L^T)^-1 e(x) = |L^-1 e(x)|^2 in the D^-1 norm: a sum of positive terms.
   double kernel = 0.0;
   for (int i = 0; i <= M; ++i)
   {
-    double yi = power;
-    for (int k = 0; k < i; ++k)
-    {
-      yi -= this->L[i * (M + 1) + k] * y[k];
-    }
-    y[i] = yi;
+    const double yi = EvaluatePolynomial(&this->LInv[i * (M + 1)], i, x);
     kernel += yi * yi * this->InvD[i];
-    power *= x;
   }
   return kernel;
 }

@@ -132,6 +132,7 @@ public:
 private:
   static constexpr int M = N / 2;
   double ChristoffelKernel(double x) const;
+  TransmittanceQuery GeneralQuery(double z, double kernelAtZ, const double* c) const;
 
   enum class PixelState
   {
@@ -144,9 +145,12 @@ private:
   double B0 = 0.0;
   double Beta = kDefaultOverestimation;
   double Fallback = 1.0;
-  // B = L D L^T of the normalised, biased Hankel matrix. D is kept inverted: every query
-  // scales by it M+1 times per support point, and a multiply is far cheaper than a divide.
-  std::array<double, (M + 1) * (M + 1)> L{}; // unit lower triangular, row major
+  // Per-pixel precomputation, so that a query is a few multiply-adds before its roots:
+  // B = L D L^T is the normalised, biased Hankel matrix. Row i of L^-1 holds the coefficients
+  // (lowest degree first) of y_i(x) = (L^-1 e(x))_i, the terms of the Christoffel kernel;
+  // B^-1 = L^-T D^-1 L^-1 maps e(z) to the kernel polynomial. D is kept inverted.
+  std::array<double, (M + 1) * (M + 1)> LInv{};
+  std::array<double, (M + 1) * (M + 1)> BInv{};
   std::array<double, M + 1> InvD{};
 };
 

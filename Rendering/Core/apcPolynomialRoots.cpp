@@ -45,16 +45,6 @@ void Polish(const double* c, int degree, double* roots, int count)
 
 } // namespace
 
-double EvaluatePolynomial(const double* c, int degree, double x)
-{
-  double p = c[degree];
-  for (int k = degree - 1; k >= 0; --k)
-  {
-    p = p * x + c[k];
-  }
-  return p;
-}
-
 int SolveCubic(const double c[4], double roots[3])
 {
   if (c[3] == 0.0)

@@ -29,7 +29,15 @@ int SolveCubic(const double c[4], double roots[3]);
 int SolveQuartic(const double c[5], double roots[4]);
 
 // c[0] + c[1] x + ... + c[degree] x^degree by Horner's rule.
-double EvaluatePolynomial(const double* c, int degree, double x);
+inline double EvaluatePolynomial(const double* c, int degree, double x)
+{
+  double p = c[degree];
+  for (int k = degree - 1; k >= 0; --k)
+  {
+    p = p * x + c[k];
+  }
+  return p;
+}
 
 inline int SolveQuadratic(const double c[3], double roots[2])
 {
