@@ -147,10 +147,9 @@ private:
   double Fallback = 1.0;
   // Per-pixel precomputation, so that a query is a few multiply-adds before its roots:
   // B = L D L^T is the normalised, biased Hankel matrix. Row i of L^-1 holds the coefficients
-  // (lowest degree first) of y_i(x) = (L^-1 e(x))_i, the terms of the Christoffel kernel;
-  // B^-1 = L^-T D^-1 L^-1 maps e(z) to the kernel polynomial. D is kept inverted.
+  // (lowest degree first) of y_i(x) = (L^-1 e(x))_i: the terms of the Christoffel kernel,
+  // and with L^-T D^-1 the kernel polynomial. D is kept inverted.
   std::array<double, (M + 1) * (M + 1)> LInv{};
-  std::array<double, (M + 1) * (M + 1)> BInv{};
   std::array<double, M + 1> InvD{};
 };
 
