@@ -11,36 +11,143 @@ namespace
 
 using detail::kDiscriminantTolerance;
 
-void Polish(const double* c, int degree, double* roots, int count)
+// A residual above this multiple of the bound on Horner's rounding error (degree * eps *
+// sum |c_k x^k|) is a closed form's cancellation, not rounding: only then is a root polished.
+// Below it Newton would only move the root within the rounding noise of p, which is what the
+// unconditional polishing used to end up doing at a few polynomial evaluations per root.
+constexpr double kPolishSlack = 4.0;
+
+// Newton steps from x, accepting only strict improvements of |p|: near a double root Newton
+// can wander off.
+double PolishRoot(const double* c, int degree, double x)
 {
-  for (int i = 0; i < count; ++i)
+  double px = EvaluatePolynomial(c, degree, x);
+  for (int iter = 0; iter < 4 && px != 0.0; ++iter)
   {
-    double x = roots[i];
-    double px = EvaluatePolynomial(c, degree, x);
-    for (int iter = 0; iter < 4 && px != 0.0; ++iter)
+    double dp = 0.0;
+    for (int k = degree; k >= 1; --k)
     {
-      double dp = 0.0;
-      for (int k = degree; k >= 1; --k)
-      {
-        dp = dp * x + k * c[k];
-      }
-      if (dp == 0.0 || !std::isfinite(dp))
-      {
-        break;
-      }
-      const double next = x - px / dp;
-      const double pNext = EvaluatePolynomial(c, degree, next);
-      // Only accept strict improvements: near a double root Newton can wander off.
-      if (!(std::abs(pNext) < std::abs(px)))
-      {
-        break;
-      }
-      x = next;
-      px = pNext;
+      dp = dp * x + k * c[k];
     }
-    roots[i] = x;
+    if (dp == 0.0 || !std::isfinite(dp))
+    {
+      break;
+    }
+    const double next = x - px / dp;
+    const double pNext = EvaluatePolynomial(c, degree, next);
+    if (!(std::abs(pNext) < std::abs(px)))
+    {
+      break;
+    }
+    x = next;
+    px = pNext;
   }
-  std::sort(roots, roots + count);
+  return x;
+}
+
+bool AtRoundingFloor(const double* c, int degree, double x)
+{
+  double p = c[degree];
+  double magnitude = std::abs(c[degree]);
+  const double ax = std::abs(x);
+  for (int k = degree - 1; k >= 0; --k)
+  {
+    p = p * x + c[k];
+    magnitude = magnitude * ax + std::abs(c[k]);
+  }
+  // Written so that a NaN residual is polished, as it always was.
+  return std::abs(p) <= kPolishSlack * degree * std::numeric_limits<double>::epsilon() * magnitude;
+}
+
+double PolishIfNeeded(const double* c, int degree, double x)
+{
+  return AtRoundingFloor(c, degree, x) ? x : PolishRoot(c, degree, x);
+}
+
+// Ascending order by compare-exchange networks: the roots come out of the closed forms
+// (nearly) sorted or in two sorted pairs, and min/max do not mispredict.
+void CompareExchange(double& a, double& b)
+{
+  const double lo = std::min(a, b);
+  b = std::max(b, a);
+  a = lo;
+}
+
+void SortRoots(double* roots, int count)
+{
+  if (count == 2)
+  {
+    CompareExchange(roots[0], roots[1]);
+  }
+  else if (count == 3)
+  {
+    CompareExchange(roots[0], roots[1]);
+    CompareExchange(roots[1], roots[2]);
+    CompareExchange(roots[0], roots[1]);
+  }
+  else if (count == 4)
+  {
+    CompareExchange(roots[0], roots[1]);
+    CompareExchange(roots[2], roots[3]);
+    CompareExchange(roots[0], roots[2]);
+    CompareExchange(roots[1], roots[3]);
+    CompareExchange(roots[1], roots[2]);
+  }
+}
+
+// The cubic's closed form without polishing: the roots in ascending order, or only the
+// largest (what Ferrari's resolvent needs, one cosine instead of three roots).
+int CubicClosedForm(const double c[4], double roots[3], bool largestOnly)
+{
+  const double a = c[2] / c[3];
+  const double b = c[1] / c[3];
+  const double d = c[0] / c[3];
+  // Depressed cubic t^3 + p t + q with x = t - a/3.
+  const double shift = a / 3.0;
+  const double p = b - a * shift;
+  const double q = (2.0 / 27.0) * a * a * a - a * b / 3.0 + d;
+  if (p == 0.0)
+  {
+    roots[0] = std::cbrt(-q) - shift;
+    if (q == 0.0 && !largestOnly)
+    {
+      roots[1] = roots[2] = roots[0];
+      return 3;
+    }
+    return 1;
+  }
+  // For p < 0, the trigonometric form is exact in the three-real-root case and free of
+  // the complex intermediate values of Cardano's formula.
+  if (p < 0.0)
+  {
+    double cosArg = (1.5 * q / p) * std::sqrt(-3.0 / p);
+    if (std::abs(cosArg) <= 1.0 + kDiscriminantTolerance)
+    {
+      cosArg = std::clamp(cosArg, -1.0, 1.0);
+      const double m = 2.0 * std::sqrt(-p / 3.0);
+      const double theta = std::acos(cosArg) / 3.0;
+      const double cosTheta = std::cos(theta);
+      if (largestOnly)
+      {
+        roots[0] = m * cosTheta - shift;
+        return 1;
+      }
+      // cos(theta -+ 2 pi / 3) from one sine and cosine instead of two more cosines; with
+      // theta in [0, pi/3] these are the middle and the smallest root.
+      constexpr double kSqrt3Half = 0.86602540378443864676;
+      const double sinPart = kSqrt3Half * std::sin(theta);
+      roots[0] = m * (-0.5 * cosTheta - sinPart) - shift;
+      roots[1] = m * (-0.5 * cosTheta + sinPart) - shift;
+      roots[2] = m * cosTheta - shift;
+      return 3;
+    }
+  }
+  // One real root; the sign choice avoids cancellation between the two cube roots.
+  const double disc = 0.25 * q * q + p * p * p / 27.0;
+  const double u = -std::copysign(std::cbrt(0.5 * std::abs(q) + std::sqrt(std::max(disc, 0.0))), q);
+  const double t = (u == 0.0) ? 0.0 : u - p / (3.0 * u);
+  roots[0] = t - shift;
+  return 1;
 }
 
 } // namespace
@@ -51,62 +158,12 @@ int SolveCubic(const double c[4], double roots[3])
   {
     return SolveQuadratic(c, roots);
   }
-  const double a = c[2] / c[3];
-  const double b = c[1] / c[3];
-  const double d = c[0] / c[3];
-  // Depressed cubic t^3 + p t + q with x = t - a/3.
-  const double shift = a / 3.0;
-  const double p = b - a * shift;
-  const double q = (2.0 / 27.0) * a * a * a - a * b / 3.0 + d;
-  int count = 0;
-  if (p == 0.0)
+  const int count = CubicClosedForm(c, roots, false);
+  for (int i = 0; i < count; ++i)
   {
-    roots[0] = std::cbrt(-q) - shift;
-    count = 1;
-    if (q == 0.0)
-    {
-      roots[1] = roots[2] = roots[0];
-      count = 3;
-    }
+    roots[i] = PolishIfNeeded(c, 3, roots[i]);
   }
-  else
-  {
-    // For p < 0, the trigonometric form is exact in the three-real-root case and free of
-    // the complex intermediate values of Cardano's formula.
-    double cosArg = 0.0;
-    bool threeReal = false;
-    if (p < 0.0)
-    {
-      cosArg = (1.5 * q / p) * std::sqrt(-3.0 / p);
-      if (std::abs(cosArg) <= 1.0 + kDiscriminantTolerance)
-      {
-        threeReal = true;
-        cosArg = std::clamp(cosArg, -1.0, 1.0);
-      }
-    }
-    if (threeReal)
-    {
-      const double m = 2.0 * std::sqrt(-p / 3.0);
-      const double theta = std::acos(cosArg) / 3.0;
-      constexpr double kTwoPiThird = 2.0943951023931954923;
-      for (int k = 0; k < 3; ++k)
-      {
-        roots[k] = m * std::cos(theta - k * kTwoPiThird) - shift;
-      }
-      count = 3;
-    }
-    else
-    {
-      // One real root; the sign choice avoids cancellation between the two cube roots.
-      const double disc = 0.25 * q * q + p * p * p / 27.0;
-      const double u =
-        -std::copysign(std::cbrt(0.5 * std::abs(q) + std::sqrt(std::max(disc, 0.0))), q);
-      const double t = (u == 0.0) ? 0.0 : u - p / (3.0 * u);
-      roots[0] = t - shift;
-      count = 1;
-    }
-  }
-  Polish(c, 3, roots, count);
+  SortRoots(roots, count);
   return count;
 }
 
@@ -136,12 +193,9 @@ int SolveQuartic(const double c[5], double roots[4])
   if (q != 0.0)
   {
     const double resolvent[4] = { -q * q, 2.0 * p * p - 8.0 * r, 8.0 * p, 8.0 };
-    double mRoots[3];
-    const int mCount = SolveCubic(resolvent, mRoots);
-    if (mCount > 0)
-    {
-      m = mRoots[mCount - 1];
-    }
+    double largest[3];
+    CubicClosedForm(resolvent, largest, true);
+    m = PolishIfNeeded(resolvent, 3, largest[0]);
   }
   if (m > 0.0 && std::isfinite(m))
   {
@@ -181,7 +235,11 @@ int SolveQuartic(const double c[5], double roots[4])
       roots[count++] = y - shift;
     }
   }
-  Polish(c, 4, roots, count);
+  for (int i = 0; i < count; ++i)
+  {
+    roots[i] = PolishIfNeeded(c, 4, roots[i]);
+  }
+  SortRoots(roots, count);
   return count;
 }
 

@@ -21,8 +21,9 @@ constexpr double kDiscriminantTolerance = 64.0 * std::numeric_limits<double>::ep
 // Each solver takes the coefficients c[0] + c[1] x + ... (lowest degree first), writes the
 // real roots in ascending order (double roots repeated) and returns how many it found.
 // A vanishing leading coefficient drops to the next lower degree. Roots from the closed
-// forms are polished by Newton steps on the original polynomial, because the closed forms
-// lose digits through cancellation when roots are clustered or large.
+// forms of degree 3 and 4 are polished by Newton steps on the original polynomial where
+// their residual shows that the closed form lost digits through cancellation (clustered or
+// large roots); elsewhere they already sit at the rounding floor of the polynomial.
 // (SolveQuadratic is inline below: it is the whole root finding of 4-moment MBOIT.)
 inline int SolveQuadratic(const double c[3], double roots[2]);
 int SolveCubic(const double c[4], double roots[3]);
