@@ -126,15 +126,15 @@ int CubicClosedForm(const double c[4], double roots[3], bool largestOnly)
       cosArg = std::clamp(cosArg, -1.0, 1.0);
       const double m = 2.0 * std::sqrt(-p / 3.0);
       const double theta = std::acos(cosArg) / 3.0;
-      const double cosTheta = std::cos(theta);
       if (largestOnly)
       {
-        roots[0] = m * cosTheta - shift;
+        roots[0] = m * std::cos(theta) - shift;
         return 1;
       }
-      // cos(theta -+ 2 pi / 3) from one sine and cosine instead of two more cosines; with
-      // theta in [0, pi/3] these are the middle and the smallest root.
+      // cos(theta -+ 2 pi / 3) from the sine and cosine of theta (one sincos) instead of two
+      // more cosines; with theta in [0, pi/3] these are the middle and the smallest root.
       constexpr double kSqrt3Half = 0.86602540378443864676;
+      const double cosTheta = std::cos(theta);
       const double sinPart = kSqrt3Half * std::sin(theta);
       roots[0] = m * (-0.5 * cosTheta - sinPart) - shift;
       roots[1] = m * (-0.5 * cosTheta + sinPart) - shift;
