@@ -99,8 +99,8 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
 
   // LDL^T of the Hankel matrix H_ij = b_{i+j}. Without pivoting: a positive definite
   // matrix needs none, and a pivot that is not positive means the bias failed to make it
-  // so, which is exactly when the reconstruction cannot be trusted. D is kept while factorising
-  // (the pivots' own rounding is the old one) and only inverted at the end.
+  // so, which is exactly when the reconstruction cannot be trusted. D is inverted only after
+  // factorising, so that the pivots and their guard see the rounding of a plain LDL^T.
   std::array<double, M + 1> d;
   std::array<double, (M + 1) * (M + 1)> l{}; // unit lower triangular, row major
   for (int j = 0; j <= M; ++j)

@@ -6,7 +6,8 @@
 //
 // Method, for N = 2m moments: normalise b_k / b0, bias b <- (1-eps) b + eps v so that the
 // (m+1)x(m+1) Hankel matrix B = [b_{i+j}] is safely positive definite, factorise B = L D L^T
-// once per pixel. Per query z0: solve B c = (1, z0, ..., z0^m); the m real roots of
+// and invert L and D once per pixel. Per query z0: c = B^-1 (1, z0, ..., z0^m), a few
+// multiply-adds with those inverses (no triangular solves); the m real roots of
 // sum c_k z^k together with z0 are the support points of the canonical distribution that
 // matches the moments. The expectation of the step function (beta at z0, [z_i < z0]
 // elsewhere) under that distribution is the normalised absorbance A in front of z0;

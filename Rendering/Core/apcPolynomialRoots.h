@@ -24,7 +24,8 @@ constexpr double kDiscriminantTolerance = 64.0 * std::numeric_limits<double>::ep
 // forms of degree 3 and 4 are polished by Newton steps on the original polynomial where
 // their residual shows that the closed form lost digits through cancellation (clustered or
 // large roots); elsewhere they already sit at the rounding floor of the polynomial.
-// (SolveQuadratic is inline below: it is the whole root finding of 4-moment MBOIT.)
+// (SolveQuadratic and EvaluatePolynomial are inline: they sit in the inner loops of the
+// quartic and of every transmittance query.)
 inline int SolveQuadratic(const double c[3], double roots[2]);
 int SolveCubic(const double c[4], double roots[3]);
 int SolveQuartic(const double c[5], double roots[4]);
