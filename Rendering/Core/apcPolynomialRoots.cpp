@@ -152,12 +152,11 @@ int CubicClosedForm(const double c[4], double roots[3], bool largestOnly)
 
 } // namespace
 
-int SolveCubic(const double c[4], double roots[3])
+namespace
 {
-  if (c[3] == 0.0)
-  {
-    return SolveQuadratic(c, roots);
-  }
+
+int SolveCubicDirect(const double c[4], double roots[3])
+{
   const int count = CubicClosedForm(c, roots, false);
   for (int i = 0; i < count; ++i)
   {
@@ -167,12 +166,8 @@ int SolveCubic(const double c[4], double roots[3])
   return count;
 }
 
-int SolveQuartic(const double c[5], double roots[4])
+int SolveQuarticDirect(const double c[5], double roots[4])
 {
-  if (c[4] == 0.0)
-  {
-    return SolveCubic(c, roots);
-  }
   const double a = c[3] / c[4];
   const double b = c[2] / c[4];
   const double cc = c[1] / c[4];
@@ -241,6 +236,60 @@ int SolveQuartic(const double c[5], double roots[4])
   }
   SortRoots(roots, count);
   return count;
+}
+
+// A root far larger than the others (a nearly vanishing leading coefficient, as the kernel
+// polynomial has next to a degree drop) makes the closed forms' shift c[n-1] / (n c[n]) dwarf
+// the other roots, which then drown in its cancellation beyond what the polishing repairs
+// (roots 1e-4 apart instead of 0.4, or missing). Their reciprocals are the roots of the
+// reversed polynomial, where that root becomes the smallest and the shift stays small.
+constexpr double kReverseRatio = 64.0;
+
+bool SolveReversed(const double* c, int degree)
+{
+  return c[0] != 0.0 && std::abs(c[degree - 1]) > kReverseRatio * std::abs(c[degree]) &&
+    std::abs(c[degree - 1] * c[0]) > kReverseRatio * std::abs(c[degree] * c[1]);
+}
+
+template <int Degree, typename Direct>
+int SolveOriented(const double* c, double* roots, Direct direct)
+{
+  if (!SolveReversed(c, Degree))
+  {
+    return direct(c, roots);
+  }
+  double reversed[Degree + 1];
+  for (int k = 0; k <= Degree; ++k)
+  {
+    reversed[k] = c[Degree - k];
+  }
+  const int count = direct(reversed, roots);
+  for (int i = 0; i < count; ++i)
+  {
+    roots[i] = PolishIfNeeded(c, Degree, 1.0 / roots[i]);
+  }
+  SortRoots(roots, count);
+  return count;
+}
+
+} // namespace
+
+int SolveCubic(const double c[4], double roots[3])
+{
+  if (c[3] == 0.0)
+  {
+    return SolveQuadratic(c, roots);
+  }
+  return SolveOriented<3>(c, roots, SolveCubicDirect);
+}
+
+int SolveQuartic(const double c[5], double roots[4])
+{
+  if (c[4] == 0.0)
+  {
+    return SolveCubic(c, roots);
+  }
+  return SolveOriented<4>(c, roots, SolveQuarticDirect);
 }
 
 } // namespace apc

@@ -773,6 +773,34 @@ TYPED_TEST(MomentTransmittanceTest, AgreesWithLongDoubleReference)
   EXPECT_EQ(skipped, 0);
 }
 
+// Rays from the benchmark where the kernel polynomial's leading coefficient nearly vanishes
+// at the query depth (a support point at ~1e5): the quartic's closed form used to lose the
+// other roots there, giving a fallback or a wrong T (0.011 for 0.00196).
+TEST(MomentTransmittance, NearDegreeDropAgreesWithLongDoubleReference)
+{
+  const double rays[3][9] = { { 6.4720244875049708, -0.88502248433881259, 0.85948309759226094,
+                                -0.17178498756259897, 0.31108112344012046, -0.051975511739605608,
+                                0.15074306801817447, -0.016292968181649329, 0.089639682821863381 },
+    { 8.1118638442796502, 0.36689972005168647, 1.7667557173352482, -0.19630068540024476,
+      1.1767968190383435, -0.258768158037123, 0.9143272273773605, -0.2471179710753019,
+      0.76365813358976142 },
+    { 2.9824226188490526, -0.37611630196336721, 1.3520373876581075, -0.077996543258857021,
+      0.62221786878043273, 0.0096625488829052142, 0.29045507338146703, 0.026375808156265987,
+      0.13746657187183758 } };
+  const double depths[3] = { 0.75, -0.90625, 0.53125 };
+  for (int i = 0; i < 3; ++i)
+  {
+    const apc::MomentTransmittance<8> t(rays[i]);
+    const LongDoubleReference<8> reference(rays[i], apc::kDefaultOverestimation);
+    for (const double dz : { 0.0, -1e-9, 1e-9 })
+    {
+      const apc::TransmittanceQuery q = t.Query(depths[i] + dz);
+      EXPECT_FALSE(q.Fallback) << "ray " << i;
+      EXPECT_NEAR(q.Transmittance, reference(depths[i] + dz), 1e-9) << "ray " << i;
+    }
+  }
+}
+
 // The guards on the 4-moment fast path's doorstep: beta = 0 with every support point behind
 // z is exactly 1 (no exp of a tiny absorbance), z = 0 on symmetric moments drops the degree
 // (a support point at infinity, not a fallback), and the clamp and NaN guards are unchanged.

@@ -162,6 +162,31 @@ TEST(PolynomialRoots, PolishedWhereTheClosedFormCancels)
   EXPECT_NEAR(r[3], 0.875, 1e-14);
 }
 
+// A nearly vanishing leading coefficient puts one root far out (the kernel polynomial next to
+// a degree drop); the closed forms' shift then swamps the others (here a 3.8e-9 error in the
+// quartic's; on a ray's kernel polynomial two roots 1e-4 apart instead of 0.45), so such
+// polynomials are solved reversed. Measured errors of the small roots: <= 1e-16.
+TEST(PolynomialRoots, LargeRootDoesNotSwampTheOthers)
+{
+  const std::vector<double> quarticRoots = { -0.68786, -0.24195, 0.18462, 165694.83 };
+  const std::vector<double> quartic = FromRoots(quarticRoots, -1.4e-4);
+  double r[4];
+  ASSERT_EQ(apc::SolveQuartic(quartic.data(), r), 4);
+  for (int i = 0; i < 3; ++i)
+  {
+    EXPECT_NEAR(r[i], quarticRoots[i], 1e-13) << "quartic root " << i;
+  }
+  EXPECT_NEAR(r[3], quarticRoots[3], 1e-9 * quarticRoots[3]);
+  const std::vector<double> cubicRoots = { -276446.26, -0.09817, 0.29609 };
+  const std::vector<double> cubic = FromRoots(cubicRoots, 3e-5);
+  ASSERT_EQ(apc::SolveCubic(cubic.data(), r), 3);
+  EXPECT_NEAR(r[0], cubicRoots[0], 1e-9 * std::abs(cubicRoots[0]));
+  for (int i = 1; i < 3; ++i)
+  {
+    EXPECT_NEAR(r[i], cubicRoots[i], 1e-13) << "cubic root " << i;
+  }
+}
+
 TEST(PolynomialRoots, NearlyDoubleRootIsNotLost)
 {
   // (x - 0.3)^2 (x + 0.5)(x - 0.9), perturbed by rounding only: all four roots must come
