@@ -6,7 +6,8 @@
 //
 // Method, for N = 2m moments: normalise b_k / b0, bias b <- (1-eps) b + eps v so that the
 // (m+1)x(m+1) Hankel matrix B = [b_{i+j}] is safely positive definite, factorise B = L D L^T
-// once per pixel. Per query z0: solve B c = (1, z0, ..., z0^m); the m real roots of
+// and invert L and D once per pixel. Per query z0: c = B^-1 (1, z0, ..., z0^m), a few
+// multiply-adds with those inverses (no triangular solves); the m real roots of
 // sum c_k z^k together with z0 are the support points of the canonical distribution that
 // matches the moments. The expectation of the step function (beta at z0, [z_i < z0]
 // elsewhere) under that distribution is the normalised absorbance A in front of z0;
@@ -132,6 +133,7 @@ public:
 private:
   static constexpr int M = N / 2;
   double ChristoffelKernel(double x) const;
+  TransmittanceQuery GeneralQuery(double z, double kernelAtZ, const double* c) const;
 
   enum class PixelState
   {
@@ -144,9 +146,12 @@ private:
   double B0 = 0.0;
   double Beta = kDefaultOverestimation;
   double Fallback = 1.0;
-  std::array<double, N + 1> Moments{};       // normalised and biased, Moments[0] = 1
-  std::array<double, (M + 1) * (M + 1)> L{}; // unit lower triangular, row major
-  std::array<double, M + 1> D{};
+  // Per-pixel precomputation, so that a query is a few multiply-adds before its roots:
+  // B = L D L^T is the normalised, biased Hankel matrix. Row i of L^-1 holds the coefficients
+  // (lowest degree first) of y_i(x) = (L^-1 e(x))_i: the terms of the Christoffel kernel,
+  // and with L^-T D^-1 the kernel polynomial. D is kept inverted.
+  std::array<double, (M + 1) * (M + 1)> LInv{};
+  std::array<double, M + 1> InvD{};
 };
 
 extern template class MomentTransmittance<4>;
