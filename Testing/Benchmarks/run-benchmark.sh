@@ -6,6 +6,10 @@
 # --datasets gear,wind,flange, --threads 1,2, --zsweep-max-cells N, --time-cap S, ...
 # Timings are wall clock on a shared machine: run it when nothing else is busy (the load
 # average is printed before and after).
+# Before/after in one run: APC_BASELINE_BUILD=<another build dir> (e.g. a `git worktree` of
+# main built with .ci/build's settings) runs that build's apcBenchmarkMappers with the same
+# arguments first, writes out/benchmark/mappers_baseline.csv and prints baseline/this ratios
+# of the frame and of each pass.
 set -euo pipefail
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 bash "$top/.ci/build"
@@ -17,6 +21,14 @@ fi
 out="$top/out/benchmark"
 mkdir -p "$out"
 
+baseline=""
+if [ -n "${APC_BASELINE_BUILD:-}" ]; then
+  baseline="$out/mappers_baseline.csv"
+  echo "baseline: $APC_BASELINE_BUILD/bin/apcBenchmarkMappers; load average $(cut -d' ' -f1-3 /proc/loadavg)"
+  mkdir -p "$out/baseline"
+  bash "$top/.ci/with-xvfb" "$APC_BASELINE_BUILD/bin/apcBenchmarkMappers" --out "$out/baseline" \
+    --csv "$baseline" "$@"
+fi
 echo "load average before: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores"
 start=$(date +%s)
 # The project's private Xvfb (2048x2048x24), not xvfb-run -a: with other X jobs running,
@@ -115,3 +127,48 @@ if noisy:
         print("  " + line)
     print("The numbers are noisy: rerun on a quiet machine.")
 EOF
+
+if [ -n "$baseline" ]; then
+  python3 - "$baseline" "$out/mappers.csv" <<'EOF'
+import csv
+import sys
+
+
+def load(path):
+    return {(r["dataset"], r["mapper"], r["mode"], r["threads"]): r for r in csv.DictReader(open(path))}
+
+
+def num(row, column):
+    try:
+        return float(row[column])
+    except (KeyError, ValueError):
+        return None
+
+
+def per_sample(row, column):
+    seconds, samples = num(row, column), num(row, "samples")
+    return f"{seconds / samples * 1e9:.0f}" if seconds and samples else "-"
+
+
+before, after = load(sys.argv[1]), load(sys.argv[2])
+print("Against the baseline build, same arguments, same run (ratio = baseline time / this time,"
+      " > 1 is faster; ns/sample = pass-1 time / lattice samples marched)")
+header = ["dataset", "mode", "threads", "frame", "pass1", "pass2", "samples base/this",
+          "pass1 ns/sample base/this"]
+table = [header]
+for key, row in after.items():
+    old = before.get(key)
+    if not old or key[1] != "apc":
+        continue
+    ratios = []
+    for column in ("frame_s", "pass1_s", "pass2_s"):
+        a, b = num(old, column), num(row, column)
+        ratios.append(f"{a / b:.2f}x" if a and b else "-")
+    table.append([key[0], key[2], key[3], *ratios,
+                  f"{num(old, 'samples'):.3g}/{num(row, 'samples'):.3g}",
+                  f"{per_sample(old, 'pass1_s')}/{per_sample(row, 'pass1_s')}"])
+widths = [max(len(r[c]) for r in table) for c in range(len(header))]
+for r in table:
+    print("  ".join(cell.ljust(w) for cell, w in zip(r, widths)))
+EOF
+fi
