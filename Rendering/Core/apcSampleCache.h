@@ -36,10 +36,21 @@ struct SampleCache
   double WarpFar = 0;
   int Moments = 0;
 
+  // The samples go, the memory stays: refilling last frame's vectors costs no page faults
+  // and no reallocation (at 1024^2 on the gear teeth, ~100 MB a frame).
   void Clear()
   {
     this->Valid = false;
-    this->Tiles.clear();
+    for (auto& tile : this->Tiles)
+    {
+      tile.clear();
+    }
+  }
+  // Ready to record a frame of this many tiles.
+  void Empty(size_t tiles)
+  {
+    this->Clear();
+    this->Tiles.resize(tiles);
   }
   // Called by a tile that recorded samples; false once the cache is over its budget.
   void Charge(const std::vector<CachedSample>& recorded)

@@ -379,7 +379,7 @@ void VolumeRayMarcher::AccumulateMoments(
   const TransferTable& table, const LogDepthWarp& warp, double* moments)
 {
   SampleCache& cache = *this->Cache;
-  cache.Tiles.assign(static_cast<size_t>(this->Bins->Grid.Count()), {});
+  cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()));
   cache.Bytes = 0;
   cache.Record = cache.MaxBytes > 0;
   visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);

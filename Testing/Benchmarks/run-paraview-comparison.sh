@@ -7,7 +7,7 @@
 # Writes out/benchmark/paraview_vs_apc.csv, one PNG per case and rank count, one log per rank
 # count; prints the CSV and the time ratios.
 # Arguments go to paraview_vs_apc.py (--size W H, --frames N, --sample-distance S, --cases ...,
-# --distances ..., --only-rendered-array); $APC_COMPARE_OUT (default out/benchmark) is the
+# --distances ..., --only-rendered-array, --opacity ramp); $APC_COMPARE_OUT (default out/benchmark) is the
 # output folder. run-evaluation.sh uses this script for the real-data experiment. Timings are wall clock on a shared 2-core machine (4 ranks are
 # oversubscribed): the load average is printed around each run; rerun when it is high.
 set -euo pipefail
@@ -81,4 +81,8 @@ for (ranks, distance, name), a in by.items():
                       float(p["first_frame_s"]), float(a["first_frame_s"]) /
                       float(p["first_frame_s"]), float(a["frame_s"]), float(p["frame_s"]),
                       float(a["frame_s"]) / float(p["frame_s"])))
+            if a.get("pass1_s") and a.get("pass2_s"):
+                render = float(a["pass1_s"]) + float(a["pass2_s"])
+                print("    render stages (pass 1 + pass 2) %.2f s = %.2f of %s's later frame" % (
+                      render, render / float(p["frame_s"]), other))
 EOF
