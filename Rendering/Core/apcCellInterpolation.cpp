@@ -387,6 +387,89 @@ bool Converged(const double p[3], int steps, double pcoords[3], int* iterations)
 bool CellInterpolator::ParametricCoordinates(
   const double x[3], double pcoords[3], int* iterations, double tolerance) const
 {
+  return this->Search(x, pcoords, iterations, tolerance, nullptr);
+}
+
+namespace
+{
+inline void Multiply(const double m[3][3], const double v[3], double out[3])
+{
+  out[0] = Dot(m[0], v);
+  out[1] = Dot(m[1], v);
+  out[2] = Dot(m[2], v);
+}
+
+void Remember(NewtonMemory* memory, const double x[3], const double p[3], const double cr[3],
+  const double cs[3], const double ct[3], double invDet)
+{
+  if (!memory)
+  {
+    return;
+  }
+  memory->Valid = true;
+  for (int d = 0; d < 3; ++d)
+  {
+    memory->P[d] = p[d];
+    memory->X[d] = x[d];
+    memory->InverseJacobian[0][d] = cr[d] * invDet;
+    memory->InverseJacobian[1][d] = cs[d] * invDet;
+    memory->InverseJacobian[2][d] = ct[d] * invDet;
+  }
+}
+
+// Chord steps tried from a prediction before a full Newton search: from a neighbour's
+// solution one or two reach an image's tolerance.
+constexpr int kMaxChordSteps = 3;
+}
+
+bool CellInterpolator::Follow(
+  const double x[3], NewtonMemory& memory, double pcoords[3], double tolerance) const
+{
+  if (!memory.Valid || this->Affine || this->Degenerate)
+  {
+    return this->Search(x, pcoords, nullptr, tolerance, &memory);
+  }
+  const bool pyramid = this->CellType == CellShape::Pyramid;
+  const double y[3] = { x[0] - this->C[0][0], x[1] - this->C[0][1], x[2] - this->C[0][2] };
+  const double dx[3] = { x[0] - memory.X[0], x[1] - memory.X[1], x[2] - memory.X[2] };
+  double p[3];
+  Multiply(memory.InverseJacobian, dx, p);
+  for (int d = 0; d < 3; ++d)
+  {
+    p[d] += memory.P[d];
+  }
+  for (int step = 0; step < kMaxChordSteps && IsFinite(p); ++step)
+  {
+    double moved[3];
+    this->Map(p, moved);
+    const double G[3] = { moved[0] - y[0], moved[1] - y[1], moved[2] - y[2] };
+    double e[3];
+    Multiply(memory.InverseJacobian, G, e);
+    p[0] -= e[0];
+    p[1] -= e[1];
+    p[2] -= e[2];
+    if (IsFinite(p) && NewtonStepSize(e, p, pyramid) < tolerance)
+    {
+      std::copy(p, p + 3, pcoords);
+      std::copy(p, p + 3, memory.P);
+      std::copy(x, x + 3, memory.X);
+      return true;
+    }
+  }
+  if (IsFinite(p))
+  {
+    std::copy(p, p + 3, pcoords);
+  }
+  return this->Search(x, pcoords, nullptr, tolerance, &memory);
+}
+
+bool CellInterpolator::Search(const double x[3], double pcoords[3], int* iterations,
+  double tolerance, NewtonMemory* memory) const
+{
+  if (memory)
+  {
+    memory->Valid = false;
+  }
   if (iterations)
   {
     *iterations = 0;
@@ -472,6 +555,7 @@ bool CellInterpolator::ParametricCoordinates(
     const double step = NewtonStepSize(d, p, pyramid);
     if (step < tolerance)
     {
+      Remember(memory, x, p, cr, cs, ct, invDet);
       return Converged(p, steps, pcoords, iterations);
     }
     if (step < kChordRegime)
@@ -489,6 +573,7 @@ bool CellInterpolator::ParametricCoordinates(
       p[2] -= e[2];
       if (IsFinite(p) && NewtonStepSize(e, p, pyramid) < tolerance)
       {
+        Remember(memory, x, p, cr, cs, ct, invDet);
         return Converged(p, steps, pcoords, iterations);
       }
     }

@@ -87,6 +87,16 @@ void ClampToReferenceCell(CellShape shape, double pcoords[3]);
 // True if pcoords lies in the reference cell grown by tolerance on every side.
 bool InsideReferenceCell(CellShape shape, const double pcoords[3], double tolerance);
 
+// What CellInterpolator::Follow carries from one point to the next: the last solution and
+// the inverse Jacobian near it.
+struct NewtonMemory
+{
+  bool Valid = false;
+  double P[3] = { 0, 0, 0 };
+  double X[3] = { 0, 0, 0 };
+  double InverseJacobian[3][3] = {};
+};
+
 // The inverse map and the interpolation of one cell, set up once per cell and then queried
 // per sample. Allocation-free; 344 bytes, so it lives on the stack or in a per-thread
 // cache.
@@ -114,6 +124,14 @@ public:
   bool ParametricCoordinates(const double x[3], double pcoords[3], int* iterations = nullptr,
     double tolerance = kNewtonTolerance) const;
 
+  // ParametricCoordinates for a point near the one memory holds (the next sample along a
+  // ray, the first sample of the neighbouring ray): the linear prediction from memory, then
+  // chord steps with memory's Jacobian, which cost one evaluation of the map each; a full
+  // Newton search (from the prediction, or from pcoords if memory is not Valid) only when
+  // they do not converge. Stops at the same test as ParametricCoordinates and updates memory
+  // (not Valid after a failure).
+  bool Follow(const double x[3], NewtonMemory& memory, double pcoords[3], double tolerance) const;
+
   // Sum of VTK's weights times the corner scalars: exact at the corners.
   double InterpolateScalar(const double pcoords[3]) const;
 
@@ -129,6 +147,9 @@ private:
   void Evaluate(const double p[3], double offset[3], double jacobian[3][3]) const;
   // The offset alone.
   void Map(const double p[3], double offset[3]) const;
+  // ParametricCoordinates, also leaving the solution and its inverse Jacobian in memory.
+  bool Search(const double x[3], double pcoords[3], int* iterations, double tolerance,
+    NewtonMemory* memory) const;
 
   CellShape CellType = CellShape::Hexahedron;
   bool Affine = false;

@@ -104,6 +104,10 @@ struct CellPlanes
 // non-planar faces replaced by planes, move it far less.
 constexpr double kOutsideTolerance = 1e-3;
 
+// Scalars need about single precision: 1e-7 in parametric units is ample and saves Newton
+// steps on distorted cells.
+constexpr double kSampleTolerance = 1e-7;
+
 // The lattice t_k = k * spacing. A sample belongs to the cell whose [tin, tout) holds the
 // rounded product k * spacing, so the first index of an interval must be the smallest k
 // whose product is >= tin, exactly; a quotient only gives a first guess, which rounding can
@@ -192,9 +196,10 @@ struct VolumeRayMarcher::Walker
     const Lattice lattice(this->Table.GetSampleSpacing());
     int64_t samples = 0;
     bool haveCorners = false;
-    // Newton's first guess for a ray: the coordinates of the first sample of the cell's
-    // previous ray, a neighbouring pixel at about the same depth; then the previous sample.
-    double firstGuess[3] = { 0, 0, 0 };
+    // Newton starts a ray from the first sample of the cell's previous ray (a neighbouring
+    // pixel at about the same depth), then goes on from the previous sample.
+    NewtonMemory firstMemory;
+    double centre[3] = { 0, 0, 0 };
     for (int j = j0; j <= j1; ++j)
     {
       for (int i = i0; i <= i1; ++i)
@@ -220,11 +225,18 @@ struct VolumeRayMarcher::Walker
           // Set up lazily: most binned cells miss most of their rectangle's rays.
           this->Mesh.GetCorners(cell, state.Corners);
           state.Interpolator.Set(state.Corners);
-          ParametricCenter(state.Corners.Shape, firstGuess);
+          ParametricCenter(state.Corners.Shape, centre);
           haveCorners = true;
         }
-        double pcoords[3] = { firstGuess[0], firstGuess[1], firstGuess[2] };
-        bool first = true;
+        // Affine cells are inverted in closed form: nothing to carry.
+        const bool follow = interpolate && !state.Interpolator.IsAffine();
+        NewtonMemory memory;
+        if (follow)
+        {
+          memory = firstMemory;
+        }
+        double pcoords[3] = { centre[0], centre[1], centre[2] };
+        bool first = follow;
         // Lattice samples in [tin, tout): t_k = k * spacing, the same points on every rank.
         int64_t k = lattice.First(tin);
         for (double t = static_cast<double>(k) * lattice.Spacing; t < tout;
@@ -236,21 +248,19 @@ struct VolumeRayMarcher::Walker
           {
             const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
               ray.O[2] + t * ray.D[2] };
-            // Scalars need about single precision: 1e-7 in parametric units is ample and
-            // saves Newton steps on distorted cells. (An extrapolated guess was tried: it
-            // can leave the cell and converge to another root of a non-affine map.)
-            if (!state.Interpolator.ParametricCoordinates(x, pcoords, nullptr, 1e-7) ||
+            if (!state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance) ||
               !InsideReferenceCell(state.Corners.Shape, pcoords, kOutsideTolerance))
             {
               // The point is inside the cell's planes, yet Newton converged outside the cell:
               // another root of a non-affine map (pyramids, from a neighbour's guess). The
               // root inside is found from the cell's centre.
-              ParametricCenter(state.Corners.Shape, pcoords);
-              state.Interpolator.ParametricCoordinates(x, pcoords, nullptr, 1e-7);
+              std::copy(centre, centre + 3, pcoords);
+              memory.Valid = false;
+              state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance);
             }
             if (first)
             {
-              std::copy(pcoords, pcoords + 3, firstGuess);
+              firstMemory = memory;
               first = false;
             }
             // Clamped to the cell's range: a point inside the planes but outside the

@@ -6,7 +6,8 @@
 //
 //   apcBenchmarkMappers [--size N] [--quick] [--repeats N] [--datasets gear,wind,flange]
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
-//     [--time-cap S] [--spacing-scale F] [--mappers bunyk,exact,mboit,zsweep,pt] [--no-images]
+//     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
+//     [--no-images]
 //
 // Run under an X server (xvfb-run); Testing/Benchmarks/run-benchmark.sh does everything.
 #include "vtkAPCPuzzleSource.h"
@@ -135,6 +136,7 @@ struct Options
   vtkIdType ZSweepMaxCells = 100000;
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
+  int Moments = 4; // APC's MBOIT moments
 };
 
 // A shared scene (its Grid: the original cells, what APC renders) plus what VTK's mappers
@@ -476,7 +478,10 @@ public:
     // segment per tetrahedron (5-6 per hexahedron): also time MBOIT with about as many
     // samples as Bunyk has segments, the other reading of "comparable sampling".
     const double bunykSamples = this->FindSamples(first, "bunyk", "", maxThreads);
-    const double apcSamples = this->FindSamples(first, "apc", "mboit", maxThreads);
+    // Bunyk integrates every segment, visible or not; APC skips the cells the transfer
+    // function hides, so the match counts the lattice samples inside all cells.
+    const double apcSamples =
+      bunykSamples > 0 ? LatticeSamples(scene, this->Opt.Size, scene.SampleDistance) : NAN;
     if (bunykSamples > 0 && apcSamples > 0)
     {
       this->RunAPC(scene, vtkAPCVolumeMapper::MBOIT, maxThreads, true,
@@ -667,6 +672,23 @@ private:
     this->Rows.push_back(row);
   }
 
+  // Lattice samples inside the cells at this spacing, whatever the transfer function hides:
+  // one untimed exact frame with a faint opacity everywhere, so that no cell is skipped.
+  static double LatticeSamples(const MapperScene& scene, int size, double spacing)
+  {
+    MapperScene faint = scene;
+    faint.TF.Opacities = { { faint.TF.Min, 1e-6 }, { faint.TF.Max, 1e-6 } };
+    Stage stage(faint, size, 1e9);
+    vtkNew<vtkAPCVolumeMapper> mapper;
+    mapper->SetInputData(faint.Grid);
+    mapper->SetMode(vtkAPCVolumeMapper::EXACT);
+    mapper->SetSampleDistance(spacing);
+    stage.SetMapper(mapper, faint);
+    stage.Render();
+    vtkDataArray* count = mapper->GetLastImage()->GetFieldData()->GetArray("SampleCount");
+    return count ? count->GetTuple1(0) : NAN;
+  }
+
   double FindSamples(
     size_t first, const std::string& mapper, const std::string& mode, int threads) const
   {
@@ -696,6 +718,7 @@ private:
     mapper->SetMode(mode);
     mapper->SetNumberOfThreads(threads);
     mapper->SetSampleDistance(spacing);
+    mapper->SetNumberOfMoments(this->Opt.Moments);
     stage.SetMapper(mapper, scene);
     std::vector<double> pass1, pass2, setup, samples;
     double mesh = 0;
@@ -848,7 +871,8 @@ void Usage()
 {
   std::cerr << "usage: apcBenchmarkMappers [--size N] [--quick] [--repeats N]\n"
                "  [--datasets gear,wind,flange] [--out DIR] [--csv FILE] [--data DIR]\n"
-               "  [--threads 1,2] [--zsweep-max-cells N] [--time-cap SECONDS] [--spacing-scale F]\n"
+               "  [--threads 1,2] [--zsweep-max-cells N] [--time-cap SECONDS] [--spacing-scale F] "
+               "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images]\n";
 }
@@ -921,6 +945,10 @@ int main(int argc, char* argv[])
     else if (arg == "--mappers")
     {
       options.Mappers = Split(value());
+    }
+    else if (arg == "--moments")
+    {
+      options.Moments = std::stoi(value());
     }
     else if (arg == "--spacing-scale")
     {
