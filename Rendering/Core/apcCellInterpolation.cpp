@@ -347,13 +347,12 @@ void CellInterpolator::Map(const double p[3], double offset[3]) const
 
 void CellInterpolator::Evaluate(const double p[3], double offset[3], double J[3][3]) const
 {
+  this->Map(p, offset);
   const double r = p[0], s = p[1], t = p[2];
   const double rs = r * s, rt = r * t, st = s * t;
   const auto& c = this->C;
   for (int d = 0; d < 3; ++d)
   {
-    offset[d] = r * c[1][d] + s * c[2][d] + t * c[3][d] + rs * c[4][d] + rt * c[5][d] +
-      st * c[6][d] + rs * t * c[7][d];
     J[0][d] = c[1][d] + s * c[4][d] + t * c[5][d] + st * c[7][d];
     J[1][d] = c[2][d] + r * c[4][d] + t * c[6][d] + rt * c[7][d];
     J[2][d] = c[3][d] + r * c[5][d] + s * c[6][d] + rs * c[7][d];

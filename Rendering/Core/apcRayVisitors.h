@@ -165,9 +165,8 @@ struct Moments : NoSegments
     if (this->Recording && this->Cache->Record)
     {
       // The cache's vector (last frame's memory) comes back to be refilled by the next tile.
-      std::vector<CachedSample>& kept = this->Cache->Tiles[tile.Index];
-      kept.swap(this->Recorded);
-      this->Cache->Charge(kept);
+      this->Cache->Tiles[tile.Index].swap(this->Recorded);
+      this->Cache->Keep(tile.Index);
     }
     for (int p = 0; p < tile.Pixels(); ++p)
     {

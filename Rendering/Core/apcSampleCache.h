@@ -4,6 +4,7 @@
 #ifndef apcSampleCache_h
 #define apcSampleCache_h
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -25,9 +26,12 @@ struct CachedSample
 struct SampleCache
 {
   std::vector<std::vector<CachedSample>> Tiles;
+  // Kept[t]: tile t's samples are all in the cache. The tiles recorded before the budget ran
+  // out stay cached; pass 2 replays them and marches only the others again.
+  std::vector<uint8_t> Kept;
   std::atomic<size_t> Bytes{ 0 };
   size_t MaxBytes = size_t(1) << 30;
-  // Cleared by the tile that goes over the budget: the cache is then dropped as a whole.
+  // Cleared by the first tile that does not fit: no tile records after it.
   std::atomic<bool> Record{ false };
   bool Valid = false;
   // What the samples were taken with: pass 2 replays them only if it uses the same.
@@ -45,21 +49,31 @@ struct SampleCache
     {
       tile.clear();
     }
+    std::fill(this->Kept.begin(), this->Kept.end(), uint8_t(0));
   }
   // Ready to record a frame of this many tiles.
   void Empty(size_t tiles)
   {
     this->Clear();
     this->Tiles.resize(tiles);
+    this->Kept.assign(tiles, 0);
+    this->Bytes = 0;
+    this->Record = this->MaxBytes > 0;
   }
-  // Called by a tile that recorded samples; false once the cache is over its budget.
-  void Charge(const std::vector<CachedSample>& recorded)
+  // Called by a tile that recorded all its samples into Tiles[tile]: keeps them if they fit
+  // in the budget, else drops them and stops the recording.
+  void Keep(size_t tile)
   {
+    std::vector<CachedSample>& recorded = this->Tiles[tile];
     const size_t bytes = recorded.capacity() * sizeof(CachedSample);
     if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes)
     {
+      this->Bytes.fetch_sub(bytes);
       this->Record = false;
+      recorded = std::vector<CachedSample>();
+      return;
     }
+    this->Kept[tile] = 1;
   }
 };
 

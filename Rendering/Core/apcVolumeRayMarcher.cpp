@@ -332,7 +332,8 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
 
 //------------------------------------------------------------------------------
 template <class Visitor>
-void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
+void VolumeRayMarcher::March(
+  Visitor& prototype, const TransferTable& table, const std::vector<uint8_t>* skipTiles)
 {
   this->LastSamples = 0;
   if (!this->Mesh || !this->Camera || this->Mesh->GetNumberOfCells() == 0)
@@ -355,7 +356,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table)
       std::vector<RaySetup>& rays = rayBuffers.local();
       for (int64_t t = begin; t < end; ++t)
       {
-        if (this->Bins->Empty(t))
+        if (this->Bins->Empty(t) || (skipTiles && (*skipTiles)[t]))
         {
           continue;
         }
@@ -390,19 +391,13 @@ void VolumeRayMarcher::AccumulateMoments(
 {
   SampleCache& cache = *this->Cache;
   cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()));
-  cache.Bytes = 0;
-  cache.Record = cache.MaxBytes > 0;
   visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);
   this->March(visitor, table);
-  cache.Valid = cache.Record;
+  cache.Valid = cache.MaxBytes > 0;
   cache.Table = &table;
   cache.WarpNear = warp.Near();
   cache.WarpFar = warp.Far();
   cache.Moments = N;
-  if (!cache.Valid)
-  {
-    cache.Tiles.clear();
-  }
 }
 
 //------------------------------------------------------------------------------
@@ -411,20 +406,24 @@ void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDep
   const double* moments, const MomentSettings<N>& settings, double* colourSums)
 {
   const SampleCache& cache = *this->Cache;
-  this->LastColourUsedCache = cache.Valid && cache.Table == &table && cache.Moments == N &&
+  const bool usable = cache.Valid && cache.Table == &table && cache.Moments == N &&
     cache.WarpNear == warp.Near() && cache.WarpFar == warp.Far();
-  if (this->LastColourUsedCache)
+  int64_t replayed = 0;
+  if (usable)
   {
-    this->ReplayColour<N>(table, warp, moments, settings, colourSums);
-    return;
+    replayed = this->ReplayColour<N>(table, warp, moments, settings, colourSums);
   }
+  // The tiles the cache does not hold (all of them without a cache) are marched again.
   visitors::Colour<N> visitor(colourSums, this->Width(), &warp, moments, settings);
-  this->March(visitor, table);
+  this->March(visitor, table, usable ? &cache.Kept : nullptr);
+  this->LastSamples += replayed;
+  this->LastColourCacheShare =
+    this->LastSamples > 0 ? static_cast<double>(replayed) / this->LastSamples : (usable ? 1 : 0);
 }
 
 //------------------------------------------------------------------------------
 template <int N>
-void VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDepthWarp& warp,
+int64_t VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDepthWarp& warp,
   const double* moments, const MomentSettings<N>& settings, double* colourSums)
 {
   // Pass 2 from pass 1's samples: the same samples with the same values, re-weighted by the
@@ -441,7 +440,7 @@ void VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDepthWa
       for (int64_t t = begin; t < end; ++t)
       {
         const std::vector<CachedSample>& recorded = cache.Tiles[t];
-        if (recorded.empty())
+        if (!cache.Kept[t] || recorded.empty())
         {
           continue;
         }
@@ -455,7 +454,7 @@ void VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDepthWa
         samples.local() += static_cast<int64_t>(recorded.size());
       }
     });
-  this->LastSamples = samples.combine(std::plus<int64_t>());
+  return samples.combine(std::plus<int64_t>());
 }
 
 //------------------------------------------------------------------------------

@@ -53,10 +53,10 @@ public:
 
   // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
   // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
-  // over the budget pass 2 marches again. 0 disables. Default 1 GiB.
+  // the tiles beyond the budget are marched again. 0 disables. Default 1 GiB.
   void SetMaxSampleCacheBytes(size_t bytes);
-  // Whether the last AccumulateColour replayed cached samples.
-  bool GetLastColourUsedCache() const { return this->LastColourUsedCache; }
+  // The share of the last AccumulateColour's samples replayed from the cache (0 to 1).
+  double GetLastColourCacheShare() const { return this->LastColourCacheShare; }
 
   // Exact ordered blending: premultiplied RGBA, W*H*4.
   void RenderExact(const TransferTable& table, float* rgba);
@@ -82,10 +82,13 @@ public:
 
 private:
   struct Walker;
+  // skipTiles: tiles t with (*skipTiles)[t] set are left out.
   template <class Visitor>
-  void March(Visitor& prototype, const TransferTable& table);
+  void March(Visitor& prototype, const TransferTable& table,
+    const std::vector<uint8_t>* skipTiles = nullptr);
+  // Returns the samples replayed.
   template <int N>
-  void ReplayColour(const TransferTable& table, const LogDepthWarp& warp, const double* moments,
+  int64_t ReplayColour(const TransferTable& table, const LogDepthWarp& warp, const double* moments,
     const MomentSettings<N>& settings, double* colourSums);
   int Width() const { return this->Camera ? this->Camera->GetWidth() : 0; }
 
@@ -98,7 +101,7 @@ private:
   std::vector<float> RayEnds;
   std::unique_ptr<TileBins> Bins;
   std::unique_ptr<SampleCache> Cache;
-  bool LastColourUsedCache = false;
+  double LastColourCacheShare = 0;
   int Threads = 0;
   int64_t LastSamples = 0;
 };
