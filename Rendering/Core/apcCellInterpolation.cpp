@@ -416,12 +416,31 @@ void Remember(NewtonMemory* memory, const double x[3], const double p[3], const 
   }
 }
 
+// How far (parametric units) outside the reference cell Follow's answer for a point inside
+// the cell may lie before it is taken for a wrong root: rounding on faces, and non-planar
+// faces replaced by planes in the ray clipping, move it far less.
+constexpr double kOutsideTolerance = 1e-3;
+
 // Chord steps tried from a prediction before a full Newton search: from a neighbour's
 // solution one or two reach an image's tolerance.
 constexpr int kMaxChordSteps = 3;
 }
 
 bool CellInterpolator::Follow(
+  const double x[3], NewtonMemory& memory, double pcoords[3], double tolerance) const
+{
+  if (this->FollowFromMemory(x, memory, pcoords, tolerance) &&
+    InsideReferenceCell(this->CellType, pcoords, kOutsideTolerance))
+  {
+    return true;
+  }
+  // x is inside the cell, yet Newton converged outside it: another root of a non-affine map
+  // (pyramids, from a neighbour's guess). The root inside is found from the cell's centre.
+  ParametricCenter(this->CellType, pcoords);
+  return this->Search(x, pcoords, nullptr, tolerance, &memory);
+}
+
+bool CellInterpolator::FollowFromMemory(
   const double x[3], NewtonMemory& memory, double pcoords[3], double tolerance) const
 {
   if (!memory.Valid || this->Affine || this->Degenerate)

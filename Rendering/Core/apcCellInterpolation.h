@@ -124,12 +124,14 @@ public:
   bool ParametricCoordinates(const double x[3], double pcoords[3], int* iterations = nullptr,
     double tolerance = kNewtonTolerance) const;
 
-  // ParametricCoordinates for a point near the one memory holds (the next sample along a
-  // ray, the first sample of the neighbouring ray): the linear prediction from memory, then
-  // chord steps with memory's Jacobian, which cost one evaluation of the map each; a full
-  // Newton search (from the prediction, or from pcoords if memory is not Valid) only when
-  // they do not converge. Stops at the same test as ParametricCoordinates and updates memory
-  // (not Valid after a failure).
+  // ParametricCoordinates for a point x known to lie in the cell, near the one memory holds
+  // (the next sample along a ray, the first sample of the neighbouring ray): the linear
+  // prediction from memory, then chord steps with memory's Jacobian, which cost one
+  // evaluation of the map each; a full Newton search (from the prediction, or from pcoords
+  // if memory is not Valid) only when they do not converge. An answer clearly outside the
+  // reference cell is a wrong root of a non-affine map and is searched again from the
+  // centre. Stops at the same test as ParametricCoordinates and updates memory (not Valid
+  // after a failure).
   bool Follow(const double x[3], NewtonMemory& memory, double pcoords[3], double tolerance) const;
 
   // Sum of VTK's weights times the corner scalars: exact at the corners.
@@ -147,6 +149,9 @@ private:
   void Evaluate(const double p[3], double offset[3], double jacobian[3][3]) const;
   // The offset alone.
   void Map(const double p[3], double offset[3]) const;
+  // Follow without the check for a wrong root.
+  bool FollowFromMemory(
+    const double x[3], NewtonMemory& memory, double pcoords[3], double tolerance) const;
   // ParametricCoordinates, also leaving the solution and its inverse Jacobian in memory.
   bool Search(const double x[3], double pcoords[3], int* iterations, double tolerance,
     NewtonMemory* memory) const;

@@ -99,11 +99,6 @@ struct CellPlanes
   }
 };
 
-// How far (parametric units) outside the reference cell Newton's answer for a point inside
-// the cell's planes may lie before it is taken for a wrong root: rounding on faces, and
-// non-planar faces replaced by planes, move it far less.
-constexpr double kOutsideTolerance = 1e-3;
-
 // Scalars need about single precision: 1e-7 in parametric units is ample and saves Newton
 // steps on distorted cells.
 constexpr double kSampleTolerance = 1e-7;
@@ -248,16 +243,7 @@ struct VolumeRayMarcher::Walker
           {
             const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
               ray.O[2] + t * ray.D[2] };
-            if (!state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance) ||
-              !InsideReferenceCell(state.Corners.Shape, pcoords, kOutsideTolerance))
-            {
-              // The point is inside the cell's planes, yet Newton converged outside the cell:
-              // another root of a non-affine map (pyramids, from a neighbour's guess). The
-              // root inside is found from the cell's centre.
-              std::copy(centre, centre + 3, pcoords);
-              memory.Valid = false;
-              state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance);
-            }
+            state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance);
             if (first)
             {
               firstMemory = memory;
