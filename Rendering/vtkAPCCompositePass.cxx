@@ -135,6 +135,11 @@ vtkIdType vtkAPCCompositePass::GetLastCompositedPixels() const
   return this->Internal->Record.Pixels;
 }
 
+vtkIdType vtkAPCCompositePass::GetLastCoveredPixels() const
+{
+  return this->Internal->Record.CoveredPixels;
+}
+
 bool vtkAPCCompositePass::GetLastFrameFailed() const
 {
   return this->Internal->Record.Failed;
@@ -214,6 +219,9 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Width = agreed.Width;
   frame.Height = agreed.Height;
   frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height);
+  const apc::ScreenRect& r = frame.Rect;
+  frame.Tiles =
+    r.Pixels() > 0 ? apc::TileGrid(frame.Width, r.I0, r.J0, r.I1, r.J1) : apc::TileGrid();
   // The frame's moment settings: the agreed number, the first volume's beta, bias and resolve.
   frame.Moments = mappers.front()->GetMomentParameters();
   frame.Moments.Moments = agreed.MaxMoments;
@@ -225,8 +233,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   return true;
 }
 
-// Step 2: the display process's (composited) depth over the screen rectangle, where every
-// ray must stop, on every process.
+// Step 2: the display process's (composited) depth, where every ray must stop, on every
+// process: only the tiles of the screen rectangle where it has opaque geometry travel.
 std::vector<float> ShareDepth(
   const apc::ProcessGroup& group, const apc::CompositeFrame& frame, apc::FrameRecord& record)
 {
@@ -236,20 +244,34 @@ std::vector<float> ShareDepth(
   {
     return depth;
   }
-  std::vector<float> packed(rect.Pixels());
   if (group.IsDisplay())
   {
+    std::vector<float> packed(rect.Pixels());
     frame.Renderer->GetRenderWindow()->GetZbufferData(frame.X0 + rect.I0, frame.Y0 + rect.J0,
       frame.X0 + rect.I1 - 1, frame.Y0 + rect.J1 - 1, packed.data());
+    apc::Unpack(packed.data(), frame.Width, rect, 1, depth.data());
   }
-  if (group.Parallel)
+  if (!group.Parallel)
+  {
+    return depth;
+  }
+  std::vector<unsigned char> opaque = group.IsDisplay()
+    ? frame.Tiles.Mark([&](size_t pixel) { return depth[pixel] < 1.0f; })
+    : std::vector<unsigned char>(frame.Tiles.Tiles());
+  group.Controller->Broadcast(opaque.data(), static_cast<vtkIdType>(opaque.size()), group.Display);
+  std::vector<float> packed(frame.Tiles.PixelsIn(opaque));
+  frame.Tiles.Pack(opaque, depth.data(), 1, packed.data());
+  if (!packed.empty())
   {
     group.Controller->Broadcast(
       packed.data(), static_cast<vtkIdType>(packed.size()), group.Display);
-    record.BytesSent += group.IsDisplay() ? 4.0 * packed.size() : 0.0;
-    record.MessagesSent += group.IsDisplay() ? 1 : 0;
   }
-  apc::Unpack(packed.data(), frame.Width, rect, 1, depth.data());
+  frame.Tiles.Unpack(opaque, packed.data(), 1, depth.data());
+  if (group.IsDisplay())
+  {
+    record.BytesSent += static_cast<double>(opaque.size() + 4 * packed.size());
+    record.MessagesSent += packed.empty() ? 1 : 2;
+  }
   return depth;
 }
 }
@@ -276,7 +298,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   {
     return;
   }
-  internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels());
+  internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels()); // APC: fewer
   const std::vector<float> depth = ShareDepth(group, frame, internal.Record);
   internal.Record.Clock.Lap("depth");
   for (size_t v = 0; v < volumes.size(); ++v)

@@ -12,16 +12,19 @@
  * 2. one small allreduce: the union of all processes' data bounds (depth warp, sample
  *    spacing, screen rectangle) and a failure flag, so that a process whose input is
  *    unusable makes every process skip the frame instead of waiting in a collective;
- * 3. a broadcast of the display process's depth over the data's screen rectangle, so that
+ * 3. a broadcast of the display process's depth where it has opaque geometry, so that
  *    every process stops its rays at the composited opaque geometry;
- * 4. pass 1 on the local cells: the moment image; one allreduce (sum) of it;
- * 5. pass 2 with the global moments: the colour-sum image; one reduce (sum) to the display
- *    process;
+ * 4. pass 1 on the local cells: the moment image; a small allreduce (bytewise max) of which
+ *    8x8 tiles each process covers, then one allreduce (sum) of the covered tiles' moments;
+ * 5. pass 2 with the global moments: the colour-sum image; one reduce (sum) of the same
+ *    tiles to the display process;
  * 6. on the display process: resolve, and blend over the opaque image in the render window.
  *
- * Only the screen rectangle the data's bounds cover is sent. Moment and colour sums travel
- * in double precision (CompositeInDouble, default on) so that the distributed image equals
- * the one-process MBOIT image to rounding; off halves the bytes.
+ * Only the tiles of the data's screen rectangle that some process covers are sent (depth:
+ * the tiles where the display process has opaque geometry). Processes sum in double; the
+ * sums travel in float (the paper's format, 36 bytes per covered pixel at 4 moments) unless
+ * CompositeInDouble is on, so the distributed image equals the one-process MBOIT image to
+ * float rounding (to double rounding with CompositeInDouble).
  *
  * Volumes share one moment image, so several APC volumes are composited order-independently
  * together; they must then use the same NumberOfMoments, and the first volume's
@@ -100,7 +103,8 @@ public:
 
   ///@{
   /**
-   * Sum moments and colours in double (default) or float precision.
+   * Ship the moment and colour sums in double instead of float (default off: float, half
+   * the bytes; each process still sums its own samples in double).
    */
   vtkSetMacro(CompositeInDouble, bool);
   vtkGetMacro(CompositeInDouble, bool);
@@ -145,8 +149,10 @@ public:
    * The last frame, per process: wall-clock seconds of a stage (null for the total), bytes
    * this process sent into the collectives and point-to-point messages, the number of those
    * (a collective this process contributes data to counts as one, as does each non-empty
-   * direct send), and the screen pixels composited. Stages: "agree", "depth", then for APC
-   * "pass1", "allreduce", "pass2", "reduce", "resolve"; for SEGMENTS "segments" (rendering
+   * direct send), and the screen pixels composited (APC: the pixels of the covered tiles;
+   * SEGMENTS: the screen rectangle). Stages: "agree", "depth", then for APC "pass1",
+   * "tiles" (agreeing on the covered tiles: where a process waits for the slowest pass 1),
+   * "allreduce", "pass2", "reduce", "resolve"; for SEGMENTS "segments" (rendering
    * them), "exchange" (counts and direct send to the strip owners), "blend_segments" (sort
    * and blend of the own strip), "gather" (strips to the display process), "statistics"
    * (the segment counts below; not counted in bytes or messages); for LOCAL_EXACT "exact";
@@ -157,6 +163,12 @@ public:
   vtkIdType GetLastMessagesSent() const;
   vtkIdType GetLastCompositedPixels() const;
   ///@}
+
+  /**
+   * APC mode, the last frame: the pixels where some process's volume has absorbance (the
+   * global moment b0 > 0), the same on every process; for bytes per covered pixel.
+   */
+  vtkIdType GetLastCoveredPixels() const;
 
   ///@{
   /**
@@ -207,7 +219,7 @@ protected:
 
   vtkMultiProcessController* Controller = nullptr;
   int DisplayProcess = 0;
-  bool CompositeInDouble = true;
+  bool CompositeInDouble = false;
   int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;
