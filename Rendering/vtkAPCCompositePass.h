@@ -15,16 +15,21 @@
  * 3. a broadcast of the display process's depth where it has opaque geometry, so that
  *    every process stops its rays at the composited opaque geometry;
  * 4. pass 1 on the local cells: the moment image; a small allreduce (bytewise max) of which
- *    8x8 tiles each process covers, then one allreduce (sum) of the covered tiles' moments;
+ *    8x8 tiles each process covers, then the covered tiles' moments are summed onto every
+ *    process (allreduce);
  * 5. pass 2 with the global moments: the colour-sum image; one reduce (sum) of the same
  *    tiles to the display process;
  * 6. on the display process: resolve, and blend over the opaque image in the render window.
  *
  * Only the tiles of the data's screen rectangle that some process covers are sent (depth:
- * the tiles where the display process has opaque geometry). Processes sum in double; the
- * sums travel in float (the paper's format, 36 bytes per covered pixel at 4 moments) unless
- * CompositeInDouble is on, so the distributed image equals the one-process MBOIT image to
- * float rounding (to double rounding with CompositeInDouble).
+ * the tiles where the display process has opaque geometry). Processes sum their own samples
+ * in double. Unless CompositeInDouble is on, the moments travel as 32-bit fixed point with a
+ * per-pixel scale the processes agree on first (one byte per pixel, MAX allreduce): integer
+ * sums are exact, so every process gets the same global moments whatever order MPI adds them
+ * in, with more bits than float sums up to ~64 processes; the colour sums travel in float
+ * (the paper's format). That is 1 + 20 + 16 bytes per covered pixel at 4 moments (the paper:
+ * 36), and the distributed image equals the one-process MBOIT image to ~1e-6 (up to 6e-5 on
+ * slab-like data, whose moment solve amplifies any rounding; CompositeInDouble: ~1e-7).
  *
  * Volumes share one moment image, so several APC volumes are composited order-independently
  * together; they must then use the same NumberOfMoments, and the first volume's
@@ -103,8 +108,9 @@ public:
 
   ///@{
   /**
-   * Ship the moment and colour sums in double instead of float (default off: float, half
-   * the bytes; each process still sums its own samples in double).
+   * Ship the moment and colour sums in double instead of the compact wire (default off:
+   * fixed-point moments and float colour sums, half the bytes; each process still sums its
+   * own samples in double).
    */
   vtkSetMacro(CompositeInDouble, bool);
   vtkGetMacro(CompositeInDouble, bool);
