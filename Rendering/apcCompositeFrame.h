@@ -59,8 +59,9 @@ struct FrameRecord
   StageClock Clock;
   double BytesSent = 0;
   vtkIdType MessagesSent = 0;
-  vtkIdType Pixels = 0;        // pixels whose values travel (APC: the covered tiles')
-  vtkIdType CoveredPixels = 0; // pixels some process's volume covers (APC)
+  vtkIdType Pixels = 0;           // pixels whose values travel (APC: the covered tiles')
+  vtkIdType CoveredPixels = 0;    // pixels some process's volume covers (APC)
+  vtkIdType OwnCoveredPixels = 0; // pixels this process's volumes cover (APC, SEGMENTS)
   SegmentStatistics Segments;
   bool Failed = false;
 };

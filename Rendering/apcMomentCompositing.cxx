@@ -127,6 +127,10 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     engine->RenderMoments(parameters, moments.data());
   }
   record.Clock.Lap("pass1");
+  for (size_t p = 0; p < frame.Pixels(); ++p)
+  {
+    record.OwnCoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
+  }
 
   // The mask's allreduce is where a process waits for the slowest one's pass 1; the moments'
   // allreduce after it is the transfer alone.

@@ -3,6 +3,7 @@
 
 #include "vtkAPCEXRWriter.h"
 #include "vtkAPCVolumeMapper.h"
+#include "vtkCommunicator.h"
 #include "vtkImageData.h"
 #include "vtkLogger.h"
 #include "vtkMultiProcessController.h"
@@ -15,6 +16,7 @@
 #include "vtkVolume.h"
 #include "vtkXMLImageDataWriter.h"
 
+#include "apcAutoMode.h"
 #include "apcCompositeFrame.h"
 #include "apcFrameAgreement.h"
 #include "apcFrameEngine.h"
@@ -31,6 +33,8 @@ struct vtkAPCCompositePass::Internals
 {
   std::vector<vtkSmartPointer<vtkVolume>> Volumes;
   apc::FrameRecord Record;
+  int LastMode = -1;
+  apc::AutoMode Auto; // the same on every process: fed only by collectives' results
   vtkNew<vtkImageData> Image;
 };
 
@@ -133,6 +137,11 @@ void vtkAPCCompositePass::GetScreenRectangle(
 vtkIdType vtkAPCCompositePass::GetLastCompositedPixels() const
 {
   return this->Internal->Record.Pixels;
+}
+
+int vtkAPCCompositePass::GetLastCompositeMode() const
+{
+  return this->Internal->LastMode;
 }
 
 vtkIdType vtkAPCCompositePass::GetLastCoveredPixels() const
@@ -287,6 +296,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   }
   Internals& internal = *this->Internal;
   internal.Record = apc::FrameRecord();
+  internal.LastMode = -1;
   internal.Record.Clock.Restart();
   internal.Image->Initialize();
 
@@ -307,8 +317,18 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     frame.Engines[v]->Prepare(mapper, frame.Renderer, volumes[v], frame.Bounds, depth.data());
   }
 
+  int mode = this->CompositeMode;
+  if (mode == AUTO)
+  {
+    const double bytesPerPixel = this->CompositeInDouble ? 8.0 * (frame.Moments.Moments + 5)
+                                                         : 1 + 4.0 * (frame.Moments.Moments + 5);
+    mode = internal.Auto.Choose(group.Processes, bytesPerPixel) == apc::AutoMode::Moments
+      ? APC
+      : SEGMENTS;
+  }
+  internal.LastMode = mode;
   apc::FrameResult result;
-  switch (this->CompositeMode)
+  switch (mode)
   {
     case LOCAL_EXACT:
       result.RGBA.assign(4 * frame.Pixels(), 0.0f);
@@ -324,7 +344,30 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     default:
       apc::RunMomentCompositing(group, frame, this->CompositeInDouble, internal.Record, result);
   }
+  if (this->CompositeMode == AUTO)
+  {
+    this->RecordForAuto(group);
+  }
   this->FinishFrame(group, frame, result);
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCCompositePass::RecordForAuto(const apc::ProcessGroup& group)
+{
+  Internals& internal = *this->Internal;
+  const apc::FrameRecord& record = internal.Record;
+  long long covered = record.OwnCoveredPixels;
+  long long coveredSum = covered;
+  if (group.Parallel)
+  {
+    group.Controller->AllReduce(&covered, &coveredSum, 1, vtkCommunicator::SUM_OP);
+  }
+  const bool segments = internal.LastMode == SEGMENTS;
+  const double coveredUnion = segments ? static_cast<double>(record.Segments.NonEmptyPixels)
+                                       : static_cast<double>(record.CoveredPixels);
+  internal.Auto.Record(coveredUnion, static_cast<double>(coveredSum),
+    segments ? static_cast<double>(record.Segments.Segments) : -1.0);
+  internal.Record.Clock.Lap("auto");
 }
 
 //------------------------------------------------------------------------------
@@ -358,15 +401,15 @@ void vtkAPCCompositePass::FinishFrame(
   }
   const char* names[] = { "APC frame (", "APC segments frame (", "APC local exact frame (" };
   std::ostringstream line;
-  line << names[this->CompositeMode] << group.Processes << " processes, " << frame.Rect.Pixels()
-       << " pixels composited):";
+  line << (this->CompositeMode == AUTO ? "Auto: " : "") << names[internal.LastMode]
+       << group.Processes << " processes, " << frame.Rect.Pixels() << " pixels composited):";
   for (const auto& entry : internal.Record.Clock.Stages())
   {
     line << ' ' << entry.first << ' ' << entry.second << " s,";
   }
   line << " bytes sent by the display process " << internal.Record.BytesSent << " in "
        << internal.Record.MessagesSent << " messages";
-  if (this->CompositeMode == SEGMENTS)
+  if (internal.LastMode == SEGMENTS)
   {
     line << "; segments per non-empty pixel: average " << internal.Record.Segments.Average()
          << ", max " << internal.Record.Segments.MaxPerPixel;
@@ -408,11 +451,8 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Volumes: " << this->Internal->Volumes.size() << "\n";
   os << indent << "DisplayProcess: " << this->DisplayProcess << "\n";
   os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
-  os << indent << "CompositeMode: "
-     << (this->CompositeMode == SEGMENTS
-            ? "SEGMENTS"
-            : (this->CompositeMode == LOCAL_EXACT ? "LOCAL_EXACT" : "APC"))
-     << "\n";
+  const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
+  os << indent << "CompositeMode: " << modes[this->CompositeMode] << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
   os << indent << "ImageFileName: " << (this->ImageFileName ? this->ImageFileName : "(none)")
      << "\n";

@@ -130,16 +130,28 @@ public:
     SEGMENTS = 1,
     /// The volumes' EXACT mode without compositing: each process blends only its own cells
     /// (a local reference; in parallel the display process shows its own piece only).
-    LOCAL_EXACT = 2
+    LOCAL_EXACT = 2,
+    /// Per frame, SEGMENTS where it moves fewer bytes than APC (few segments per pixel: the
+    /// exact picture for free) and APC where segments would cost more, estimated from the
+    /// previous frames' measured coverage and segment counts, the same on every process
+    /// (apcAutoMode.h). The first frame composites segments. GetLastCompositeMode() says
+    /// which ran.
+    AUTO = 3
   };
 
   ///@{
   /**
-   * How the processes' volumes are combined: APC (default), SEGMENTS or LOCAL_EXACT.
+   * How the processes' volumes are combined: APC (default), SEGMENTS, LOCAL_EXACT or AUTO.
    */
-  vtkSetClampMacro(CompositeMode, int, APC, LOCAL_EXACT);
+  vtkSetClampMacro(CompositeMode, int, APC, AUTO);
   vtkGetMacro(CompositeMode, int);
   ///@}
+
+  /**
+   * The mode the last frame ran: APC, SEGMENTS or LOCAL_EXACT (AUTO's choice); -1 before
+   * the first frame or if it was skipped.
+   */
+  int GetLastCompositeMode() const;
 
   ///@{
   /**
@@ -235,6 +247,8 @@ private:
   void operator=(const vtkAPCCompositePass&) = delete;
 
   void WriteImage();
+  // AUTO: what this frame measured, summed over processes, into the history of the choice.
+  void RecordForAuto(const apc::ProcessGroup& group);
   // Stores, blends and writes the display process's image, and reports the frame.
   void FinishFrame(const apc::ProcessGroup& group, const apc::CompositeFrame& frame,
     const apc::FrameResult& result);

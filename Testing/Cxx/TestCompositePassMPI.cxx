@@ -259,6 +259,44 @@ std::array<double, 2> CompareWithWhole(vtkMPIController* controller, const char*
     static_cast<double>(pass->GetLastMaxSegmentsPerPixel()) };
 }
 
+// AUTO over two frames with one pass: the first composites segments (the exact picture, and
+// the segment count it measures), the second the mode expected from that measurement; each
+// frame's image is the one-process render of the mode that ran.
+void CheckAuto(vtkMPIController* controller, const char* name, const apctest::Scene& scene,
+  vtkUnstructuredGrid* piece, int size, int expectedSecond)
+{
+  const int rank = controller->GetLocalProcessId();
+  double bounds[6];
+  GlobalBounds(controller, piece, bounds);
+  vtkNew<vtkAPCCompositePass> pass;
+  pass->SetCompositeMode(vtkAPCCompositePass::AUTO);
+  const int expected[2] = { vtkAPCCompositePass::SEGMENTS, expectedSecond };
+  for (int frame = 0; frame < 2; ++frame)
+  {
+    const std::vector<float> distributed =
+      RenderDistributed(controller, scene, piece, bounds, size, false, pass);
+    const int ran = pass->GetLastCompositeMode();
+    Check(ran == expected[frame], rank,
+      std::string(name) + ": Auto frame " + std::to_string(frame) + " ran mode " +
+        std::to_string(ran) + ", expected " + std::to_string(expected[frame]));
+    if (rank == 0)
+    {
+      const std::vector<float> whole = RenderWhole(scene, size, false,
+        ran == vtkAPCCompositePass::SEGMENTS ? vtkAPCVolumeMapper::EXACT
+                                             : vtkAPCVolumeMapper::MBOIT);
+      double maxDiff = distributed.size() == whole.size() ? 0.0 : 1.0;
+      for (size_t v = 0; v < std::min(distributed.size(), whole.size()); ++v)
+      {
+        maxDiff = std::max(maxDiff, static_cast<double>(std::abs(distributed[v] - whole[v])));
+      }
+      std::printf("%s, Auto frame %d on %d ranks: mode %d, max |distributed - one process| = "
+                  "%.3g, %.0f bytes sent by the display rank\n",
+        name, frame, controller->GetNumberOfProcesses(), ran, maxDiff, pass->GetLastBytesSent());
+      Check(maxDiff <= 5e-5, 0, std::string(name) + ": Auto frame equals its one-process mode");
+    }
+  }
+}
+
 // The gear teeth (SANDWICH) or spheres of the puzzle source: piece `piece` of `pieces`.
 vtkSmartPointer<vtkUnstructuredGrid> PuzzlePiece(
   int piece, int pieces, int puzzlePieces, int field = vtkAPCPuzzleSource::SPHERES)
@@ -375,7 +413,15 @@ int main(int argc, char* argv[])
     }
     Check(stats[0] == expected && stats[1] == expected, rank,
       "segments gear teeth: the analytic segment count");
+    // Auto: 4 segments per rank and pixel cost more bytes than the moments from 2 ranks on
+    // (2 ranks: (1/2)(24 * 8 + 16) = 104 B against 2 * 37 = 74 B per pixel); one rank ships
+    // nothing either way and keeps the exact picture.
+    CheckAuto(controller, "gear teeth", gear,
+      PuzzlePiece(rank, ranks, ranks, vtkAPCPuzzleSource::SANDWICH), 32,
+      ranks == 1 ? vtkAPCCompositePass::SEGMENTS : vtkAPCCompositePass::APC);
   }
+  // Auto on the wind data: ~2.2 segments per covered pixel stay cheaper than the moments.
+  CheckAuto(controller, "wind", wind, WindPieces(rank, ranks), 96, vtkAPCCompositePass::SEGMENTS);
 
   // A rank without the scalar array: every rank must skip the frame, none may hang.
   {
