@@ -234,7 +234,8 @@ void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
 //------------------------------------------------------------------------------
 double* vtkAPCVolumeRepresentation::GetLastTimings()
 {
-  std::fill(this->LastTimings, this->LastTimings + 11, 0.0);
+  std::fill(this->LastTimings, this->LastTimings + 14, 0.0);
+  this->LastTimings[11] = -1;
   if (const vtkAPCCompositePass* pass = apc::FindPass(this))
   {
     const char* stages[] = { "agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve",
@@ -246,6 +247,9 @@ double* vtkAPCVolumeRepresentation::GetLastTimings()
     this->LastTimings[8] = pass->GetLastStageSeconds(nullptr);
     this->LastTimings[9] = pass->GetLastBytesSent();
     this->LastTimings[10] = static_cast<double>(pass->GetLastCompositedPixels());
+    this->LastTimings[11] = pass->GetLastCompositeMode();
+    this->LastTimings[12] = static_cast<double>(pass->GetLastCoveredPixels());
+    this->LastTimings[13] = pass->GetLastStageSeconds("tiles");
   }
   return this->LastTimings;
 }
