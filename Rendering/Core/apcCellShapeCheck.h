@@ -10,9 +10,10 @@
 //   RelativeThickness = |V| / (A_max * D),
 // with V the cell's volume (divergence theorem over its faces, triangulated from their first
 // corner, around the centroid), A_max its largest face area and D the diagonal of its
-// bounding box. A slab of size L x L x h gives about h / (3 L), a needle L x h x h the same
-// (volume alone would call a 1000:1 needle flat), a cube 1 / (3 sqrt 3) = 0.19, a regular
-// tetrahedron 0.12. Translating or scaling a cell does not change it (to rounding).
+// bounding box. A slab of size L x L x h gives about h / (1.4 L), a needle L x h x h about
+// h / L (volume over the longest edge cubed would call a 1000:1 needle flat), a cube
+// 1 / sqrt 3 = 0.58, the corner tetrahedron of a cube 1/9. Translating or scaling a cell does
+// not change it (to rounding).
 //
 // The threshold: planes are stored in float, whose unit normals carry errors of about 6e-8.
 // A cell thinner than about a hundred times that can no longer be trusted to be bounded by its
