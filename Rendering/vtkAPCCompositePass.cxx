@@ -21,6 +21,7 @@
 #include "apcFrameAgreement.h"
 #include "apcFrameEngine.h"
 #include "apcImageOutput.h"
+#include "apcInputReport.h"
 
 #include <algorithm>
 #include <sstream>
@@ -171,6 +172,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   apc::LocalFrame local;
   std::ostringstream problem;
   std::vector<vtkAPCVolumeMapper*> mappers;
+  apc::InputReport reports; // said once for all processes when any has news
   for (const auto& volume : volumes)
   {
     if (!volume->GetVisibility())
@@ -191,6 +193,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
       problem << "unusable input (see the mapper's error); ";
       local.Failed = true;
     }
+    local.ReportPending = engine->TakeNewInputReport() || local.ReportPending;
+    reports.Add(engine->GetInputReport());
     double bounds[6];
     local.AddVolume(
       mapper->GetNumberOfMoments(), engine->GetLocalBounds(bounds) ? bounds : nullptr);
@@ -201,6 +205,11 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   // between processes would make their collectives disagree in length.
   ren->GetTiledSizeAndOrigin(&local.Width, &local.Height, &frame.X0, &frame.Y0);
   const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
+  if (agreed.AnyReportPending)
+  {
+    apc::ShareInputReports(group, reports,
+      mappers.empty() ? static_cast<vtkObject*>(self) : static_cast<vtkObject*>(mappers.front()));
+  }
   record.Clock.Lap("agree");
   if (agreed.NoVolumes())
   {

@@ -8,6 +8,7 @@
 
 #include "vtkAlgorithmOutput.h"
 #include "vtkAppendFilter.h"
+#include "vtkColorTransferFunction.h"
 #include "vtkCompositeDataIterator.h"
 #include "vtkCompositeDataSet.h"
 #include "vtkDataObject.h"
@@ -142,6 +143,15 @@ void vtkAPCVolumeRepresentation::UpdateMapperArray()
     this->Mapper->SelectScalarArray(static_cast<const char*>(nullptr));
     this->Mapper->SetScalarMode(VTK_SCALAR_MODE_DEFAULT);
   }
+  // Which values of a vector are rendered: the colour map's vector mode and component (what
+  // ColorBy(display, ('POINTS', 'v', 'X')) sets), as ParaView's own volume representations
+  // hand them to their mappers; with dependent components (Map Scalars off, or Multi
+  // Components Mapping on) the first one, as they do.
+  vtkColorTransferFunction* colours = this->Property->GetRGBTransferFunction(0);
+  const bool independent = this->MapScalars && !this->MultiComponentsMapping;
+  this->Mapper->SetVectorMode(
+    independent && colours ? colours->GetVectorMode() : vtkScalarsToColors::COMPONENT);
+  this->Mapper->SetVectorComponent(independent && colours ? colours->GetVectorComponent() : 0);
 }
 
 //------------------------------------------------------------------------------
