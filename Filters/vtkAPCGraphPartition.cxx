@@ -96,8 +96,8 @@ void InstallPartitions(vtkPartitionedDataSet* out, const UGrids& pieces)
 
 // Walks a composite input in a fixed order (the same on every rank when the structure is),
 // building the output tree and one unit per mesh. Returns an error message or "".
-std::string CollectTree(vtkDataObject* in, vtkDataObject* out, std::vector<Unit>& units,
-  const std::string& where)
+std::string CollectTree(
+  vtkDataObject* in, vtkDataObject* out, std::vector<Unit>& units, const std::string& where)
 {
   if (auto* inMb = vtkMultiBlockDataSet::SafeDownCast(in))
   {
@@ -205,8 +205,8 @@ std::string CollectTree(vtkDataObject* in, vtkDataObject* out, std::vector<Unit>
 const int TetraFacets[] = { 3, 0, 1, 2, 3, 0, 1, 3, 3, 0, 2, 3, 3, 1, 2, 3, 0 };
 const int HexahedronFacets[] = { 4, 0, 4, 7, 3, 4, 1, 2, 6, 5, 4, 0, 1, 5, 4, 4, 3, 7, 6, 2, 4, 0,
   3, 2, 1, 4, 4, 5, 6, 7, 0 };
-const int VoxelFacets[] = { 4, 0, 2, 6, 4, 4, 1, 3, 7, 5, 4, 0, 1, 5, 4, 4, 2, 3, 7, 6, 4, 0, 1,
-  3, 2, 4, 4, 5, 7, 6, 0 };
+const int VoxelFacets[] = { 4, 0, 2, 6, 4, 4, 1, 3, 7, 5, 4, 0, 1, 5, 4, 4, 2, 3, 7, 6, 4, 0, 1, 3,
+  2, 4, 4, 5, 7, 6, 0 };
 const int WedgeFacets[] = { 3, 0, 1, 2, 3, 3, 4, 5, 4, 0, 1, 4, 3, 4, 1, 2, 5, 4, 4, 2, 0, 3, 5,
   0 };
 const int PyramidFacets[] = { 4, 0, 1, 2, 3, 3, 0, 1, 4, 3, 1, 2, 4, 3, 2, 3, 4, 3, 3, 0, 4, 0 };
@@ -303,6 +303,10 @@ LocalCells KeptCells(const Unit& unit)
 apc::Facets BuildFacets(const Unit& unit, const LocalCells& cells, PositionKeys& keys)
 {
   apc::Facets facets;
+  // Hexahedra-dominated meshes: about 6 facets of 4 points per cell.
+  facets.Cell.reserve(static_cast<std::size_t>(6 * cells.Count));
+  facets.Offsets.reserve(static_cast<std::size_t>(6 * cells.Count + 1));
+  facets.Points.reserve(static_cast<std::size_t>(24 * cells.Count));
   vtkNew<vtkGenericCell> cell;
   vtkNew<vtkIdList> ids;
   std::vector<std::int64_t> pointKey;
@@ -313,13 +317,15 @@ apc::Facets BuildFacets(const Unit& unit, const LocalCells& cells, PositionKeys&
     vtkUnstructuredGrid* part = unit.Parts[p];
     const vtkIdType numberOfPoints = part->GetNumberOfPoints();
     pointKey.resize(static_cast<std::size_t>(numberOfPoints));
+    keys.Ids.reserve(keys.Ids.size() + static_cast<std::size_t>(numberOfPoints));
     double x[3];
     for (vtkIdType i = 0; i < numberOfPoints; ++i)
     {
       part->GetPoint(i, x);
       pointKey[i] = keys.Key(x);
     }
-    auto addFacet = [&](const vtkIdType* pts, vtkIdType n) {
+    auto addFacet = [&](const vtkIdType* pts, vtkIdType n)
+    {
       facet.resize(static_cast<std::size_t>(n));
       for (vtkIdType k = 0; k < n; ++k)
       {
@@ -411,8 +417,8 @@ apc::Facets BuildFacets(const Unit& unit, const LocalCells& cells, PositionKeys&
 }
 
 // A shallow copy of a part with its piece ids (-1 on ghost cells) and without ghost arrays.
-vtkSmartPointer<vtkUnstructuredGrid> Labelled(vtkUnstructuredGrid* part,
-  const std::vector<vtkIdType>& kept, const int* piece, bool dropGhosts)
+vtkSmartPointer<vtkUnstructuredGrid> Labelled(
+  vtkUnstructuredGrid* part, const std::vector<vtkIdType>& kept, const int* piece, bool dropGhosts)
 {
   auto copy = vtkSmartPointer<vtkUnstructuredGrid>::New();
   copy->ShallowCopy(part);
@@ -433,7 +439,8 @@ vtkSmartPointer<vtkUnstructuredGrid> Labelled(vtkUnstructuredGrid* part,
   return copy;
 }
 
-vtkSmartPointer<vtkUnstructuredGrid> Extract(vtkUnstructuredGrid* grid, const std::vector<vtkIdType>& ids)
+vtkSmartPointer<vtkUnstructuredGrid> Extract(
+  vtkUnstructuredGrid* grid, const std::vector<vtkIdType>& ids)
 {
   if (static_cast<vtkIdType>(ids.size()) == grid->GetNumberOfCells())
   {
@@ -516,7 +523,8 @@ int vtkAPCGraphPartition::RequestData(
 
   // Every failure below is agreed on by all ranks before the next collective, so a rank that
   // fails never leaves the others waiting in one.
-  auto agree = [&](int localFailure) {
+  auto agree = [&](int localFailure)
+  {
     int any = localFailure;
     if (ranks > 1)
     {
@@ -692,7 +700,8 @@ int vtkAPCGraphPartition::RequestData(
           const vtkIdType offset = cellOffsets[r];
           for (vtkIdType i = 0; i < allCounts[4 * r + 1]; i += 2, idAt += 2)
           {
-            pairs.emplace_back(allIds->GetValue(idAt) + offset, allIds->GetValue(idAt + 1) + offset);
+            pairs.emplace_back(
+              allIds->GetValue(idAt) + offset, allIds->GetValue(idAt + 1) + offset);
           }
           for (vtkIdType f = 0; f < allCounts[4 * r + 2]; ++f)
           {
@@ -738,8 +747,8 @@ int vtkAPCGraphPartition::RequestData(
       {
         lengths[r] = allCounts[4 * r];
       }
-      controller->ScatterV(allPieces.data(), piece.data(), lengths.data(), cellOffsets.data(),
-        local.Count, 0);
+      controller->ScatterV(
+        allPieces.data(), piece.data(), lengths.data(), cellOffsets.data(), local.Count, 0);
       if (rank == 0)
       {
         partition.Part = std::move(allPieces);
@@ -842,8 +851,8 @@ int vtkAPCGraphPartition::RequestData(
     if (mine.empty())
     {
       // No piece here: an empty grid that still has the input's arrays.
-      result = labelled.empty() ? vtkSmartPointer<vtkUnstructuredGrid>::New()
-                                : Extract(labelled[0], {});
+      result =
+        labelled.empty() ? vtkSmartPointer<vtkUnstructuredGrid>::New() : Extract(labelled[0], {});
     }
     else
     {

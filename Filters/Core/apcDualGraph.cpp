@@ -64,7 +64,17 @@ FacetMatches MatchFacets(const Facets& facets)
   {
     auto first = sorted.begin() + facets.Offsets[f];
     auto last = sorted.begin() + facets.Offsets[f + 1];
-    std::sort(first, last);
+    // Facets have 2-4 keys (rarely more): insertion sort beats std::sort's set-up there.
+    for (auto it = first + (first != last); it < last; ++it)
+    {
+      const std::int64_t v = *it;
+      auto hole = it;
+      for (; hole != first && *(hole - 1) > v; --hole)
+      {
+        *hole = *(hole - 1);
+      }
+      *hole = v;
+    }
     std::uint64_t h = static_cast<std::uint64_t>(last - first);
     for (auto it = first; it != last; ++it)
     {
@@ -74,7 +84,8 @@ FacetMatches MatchFacets(const Facets& facets)
   }
   std::sort(order.begin(), order.end());
 
-  auto same = [&](std::int64_t a, std::int64_t b) {
+  auto same = [&](std::int64_t a, std::int64_t b)
+  {
     const std::int64_t na = facets.Offsets[a + 1] - facets.Offsets[a];
     const std::int64_t nb = facets.Offsets[b + 1] - facets.Offsets[b];
     return na == nb &&

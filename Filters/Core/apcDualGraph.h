@@ -51,7 +51,10 @@ struct CellGraph
   {
     return this->Offsets.empty() ? 0 : static_cast<std::int64_t>(this->Offsets.size()) - 1;
   }
-  std::int64_t NumberOfEdges() const { return static_cast<std::int64_t>(this->Adjacency.size()) / 2; }
+  std::int64_t NumberOfEdges() const
+  {
+    return static_cast<std::int64_t>(this->Adjacency.size()) / 2;
+  }
 };
 
 /// The graph of numberOfCells vertices with an edge for every pair (either order, repeats
