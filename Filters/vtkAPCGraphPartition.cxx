@@ -422,6 +422,13 @@ vtkSmartPointer<vtkUnstructuredGrid> Labelled(
 {
   auto copy = vtkSmartPointer<vtkUnstructuredGrid>::New();
   copy->ShallowCopy(part);
+  vtkIdTypeArray* locations = part->GetFaceLocations();
+  if (locations && locations->GetNumberOfValues() != part->GetNumberOfCells())
+  {
+    // Empty face arrays on a grid without polyhedra (ParaView's parallel XML reader leaves
+    // them on some ranks) make vtkExtractCells read past their end.
+    copy->SetCells(part->GetCellTypesArray(), part->GetCells(), nullptr, nullptr);
+  }
   vtkNew<vtkIntArray> ids;
   ids->SetName(vtkAPCGraphPartition::GetPartitionIdArrayName());
   ids->SetNumberOfValues(part->GetNumberOfCells());
@@ -460,6 +467,8 @@ vtkSmartPointer<vtkUnstructuredGrid> Extract(
   vtkNew<vtkExtractCells> extract;
   extract->SetInputData(grid);
   extract->SetCellList(list);
+  extract->AssumeSortedAndUniqueIdsOn();
+  extract->PassThroughCellIdsOff();
   extract->Update();
   return vtkUnstructuredGrid::SafeDownCast(extract->GetOutput());
 }

@@ -476,6 +476,40 @@ void CompositeCase(vtkMPIController* controller)
   Check(total == 5712, rank, "partitioned block: every cell once");
 }
 
+// --- empty face arrays on a grid without polyhedra (what ParaView's parallel XML reader gives
+// some ranks) must not be taken for polyhedra ---------------------------------------------------
+void EmptyFaceArraysCase(vtkMPIController* controller)
+{
+  const int rank = controller->GetLocalProcessId();
+  const int ranks = controller->GetNumberOfProcesses();
+  auto flange = LocalFlange(rank, ranks);
+  Tag(controller, flange);
+  vtkNew<vtkIdTypeArray> locations, faces;
+  flange->SetCells(flange->GetCellTypesArray(), flange->GetCells(), locations, faces);
+  vtkNew<vtkMultiPieceDataSet> pieces;
+  pieces->SetPartition(0, flange);
+  vtkNew<vtkMultiBlockDataSet> blocks;
+  blocks->SetBlock(0, flange);
+  blocks->SetBlock(1, pieces);
+  const int k = ranks + 2;
+  vtkSmartPointer<vtkDataObject> outObject = Run(blocks, k, false);
+  auto* out = vtkMultiBlockDataSet::SafeDownCast(outObject);
+  auto* grid = out ? vtkUnstructuredGrid::SafeDownCast(out->GetBlock(0)) : nullptr;
+  Check(grid != nullptr, rank, "empty face arrays: partitioned");
+  if (grid)
+  {
+    CheckMoved(controller, "flange with empty face arrays", flange, grid, k);
+  }
+  auto* split = out ? vtkPartitionedDataSet::SafeDownCast(out->GetBlock(1)) : nullptr;
+  vtkIdType n = 0, total = 0;
+  for (unsigned int i = 0; split && i < split->GetNumberOfPartitions(); ++i)
+  {
+    n += split->GetPartition(i)->GetNumberOfCells();
+  }
+  controller->AllReduce(&n, &total, 1, vtkCommunicator::SUM_OP);
+  Check(total == 5712, rank, "empty face arrays: the partitioned block split into its pieces");
+}
+
 // --- bad inputs: an error on every rank, nobody left waiting ------------------------------------
 void ExpectError(
   vtkMPIController* controller, vtkDataObject* input, int k, const char* what, const char* message)
@@ -673,6 +707,7 @@ int main(int argc, char* argv[])
   WindCases(controller);
   PolyhedraCase(controller);
   CompositeCase(controller);
+  EmptyFaceArraysCase(controller);
   BadInputCases(controller);
   if (controller->GetNumberOfProcesses() == 1)
   {
