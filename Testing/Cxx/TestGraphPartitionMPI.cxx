@@ -571,6 +571,16 @@ void BadInputCases(vtkMPIController* controller)
   vtkIdType n = out ? out->GetNumberOfCells() : 0, total = 0;
   controller->AllReduce(&n, &total, 1, vtkCommunicator::SUM_OP);
   Check(total == 1438 && n > 0, rank, "cells on one rank only: every rank gets a piece");
+
+  // Fewer pieces than ranks: the ranks without a piece get an empty grid that still has the
+  // arrays (APC Volume skips the frame on every rank if one lacks the coloured array).
+  vtkSmartPointer<vtkDataObject> singleObject = Run(flange, 1, false);
+  auto* single = vtkUnstructuredGrid::SafeDownCast(singleObject);
+  Check(single && single->GetNumberOfCells() == (Owns(rank, ranks, 0, 1) ? 5712 : 0), rank,
+    "K = 1: the owner of piece 0 (the last rank) gets every cell, the others none");
+  Check(single && single->GetPointData()->GetArray("T") &&
+      single->GetCellData()->GetArray("PartitionId"),
+    rank, "K = 1: the arrays are there on every rank, even without cells");
 }
 
 // --- jagged pieces (one rank, whole mesh): graph partition vs kd-tree
