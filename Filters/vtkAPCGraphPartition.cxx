@@ -587,13 +587,13 @@ int vtkAPCGraphPartition::RequestData(
   }
 
   std::vector<LocalCells> cells;
-  std::vector<vtkIdType> localCounts, totalCounts(units.size(), 0);
+  std::vector<vtkIdType> localCounts;
   for (const Unit& unit : units)
   {
     cells.push_back(KeptCells(unit));
     localCounts.push_back(cells.back().Count);
   }
-  totalCounts = localCounts;
+  std::vector<vtkIdType> totalCounts = localCounts;
   if (ranks > 1 && !units.empty())
   {
     controller->AllReduce(localCounts.data(), totalCounts.data(),
