@@ -2,19 +2,26 @@
 #include "apcCellMeshFromVTK.h"
 
 #include "apcCellMesh.h"
+#include "apcCellShapeCheck.h"
+#include "apcInputReport.h"
 
+#include "vtkCellData.h"
 #include "vtkCellType.h"
-#include "vtkCellTypes.h"
 #include "vtkDataArray.h"
 #include "vtkDataSetAttributes.h"
+#include "vtkDataSetTriangleFilter.h"
+#include "vtkGenericCell.h"
 #include "vtkIdList.h"
+#include "vtkIdTypeArray.h"
 #include "vtkNew.h"
+#include "vtkPoints.h"
 #include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
 
+#include <algorithm>
 #include <cmath>
-#include <map>
-#include <sstream>
+#include <vector>
 
 namespace apc
 {
@@ -42,54 +49,150 @@ bool ShapeOf(int vtkType, CellShape& shape)
   }
 }
 
-double ScalarValue(vtkDataArray* array, vtkIdType tuple)
+// 3D cells vtkDataSetTriangleFilter cuts into tetrahedra over their own points with its
+// ordered triangulator, as for ParaView's Volume. Higher-order Lagrange and Bezier cells are
+// left out: the triangulator would ignore their curvature.
+bool TriangulatedByTheFilter(int vtkType)
 {
-  const int components = array->GetNumberOfComponents();
-  if (components == 1)
+  switch (vtkType)
   {
-    return array->GetComponent(tuple, 0);
+    case VTK_QUADRATIC_TETRA:
+    case VTK_QUADRATIC_PYRAMID:
+    case VTK_QUADRATIC_WEDGE:
+    case VTK_QUADRATIC_HEXAHEDRON:
+    case VTK_TRIQUADRATIC_HEXAHEDRON:
+    case VTK_TRIQUADRATIC_PYRAMID:
+    case VTK_QUADRATIC_LINEAR_WEDGE:
+    case VTK_BIQUADRATIC_QUADRATIC_WEDGE:
+    case VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON:
+    case VTK_PENTAGONAL_PRISM:
+    case VTK_HEXAGONAL_PRISM:
+      return true;
+    default:
+      return false;
   }
-  // Multi-component arrays render their magnitude, ParaView's default for vectors.
-  double sum = 0;
-  for (int c = 0; c < components; ++c)
+}
+
+// One value per tuple as the selection asks for it.
+class ScalarReader
+{
+public:
+  ScalarReader(const ScalarSelection& selection, InputReport& report)
+    : Array(selection.Array)
+    , Components(selection.Array->GetNumberOfComponents())
   {
-    const double v = array->GetComponent(tuple, c);
-    sum += v * v;
+    if (this->Components == 1)
+    {
+      return;
+    }
+    if (selection.VectorMode == vtkScalarsToColors::COMPONENT)
+    {
+      this->Component = std::min(std::max(selection.VectorComponent, 0), this->Components - 1);
+      if (this->Component != selection.VectorComponent)
+      {
+        report[InputReport::ComponentClamped] = 1;
+      }
+    }
+    else if (selection.VectorMode == vtkScalarsToColors::RGBCOLORS)
+    {
+      report[InputReport::RGBColoursMode] = 1;
+    }
   }
-  return std::sqrt(sum);
+
+  float operator()(vtkIdType tuple) const
+  {
+    if (this->Components == 1)
+    {
+      return static_cast<float>(this->Array->GetComponent(tuple, 0));
+    }
+    if (this->Component >= 0)
+    {
+      return static_cast<float>(this->Array->GetComponent(tuple, this->Component));
+    }
+    double sum = 0;
+    for (int c = 0; c < this->Components; ++c)
+    {
+      const double v = this->Array->GetComponent(tuple, c);
+      sum += v * v;
+    }
+    return static_cast<float>(std::sqrt(sum));
+  }
+
+private:
+  vtkDataArray* Array;
+  int Components;
+  int Component = -1; // the magnitude
+};
+
+// Appends the tetrahedra of one decomposed cell (4 point ids each), leaving out the flat ones
+// a triangulation makes of coplanar points: they hold no volume. Returns how many it added.
+int AddTetrahedra(
+  CellMesh& mesh, const vtkIdType* ids, vtkIdType count, bool cellData, float cellScalar)
+{
+  int added = 0;
+  for (vtkIdType t = 0; t + 3 < count; t += 4)
+  {
+    int64_t corners[4];
+    std::array<std::array<double, 3>, 8> x{};
+    bool finite = true;
+    for (int i = 0; i < 4; ++i)
+    {
+      corners[i] = ids[t + i];
+      x[i] = mesh.Points[corners[i]];
+      finite = finite && std::isfinite(x[i][0] + x[i][1] + x[i][2]);
+    }
+    // Non-finite corners go in: CellMesh::Finalize skips and counts them.
+    if (finite && IsFlat(CellShape::Tetra, x))
+    {
+      continue;
+    }
+    mesh.AddCell(CellShape::Tetra, corners);
+    if (cellData)
+    {
+      mesh.CellScalars.push_back(cellScalar);
+    }
+    ++added;
+  }
+  return added;
 }
 }
 
-bool CellMeshFromVTK(vtkUnstructuredGridBase* input, vtkDataArray* scalars, bool cellData,
-  CellMesh& mesh, std::string& message)
+//------------------------------------------------------------------------------
+bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scalars, CellMesh& mesh,
+  InputReport& report, std::string& error)
 {
   mesh = CellMesh();
-  message.clear();
-  if (!input || !scalars)
+  report = InputReport();
+  error.clear();
+  if (!input || !scalars.Array)
   {
-    message = "no input grid or no scalars";
+    error = "no input grid or no scalars";
     return false;
   }
+  const ScalarReader value(scalars, report);
   const vtkIdType numPoints = input->GetNumberOfPoints();
   mesh.Points.resize(numPoints);
   for (vtkIdType p = 0; p < numPoints; ++p)
   {
     input->GetPoint(p, mesh.Points[p].data());
   }
-  if (!cellData)
+  if (!scalars.CellData)
   {
     mesh.PointScalars.resize(numPoints);
     for (vtkIdType p = 0; p < numPoints; ++p)
     {
-      mesh.PointScalars[p] = static_cast<float>(ScalarValue(scalars, p));
+      mesh.PointScalars[p] = value(p);
     }
   }
 
   vtkUnsignedCharArray* ghosts = input->GetCellGhostArray();
   const unsigned char skipMask =
     vtkDataSetAttributes::DUPLICATECELL | vtkDataSetAttributes::HIDDENCELL;
-  std::map<int, vtkIdType> unsupported;
   vtkNew<vtkIdList> cellPoints;
+  vtkNew<vtkGenericCell> cell;
+  vtkNew<vtkPoints> tetPoints;
+  std::vector<vtkIdType> forTheFilter;
+  int64_t flatDecomposed = 0;
   const vtkIdType numCells = input->GetNumberOfCells();
   for (vtkIdType c = 0; c < numCells; ++c)
   {
@@ -99,48 +202,117 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, vtkDataArray* scalars, bool
     }
     const int type = input->GetCellType(c);
     CellShape shape;
-    if (!ShapeOf(type, shape))
+    if (ShapeOf(type, shape))
     {
-      ++unsupported[type];
-      continue;
+      input->GetCellPoints(c, cellPoints);
+      const vtkIdType* ids = cellPoints->GetPointer(0);
+      int64_t corners[8];
+      for (int i = 0; i < NumberOfCorners(shape); ++i)
+      {
+        corners[i] = type == VTK_VOXEL ? ids[kVoxelToHexahedron[i]] : ids[i];
+      }
+      mesh.AddCell(shape, corners);
+      if (scalars.CellData)
+      {
+        mesh.CellScalars.push_back(value(c));
+      }
     }
-    input->GetCellPoints(c, cellPoints);
-    const vtkIdType* ids = cellPoints->GetPointer(0);
-    int64_t corners[8];
-    for (int i = 0; i < NumberOfCorners(shape); ++i)
+    else if (type == VTK_POLYHEDRON)
     {
-      corners[i] = type == VTK_VOXEL ? ids[kVoxelToHexahedron[i]] : ids[i];
+      // What vtkDataSetTriangleFilter does with a polyhedron: its own triangulation (global
+      // point ids, no new points).
+      input->GetCell(c, cell);
+      const bool triangulated = cell->Triangulate(0, cellPoints, tetPoints) != 0;
+      const int added = triangulated
+        ? AddTetrahedra(mesh, cellPoints->GetPointer(0), cellPoints->GetNumberOfIds(),
+            scalars.CellData, scalars.CellData ? value(c) : 0.f)
+        : 0;
+      // A polyhedron VTK cannot cut into tetrahedra with volume has none to render.
+      flatDecomposed += added == 0 ? 1 : 0;
     }
-    mesh.AddCell(shape, corners);
-    if (cellData)
+    else if (TriangulatedByTheFilter(type))
     {
-      mesh.CellScalars.push_back(static_cast<float>(ScalarValue(scalars, c)));
+      forTheFilter.push_back(c);
+    }
+    else
+    {
+      report.AddUnsupported(type);
     }
   }
-  if (!unsupported.empty())
+
+  if (!forTheFilter.empty())
   {
-    std::ostringstream text;
-    text << "Skipped cells of types the APC ray marcher does not support (it renders "
-            "tetrahedra, pyramids, wedges, hexahedra and voxels; decompose polyhedra and "
-            "quadratic cells first, e.g. with the OpenFOAM reader's 'Decompose polyhedra'):";
-    for (const auto& entry : unsupported)
+    // The filter itself, on just these cells over the input's points: the same tetrahedra
+    // as ParaView's Volume renders, point ids unchanged. A cell array carries each
+    // tetrahedron's source cell.
+    vtkNew<vtkUnstructuredGrid> cells;
+    cells->SetPoints(input->GetPoints());
+    cells->AllocateEstimate(static_cast<vtkIdType>(forTheFilter.size()), 27);
+    vtkNew<vtkIdTypeArray> source;
+    source->SetName("APCSourceCell");
+    for (vtkIdType c : forTheFilter)
     {
-      text << ' ' << entry.second << " x " << vtkCellTypes::GetClassNameFromTypeId(entry.first);
+      input->GetCellPoints(c, cellPoints);
+      cells->InsertNextCell(input->GetCellType(c), cellPoints);
+      source->InsertNextValue(c);
     }
-    message = text.str();
+    cells->GetCellData()->AddArray(source);
+    vtkNew<vtkDataSetTriangleFilter> triangulate;
+    triangulate->TetrahedraOnlyOn();
+    triangulate->SetInputData(cells);
+    triangulate->Update();
+    vtkUnstructuredGrid* tets = triangulate->GetOutput();
+    auto* sources = vtkIdTypeArray::SafeDownCast(tets->GetCellData()->GetArray("APCSourceCell"));
+    std::vector<int> kept(forTheFilter.size(), 0);
+    for (vtkIdType t = 0; sources && t < tets->GetNumberOfCells(); ++t)
+    {
+      vtkIdType count;
+      const vtkIdType* ids;
+      tets->GetCellPoints(t, count, ids);
+      const vtkIdType c = sources->GetValue(t);
+      if (tets->GetCellType(t) == VTK_TETRA && count == 4)
+      {
+        const auto at = std::lower_bound(forTheFilter.begin(), forTheFilter.end(), c);
+        kept[at - forTheFilter.begin()] +=
+          AddTetrahedra(mesh, ids, 4, scalars.CellData, scalars.CellData ? value(c) : 0.f);
+      }
+    }
+    flatDecomposed += std::count(kept.begin(), kept.end(), 0);
   }
-  std::string error;
+
   const bool usable = mesh.Finalize(&error);
-  if (usable && mesh.GetNumberOfSkippedCells() > 0)
-  {
-    message += (message.empty() ? "" : "; ") + std::to_string(mesh.GetNumberOfSkippedCells()) +
-      " cells with non-finite or collapsed corners skipped";
-  }
   if (!usable)
   {
-    message += (message.empty() ? "" : "; ") + std::string("unusable mesh: ") + error;
+    error = "unusable mesh: " + error;
     return false;
   }
+  report[InputReport::FlatCells] =
+    static_cast<double>(mesh.GetNumberOfFlatCells() + flatDecomposed);
+  report[InputReport::NonFiniteCorners] =
+    static_cast<double>(mesh.GetNumberOfNonFiniteCornerCells());
+  report[InputReport::NonFiniteScalars] =
+    static_cast<double>(mesh.GetNumberOfNonFiniteScalarCells());
   return true;
+}
+
+//------------------------------------------------------------------------------
+bool CellMeshFromVTK(vtkUnstructuredGridBase* input, vtkDataArray* scalars, bool cellData,
+  CellMesh& mesh, std::string& message)
+{
+  ScalarSelection selection;
+  selection.Array = scalars;
+  selection.CellData = cellData;
+  InputReport report;
+  std::string error;
+  const bool usable = CellMeshFromVTK(input, selection, mesh, report, error);
+  message.clear();
+  for (const std::string& part : { report.Errors(), report.Warnings(), error })
+  {
+    if (!part.empty())
+    {
+      message += (message.empty() ? "" : "; ") + part;
+    }
+  }
+  return usable;
 }
 }

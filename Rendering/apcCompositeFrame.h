@@ -6,6 +6,7 @@
 #ifndef apcCompositeFrame_h
 #define apcCompositeFrame_h
 
+#include "apcCoveredTiles.h"
 #include "apcMomentParameters.h"
 #include "apcRaySegments.h"
 #include "apcScreenRect.h"
@@ -45,6 +46,7 @@ struct CompositeFrame
   int Y0 = 0;
   double Bounds[6] = { 0, 0, 0, 0, 0, 0 }; // all processes' cells
   ScreenRect Rect;                         // the pixels whose rays can meet Bounds
+  TileGrid Tiles;                          // Rect in tiles: what the collectives ship
   MomentParameters Moments;
   std::vector<FrameEngine*> Engines;
 
@@ -57,7 +59,9 @@ struct FrameRecord
   StageClock Clock;
   double BytesSent = 0;
   vtkIdType MessagesSent = 0;
-  vtkIdType Pixels = 0;
+  vtkIdType Pixels = 0;           // pixels whose values travel (APC: the covered tiles')
+  vtkIdType CoveredPixels = 0;    // pixels some process's volume covers (APC)
+  vtkIdType OwnCoveredPixels = 0; // pixels this process's volumes cover (APC, SEGMENTS)
   SegmentStatistics Segments;
   bool Failed = false;
 };

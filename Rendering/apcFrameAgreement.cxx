@@ -33,6 +33,7 @@ enum Slot
   MinWidthNegated,
   MaxHeight,
   MinHeightNegated,
+  ReportPending,
   SlotCount
 };
 }
@@ -78,6 +79,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   mine[slot::MinWidthNegated] = -local.Width;
   mine[slot::MaxHeight] = local.Height;
   mine[slot::MinHeightNegated] = -local.Height;
+  mine[slot::ReportPending] = local.ReportPending ? 1 : 0;
   double all[slot::SlotCount];
   std::copy(mine, mine + slot::SlotCount, all);
   if (group.Parallel)
@@ -98,6 +100,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   agreed.MinVolumes = static_cast<int>(-all[slot::MinVolumesNegated]);
   agreed.SizesDiffer = all[slot::MaxWidth] != -all[slot::MinWidthNegated] ||
     all[slot::MaxHeight] != -all[slot::MinHeightNegated];
+  agreed.AnyReportPending = all[slot::ReportPending] > 0;
   agreed.Width = local.Width;
   agreed.Height = local.Height;
   return agreed;

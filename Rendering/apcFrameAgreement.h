@@ -23,6 +23,7 @@ struct LocalFrame
   int MaxMoments = 0;
   int Width = 0;
   int Height = 0;
+  bool ReportPending = false; // an input report to say (apcInputReport.h)
 
   LocalFrame();
   // One visible APC volume: its number of moments and, if it has cells, their bounds.
@@ -41,6 +42,7 @@ struct FrameAgreement
   bool SizesDiffer = false;
   int Width = 0;
   int Height = 0;
+  bool AnyReportPending = false; // then every process calls ShareInputReports
 
   static FrameAgreement Agree(const ProcessGroup& group, const LocalFrame& local);
 

@@ -37,6 +37,8 @@ bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
     this->Mesh.Finalize();
     this->MeshValid = true;
     this->MeshScalarKey.clear();
+    this->Report = InputReport();
+    this->ReportPending = false;
     return true;
   }
   int cellFlag = 0;
@@ -51,24 +53,42 @@ bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
     this->MeshValid = false;
     return false;
   }
+  ScalarSelection selection;
+  selection.Array = scalars;
+  selection.CellData = cellFlag == 1;
+  selection.VectorMode = mapper->GetVectorMode();
+  selection.VectorComponent = mapper->GetVectorComponent();
   // Rebuild the ray marcher's mesh only when the data or the scalar selection changed.
   std::ostringstream key;
-  key << scalars << ' ' << scalars->GetMTime() << ' ' << cellFlag;
+  key << scalars << ' ' << scalars->GetMTime() << ' ' << cellFlag << ' ' << selection.VectorMode
+      << ' ' << selection.VectorComponent;
   if (this->MeshValid && this->MeshInputTime >= input->GetMTime() &&
     this->MeshScalarKey == key.str())
   {
     return true;
   }
-  std::string message;
-  this->MeshValid = CellMeshFromVTK(input, scalars, cellFlag == 1, this->Mesh, message);
-  if (!message.empty())
+  std::string error;
+  this->MeshValid = CellMeshFromVTK(input, selection, this->Mesh, this->Report, error);
+  this->ReportPending = this->MeshValid && !this->Report.Empty();
+  if (!this->MeshValid)
   {
-    vtkErrorWithObjectMacro(mapper, << message);
+    // The input cannot be rendered at all: said at once, by every process it happens on.
+    this->Report.Emit(mapper);
+    vtkErrorWithObjectMacro(mapper, << error);
+    this->Report = InputReport();
   }
   this->MeshInputTime = input->GetMTime();
   this->MeshScalarKey = key.str();
   this->Clock.Lap("mesh");
   return this->MeshValid;
+}
+
+//------------------------------------------------------------------------------
+bool FrameEngine::TakeNewInputReport()
+{
+  const bool news = this->ReportPending;
+  this->ReportPending = false;
+  return news;
 }
 
 //------------------------------------------------------------------------------

@@ -13,6 +13,7 @@
 
 #include "APCRenderingModule.h" // for export macro
 #include "apcCellMesh.h"
+#include "apcInputReport.h"
 #include "apcMomentParameters.h"
 #include "apcStageClock.h"
 #include "apcVolumeRayMarcher.h"
@@ -45,6 +46,15 @@ public:
    * an empty or missing input is usable and renders nothing.
    */
   bool UpdateInput(vtkAPCVolumeMapper* mapper);
+
+  /**
+   * What the conversion of the current input found (skipped or transparent cells, see
+   * apcInputReport.h), and whether that is news: true once after a data change whose report
+   * is not empty. The mapper alone says its report then; vtkAPCCompositePass, when any
+   * process has news, says the sum of every process's current report, once.
+   */
+  const InputReport& GetInputReport() const { return this->Report; }
+  bool TakeNewInputReport();
 
   /// Bounds of the renderable cells as of the last UpdateInput; false if there are none.
   bool GetLocalBounds(double bounds[6]) const;
@@ -90,6 +100,8 @@ private:
   bool MeshValid = false;
   vtkMTimeType MeshInputTime = 0;
   std::string MeshScalarKey;
+  InputReport Report;
+  bool ReportPending = false;
   VolumeRayMarcher Marcher;
 
   bool Ready = false;

@@ -230,6 +230,15 @@ void RunSegmentCompositing(
     }
   }
   record.Clock.Lap("segments");
+  for (size_t p = 0; p < frame.Pixels(); ++p)
+  {
+    bool any = false;
+    for (const SegmentImage& image : images)
+    {
+      any = any || image.Count(static_cast<int64_t>(p)) > 0;
+    }
+    record.OwnCoveredPixels += any ? 1 : 0;
+  }
 
   // 2. Counts per owner, then the segments, to their owners.
   std::vector<long long> counts;

@@ -3,6 +3,7 @@
 
 #include "vtkAPCEXRWriter.h"
 #include "vtkAPCVolumeMapper.h"
+#include "vtkCommunicator.h"
 #include "vtkImageData.h"
 #include "vtkLogger.h"
 #include "vtkMultiProcessController.h"
@@ -15,10 +16,12 @@
 #include "vtkVolume.h"
 #include "vtkXMLImageDataWriter.h"
 
+#include "apcAutoMode.h"
 #include "apcCompositeFrame.h"
 #include "apcFrameAgreement.h"
 #include "apcFrameEngine.h"
 #include "apcImageOutput.h"
+#include "apcInputReport.h"
 
 #include <algorithm>
 #include <sstream>
@@ -31,6 +34,8 @@ struct vtkAPCCompositePass::Internals
 {
   std::vector<vtkSmartPointer<vtkVolume>> Volumes;
   apc::FrameRecord Record;
+  int LastMode = -1;
+  apc::AutoMode Auto; // the same on every process: fed only by collectives' results
   vtkNew<vtkImageData> Image;
 };
 
@@ -135,6 +140,16 @@ vtkIdType vtkAPCCompositePass::GetLastCompositedPixels() const
   return this->Internal->Record.Pixels;
 }
 
+int vtkAPCCompositePass::GetLastCompositeMode() const
+{
+  return this->Internal->LastMode;
+}
+
+vtkIdType vtkAPCCompositePass::GetLastCoveredPixels() const
+{
+  return this->Internal->Record.CoveredPixels;
+}
+
 bool vtkAPCCompositePass::GetLastFrameFailed() const
 {
   return this->Internal->Record.Failed;
@@ -157,6 +172,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   apc::LocalFrame local;
   std::ostringstream problem;
   std::vector<vtkAPCVolumeMapper*> mappers;
+  apc::InputReport reports; // said once for all processes when any has news
   for (const auto& volume : volumes)
   {
     if (!volume->GetVisibility())
@@ -177,6 +193,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
       problem << "unusable input (see the mapper's error); ";
       local.Failed = true;
     }
+    local.ReportPending = engine->TakeNewInputReport() || local.ReportPending;
+    reports.Add(engine->GetInputReport());
     double bounds[6];
     local.AddVolume(
       mapper->GetNumberOfMoments(), engine->GetLocalBounds(bounds) ? bounds : nullptr);
@@ -187,6 +205,11 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   // between processes would make their collectives disagree in length.
   ren->GetTiledSizeAndOrigin(&local.Width, &local.Height, &frame.X0, &frame.Y0);
   const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
+  if (agreed.AnyReportPending)
+  {
+    apc::ShareInputReports(group, reports,
+      mappers.empty() ? static_cast<vtkObject*>(self) : static_cast<vtkObject*>(mappers.front()));
+  }
   record.Clock.Lap("agree");
   if (agreed.NoVolumes())
   {
@@ -214,6 +237,9 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Width = agreed.Width;
   frame.Height = agreed.Height;
   frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height);
+  const apc::ScreenRect& r = frame.Rect;
+  frame.Tiles =
+    r.Pixels() > 0 ? apc::TileGrid(frame.Width, r.I0, r.J0, r.I1, r.J1) : apc::TileGrid();
   // The frame's moment settings: the agreed number, the first volume's beta, bias and resolve.
   frame.Moments = mappers.front()->GetMomentParameters();
   frame.Moments.Moments = agreed.MaxMoments;
@@ -225,8 +251,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   return true;
 }
 
-// Step 2: the display process's (composited) depth over the screen rectangle, where every
-// ray must stop, on every process.
+// Step 2: the display process's (composited) depth, where every ray must stop, on every
+// process: only the tiles of the screen rectangle where it has opaque geometry travel.
 std::vector<float> ShareDepth(
   const apc::ProcessGroup& group, const apc::CompositeFrame& frame, apc::FrameRecord& record)
 {
@@ -236,20 +262,34 @@ std::vector<float> ShareDepth(
   {
     return depth;
   }
-  std::vector<float> packed(rect.Pixels());
   if (group.IsDisplay())
   {
+    std::vector<float> packed(rect.Pixels());
     frame.Renderer->GetRenderWindow()->GetZbufferData(frame.X0 + rect.I0, frame.Y0 + rect.J0,
       frame.X0 + rect.I1 - 1, frame.Y0 + rect.J1 - 1, packed.data());
+    apc::Unpack(packed.data(), frame.Width, rect, 1, depth.data());
   }
-  if (group.Parallel)
+  if (!group.Parallel)
+  {
+    return depth;
+  }
+  std::vector<unsigned char> opaque = group.IsDisplay()
+    ? frame.Tiles.Mark([&](size_t pixel) { return depth[pixel] < 1.0f; })
+    : std::vector<unsigned char>(frame.Tiles.Tiles());
+  group.Controller->Broadcast(opaque.data(), static_cast<vtkIdType>(opaque.size()), group.Display);
+  std::vector<float> packed(frame.Tiles.PixelsIn(opaque));
+  frame.Tiles.Pack(opaque, depth.data(), 1, packed.data());
+  if (!packed.empty())
   {
     group.Controller->Broadcast(
       packed.data(), static_cast<vtkIdType>(packed.size()), group.Display);
-    record.BytesSent += group.IsDisplay() ? 4.0 * packed.size() : 0.0;
-    record.MessagesSent += group.IsDisplay() ? 1 : 0;
   }
-  apc::Unpack(packed.data(), frame.Width, rect, 1, depth.data());
+  frame.Tiles.Unpack(opaque, packed.data(), 1, depth.data());
+  if (group.IsDisplay())
+  {
+    record.BytesSent += static_cast<double>(opaque.size() + 4 * packed.size());
+    record.MessagesSent += packed.empty() ? 1 : 2;
+  }
   return depth;
 }
 }
@@ -265,6 +305,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   }
   Internals& internal = *this->Internal;
   internal.Record = apc::FrameRecord();
+  internal.LastMode = -1;
   internal.Record.Clock.Restart();
   internal.Image->Initialize();
 
@@ -276,7 +317,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   {
     return;
   }
-  internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels());
+  internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels()); // APC: fewer
   const std::vector<float> depth = ShareDepth(group, frame, internal.Record);
   internal.Record.Clock.Lap("depth");
   for (size_t v = 0; v < volumes.size(); ++v)
@@ -285,8 +326,18 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     frame.Engines[v]->Prepare(mapper, frame.Renderer, volumes[v], frame.Bounds, depth.data());
   }
 
+  int mode = this->CompositeMode;
+  if (mode == AUTO)
+  {
+    const double bytesPerPixel = this->CompositeInDouble ? 8.0 * (frame.Moments.Moments + 5)
+                                                         : 1 + 4.0 * (frame.Moments.Moments + 5);
+    mode = internal.Auto.Choose(group.Processes, bytesPerPixel) == apc::AutoMode::Moments
+      ? APC
+      : SEGMENTS;
+  }
+  internal.LastMode = mode;
   apc::FrameResult result;
-  switch (this->CompositeMode)
+  switch (mode)
   {
     case LOCAL_EXACT:
       result.RGBA.assign(4 * frame.Pixels(), 0.0f);
@@ -302,7 +353,30 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     default:
       apc::RunMomentCompositing(group, frame, this->CompositeInDouble, internal.Record, result);
   }
+  if (this->CompositeMode == AUTO)
+  {
+    this->RecordForAuto(group);
+  }
   this->FinishFrame(group, frame, result);
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCCompositePass::RecordForAuto(const apc::ProcessGroup& group)
+{
+  Internals& internal = *this->Internal;
+  const apc::FrameRecord& record = internal.Record;
+  long long covered = record.OwnCoveredPixels;
+  long long coveredSum = covered;
+  if (group.Parallel)
+  {
+    group.Controller->AllReduce(&covered, &coveredSum, 1, vtkCommunicator::SUM_OP);
+  }
+  const bool segments = internal.LastMode == SEGMENTS;
+  const double coveredUnion = segments ? static_cast<double>(record.Segments.NonEmptyPixels)
+                                       : static_cast<double>(record.CoveredPixels);
+  internal.Auto.Record(coveredUnion, static_cast<double>(coveredSum),
+    segments ? static_cast<double>(record.Segments.Segments) : -1.0);
+  internal.Record.Clock.Lap("auto");
 }
 
 //------------------------------------------------------------------------------
@@ -336,15 +410,15 @@ void vtkAPCCompositePass::FinishFrame(
   }
   const char* names[] = { "APC frame (", "APC segments frame (", "APC local exact frame (" };
   std::ostringstream line;
-  line << names[this->CompositeMode] << group.Processes << " processes, " << frame.Rect.Pixels()
-       << " pixels composited):";
+  line << (this->CompositeMode == AUTO ? "Auto: " : "") << names[internal.LastMode]
+       << group.Processes << " processes, " << frame.Rect.Pixels() << " pixels composited):";
   for (const auto& entry : internal.Record.Clock.Stages())
   {
     line << ' ' << entry.first << ' ' << entry.second << " s,";
   }
   line << " bytes sent by the display process " << internal.Record.BytesSent << " in "
        << internal.Record.MessagesSent << " messages";
-  if (this->CompositeMode == SEGMENTS)
+  if (internal.LastMode == SEGMENTS)
   {
     line << "; segments per non-empty pixel: average " << internal.Record.Segments.Average()
          << ", max " << internal.Record.Segments.MaxPerPixel;
@@ -386,11 +460,8 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Volumes: " << this->Internal->Volumes.size() << "\n";
   os << indent << "DisplayProcess: " << this->DisplayProcess << "\n";
   os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
-  os << indent << "CompositeMode: "
-     << (this->CompositeMode == SEGMENTS
-            ? "SEGMENTS"
-            : (this->CompositeMode == LOCAL_EXACT ? "LOCAL_EXACT" : "APC"))
-     << "\n";
+  const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
+  os << indent << "CompositeMode: " << modes[this->CompositeMode] << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
   os << indent << "ImageFileName: " << (this->ImageFileName ? this->ImageFileName : "(none)")
      << "\n";

@@ -12,16 +12,24 @@
  * 2. one small allreduce: the union of all processes' data bounds (depth warp, sample
  *    spacing, screen rectangle) and a failure flag, so that a process whose input is
  *    unusable makes every process skip the frame instead of waiting in a collective;
- * 3. a broadcast of the display process's depth over the data's screen rectangle, so that
+ * 3. a broadcast of the display process's depth where it has opaque geometry, so that
  *    every process stops its rays at the composited opaque geometry;
- * 4. pass 1 on the local cells: the moment image; one allreduce (sum) of it;
- * 5. pass 2 with the global moments: the colour-sum image; one reduce (sum) to the display
- *    process;
+ * 4. pass 1 on the local cells: the moment image; a small allreduce (bytewise max) of which
+ *    8x8 tiles each process covers, then the covered tiles' moments are summed onto every
+ *    process (allreduce);
+ * 5. pass 2 with the global moments: the colour-sum image; one reduce (sum) of the same
+ *    tiles to the display process;
  * 6. on the display process: resolve, and blend over the opaque image in the render window.
  *
- * Only the screen rectangle the data's bounds cover is sent. Moment and colour sums travel
- * in double precision (CompositeInDouble, default on) so that the distributed image equals
- * the one-process MBOIT image to rounding; off halves the bytes.
+ * Only the tiles of the data's screen rectangle that some process covers are sent (depth:
+ * the tiles where the display process has opaque geometry). Processes sum their own samples
+ * in double. Unless CompositeInDouble is on, the moments travel as 32-bit fixed point with a
+ * per-pixel scale the processes agree on first (one byte per pixel, MAX allreduce): integer
+ * sums are exact, so every process gets the same global moments whatever order MPI adds them
+ * in, with more bits than float sums up to ~64 processes; the colour sums travel in float
+ * (the paper's format). That is 1 + 20 + 16 bytes per covered pixel at 4 moments (the paper:
+ * 36), and the distributed image equals the one-process MBOIT image to ~1e-6 (up to 6e-5 on
+ * slab-like data, whose moment solve amplifies any rounding; CompositeInDouble: ~1e-7).
  *
  * Volumes share one moment image, so several APC volumes are composited order-independently
  * together; they must then use the same NumberOfMoments, and the first volume's
@@ -100,7 +108,9 @@ public:
 
   ///@{
   /**
-   * Sum moments and colours in double (default) or float precision.
+   * Ship the moment and colour sums in double instead of the compact wire (default off:
+   * fixed-point moments and float colour sums, half the bytes; each process still sums its
+   * own samples in double).
    */
   vtkSetMacro(CompositeInDouble, bool);
   vtkGetMacro(CompositeInDouble, bool);
@@ -120,16 +130,28 @@ public:
     SEGMENTS = 1,
     /// The volumes' EXACT mode without compositing: each process blends only its own cells
     /// (a local reference; in parallel the display process shows its own piece only).
-    LOCAL_EXACT = 2
+    LOCAL_EXACT = 2,
+    /// Per frame, SEGMENTS where it moves fewer bytes than APC (few segments per pixel: the
+    /// exact picture for free) and APC where segments would cost more, estimated from the
+    /// previous frames' measured coverage and segment counts, the same on every process
+    /// (apcAutoMode.h). The first frame composites segments. GetLastCompositeMode() says
+    /// which ran.
+    AUTO = 3
   };
 
   ///@{
   /**
-   * How the processes' volumes are combined: APC (default), SEGMENTS or LOCAL_EXACT.
+   * How the processes' volumes are combined: APC (default), SEGMENTS, LOCAL_EXACT or AUTO.
    */
-  vtkSetClampMacro(CompositeMode, int, APC, LOCAL_EXACT);
+  vtkSetClampMacro(CompositeMode, int, APC, AUTO);
   vtkGetMacro(CompositeMode, int);
   ///@}
+
+  /**
+   * The mode the last frame ran: APC, SEGMENTS or LOCAL_EXACT (AUTO's choice); -1 before
+   * the first frame or if it was skipped.
+   */
+  int GetLastCompositeMode() const;
 
   ///@{
   /**
@@ -145,8 +167,10 @@ public:
    * The last frame, per process: wall-clock seconds of a stage (null for the total), bytes
    * this process sent into the collectives and point-to-point messages, the number of those
    * (a collective this process contributes data to counts as one, as does each non-empty
-   * direct send), and the screen pixels composited. Stages: "agree", "depth", then for APC
-   * "pass1", "allreduce", "pass2", "reduce", "resolve"; for SEGMENTS "segments" (rendering
+   * direct send), and the screen pixels composited (APC: the pixels of the covered tiles;
+   * SEGMENTS: the screen rectangle). Stages: "agree", "depth", then for APC "pass1",
+   * "tiles" (agreeing on the covered tiles: where a process waits for the slowest pass 1),
+   * "allreduce", "pass2", "reduce", "resolve"; for SEGMENTS "segments" (rendering
    * them), "exchange" (counts and direct send to the strip owners), "blend_segments" (sort
    * and blend of the own strip), "gather" (strips to the display process), "statistics"
    * (the segment counts below; not counted in bytes or messages); for LOCAL_EXACT "exact";
@@ -157,6 +181,12 @@ public:
   vtkIdType GetLastMessagesSent() const;
   vtkIdType GetLastCompositedPixels() const;
   ///@}
+
+  /**
+   * APC mode, the last frame: the pixels where some process's volume has absorbance (the
+   * global moment b0 > 0), the same on every process; for bytes per covered pixel.
+   */
+  vtkIdType GetLastCoveredPixels() const;
 
   ///@{
   /**
@@ -207,7 +237,7 @@ protected:
 
   vtkMultiProcessController* Controller = nullptr;
   int DisplayProcess = 0;
-  bool CompositeInDouble = true;
+  bool CompositeInDouble = false;
   int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;
@@ -217,6 +247,8 @@ private:
   void operator=(const vtkAPCCompositePass&) = delete;
 
   void WriteImage();
+  // AUTO: what this frame measured, summed over processes, into the history of the choice.
+  void RecordForAuto(const apc::ProcessGroup& group);
   // Stores, blends and writes the display process's image, and reports the frame.
   void FinishFrame(const apc::ProcessGroup& group, const apc::CompositeFrame& frame,
     const apc::FrameResult& result);

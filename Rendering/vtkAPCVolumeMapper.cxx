@@ -90,7 +90,12 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
 {
   apc::FrameEngine& engine = this->Internal->Engine;
   engine.BeginFrame();
-  if (!engine.UpdateInput(this) || !engine.Prepare(this, ren, vol, nullptr, nullptr) ||
+  const bool usable = engine.UpdateInput(this);
+  if (engine.TakeNewInputReport())
+  {
+    engine.GetInputReport().Emit(this);
+  }
+  if (!usable || !engine.Prepare(this, ren, vol, nullptr, nullptr) ||
     engine.GetNumberOfCells() == 0)
   {
     this->Internal->Image->Initialize();
@@ -151,4 +156,6 @@ void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "ComputeSegmentCount: " << this->ComputeSegmentCount << "\n";
+  os << indent << "VectorMode: " << this->VectorMode << "\n";
+  os << indent << "VectorComponent: " << this->VectorComponent << "\n";
 }

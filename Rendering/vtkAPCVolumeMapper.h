@@ -25,9 +25,13 @@
  * The last frame's float images (final RGBA, moments, colour sums, segment counts) are
  * available as vtkImageData for inspection and tests.
  *
- * Unsupported input gives an error and a blank image, never a crash: a non-unstructured
- * input, no scalars, cells of other types (polyhedra, quadratic cells: named in the error and
- * skipped). Ghost cells (vtkGhostType DUPLICATECELL) are skipped; NaN scalars are transparent.
+ * Polyhedra and quadratic cells (and pentagonal and hexagonal prisms) are rendered through
+ * the tetrahedra vtkDataSetTriangleFilter makes of them, as ParaView's Volume does. Unsupported
+ * input gives an error and a blank image, never a crash: a non-unstructured input, no
+ * scalars; cells of other types (lower-dimensional, higher-order Lagrange/Bezier) are named in
+ * an error and skipped. Ghost cells (vtkGhostType DUPLICATECELL) and cells with no volume
+ * (flat or collapsed) are skipped; non-finite scalars (NaN, +-inf) are transparent; each is
+ * said once per data change.
  *
  * Threads: TBB tasks over screen tiles (NumberOfThreads; VTK's SMP backend is not touched).
  *
@@ -41,6 +45,7 @@
 #define vtkAPCVolumeMapper_h
 
 #include "APCRenderingModule.h" // for export macro
+#include "vtkScalarsToColors.h" // for the vector modes
 #include "vtkUnstructuredGridVolumeMapper.h"
 
 #include <memory> // for std::unique_ptr
@@ -149,6 +154,20 @@ public:
 
   ///@{
   /**
+   * What a multi-component array renders, as vtkSmartVolumeMapper's settings of the same
+   * names (ParaView's "APC Volume" sets them from the colour map, as its Volume does):
+   * vtkScalarsToColors::MAGNITUDE (default), COMPONENT (VectorComponent, clamped to the
+   * array's components with a warning) or RGBCOLORS (not supported: the magnitude, with a
+   * warning). Single-component arrays render their value whatever the mode.
+   */
+  vtkSetClampMacro(VectorMode, int, vtkScalarsToColors::MAGNITUDE, vtkScalarsToColors::RGBCOLORS);
+  vtkGetMacro(VectorMode, int);
+  vtkSetMacro(VectorComponent, int);
+  vtkGetMacro(VectorComponent, int);
+  ///@}
+
+  ///@{
+  /**
    * Float images of the last frame, W x H, row 0 at the bottom, as point arrays of a
    * vtkImageData: "RGBA" (premultiplied, the volume alone), "Moments" (b0..bN, MBOIT mode),
    * "ColourSums" (sum w r, g, b, sum w; MBOIT mode), "SegmentCount" (if enabled). The image
@@ -198,6 +217,8 @@ protected:
   double SampleDistance = 0.0;
   int NumberOfThreads = 0;
   bool ComputeSegmentCount = false;
+  int VectorMode = vtkScalarsToColors::MAGNITUDE;
+  int VectorComponent = 0;
 
 private:
   vtkAPCVolumeMapper(const vtkAPCVolumeMapper&) = delete;

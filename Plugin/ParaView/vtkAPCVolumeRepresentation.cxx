@@ -8,6 +8,7 @@
 
 #include "vtkAlgorithmOutput.h"
 #include "vtkAppendFilter.h"
+#include "vtkColorTransferFunction.h"
 #include "vtkCompositeDataIterator.h"
 #include "vtkCompositeDataSet.h"
 #include "vtkDataObject.h"
@@ -142,6 +143,15 @@ void vtkAPCVolumeRepresentation::UpdateMapperArray()
     this->Mapper->SelectScalarArray(static_cast<const char*>(nullptr));
     this->Mapper->SetScalarMode(VTK_SCALAR_MODE_DEFAULT);
   }
+  // Which values of a vector are rendered: the colour map's vector mode and component (what
+  // ColorBy(display, ('POINTS', 'v', 'X')) sets), as ParaView's own volume representations
+  // hand them to their mappers; with dependent components (Map Scalars off, or Multi
+  // Components Mapping on) the first one, as they do.
+  vtkColorTransferFunction* colours = this->Property->GetRGBTransferFunction(0);
+  const bool independent = this->MapScalars && !this->MultiComponentsMapping;
+  this->Mapper->SetVectorMode(
+    independent && colours ? colours->GetVectorMode() : vtkScalarsToColors::COMPONENT);
+  this->Mapper->SetVectorComponent(independent && colours ? colours->GetVectorComponent() : 0);
 }
 
 //------------------------------------------------------------------------------
@@ -234,7 +244,8 @@ void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
 //------------------------------------------------------------------------------
 double* vtkAPCVolumeRepresentation::GetLastTimings()
 {
-  std::fill(this->LastTimings, this->LastTimings + 11, 0.0);
+  std::fill(this->LastTimings, this->LastTimings + 14, 0.0);
+  this->LastTimings[11] = -1;
   if (const vtkAPCCompositePass* pass = apc::FindPass(this))
   {
     const char* stages[] = { "agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve",
@@ -246,6 +257,9 @@ double* vtkAPCVolumeRepresentation::GetLastTimings()
     this->LastTimings[8] = pass->GetLastStageSeconds(nullptr);
     this->LastTimings[9] = pass->GetLastBytesSent();
     this->LastTimings[10] = static_cast<double>(pass->GetLastCompositedPixels());
+    this->LastTimings[11] = pass->GetLastCompositeMode();
+    this->LastTimings[12] = static_cast<double>(pass->GetLastCoveredPixels());
+    this->LastTimings[13] = pass->GetLastStageSeconds("tiles");
   }
   return this->LastTimings;
 }

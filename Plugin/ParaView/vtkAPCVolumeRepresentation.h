@@ -67,7 +67,8 @@ public:
    * How the ranks' volumes are combined, vtkAPCCompositePass::CompositeModeType: APC (0,
    * default); SEGMENTS (1), the exact sort-last baseline (ray segments sent to their pixel's
    * owner, sorted and blended); LOCAL_EXACT (2), each rank's own cells in exact mode, without
-   * compositing (a local reference, for comparison).
+   * compositing (a local reference, for comparison); AUTO (3), per frame SEGMENTS or APC,
+   * whichever moves fewer bytes.
    */
   void SetMode(int mode);
   vtkGetMacro(Mode, int);
@@ -91,10 +92,11 @@ public:
 
   /**
    * The last frame's stage timings on this rank, in seconds: agree, depth, pass1, allreduce,
-   * pass2, reduce, resolve, blend, total; then the bytes this rank sent and the composited
-   * pixels (11 values).
+   * pass2, reduce, resolve, blend, total; then the bytes this rank sent, the composited
+   * pixels, the mode that ran (vtkAPCCompositePass::GetLastCompositeMode: what Auto chose),
+   * the covered pixels and the seconds of the "tiles" stage (14 values).
    */
-  double* GetLastTimings() VTK_SIZEHINT(11);
+  double* GetLastTimings() VTK_SIZEHINT(14);
   /**
    * The last SEGMENTS frame on this rank: seconds of segments, exchange, blend_segments and
    * gather; messages sent; average and maximum segments per non-empty pixel (all ranks).
@@ -122,7 +124,7 @@ protected:
   int Mode = 0;
   int Verbosity = 0;
   std::string ImageFileName;
-  double LastTimings[11] = {};
+  double LastTimings[14] = {};
   double LastSegmentStatistics[7] = {};
 
 private:

@@ -1,5 +1,7 @@
 #include "apcCellMesh.h"
 
+#include "apcCellShapeCheck.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -8,38 +10,6 @@ namespace apc
 {
 namespace
 {
-struct FaceList
-{
-  int Count;
-  int Size[6];
-  int Corner[6][4];
-};
-
-// Faces in VTK's corner numbering; their orientation does not matter (fixed by the centroid).
-const FaceList& FacesOf(CellShape shape)
-{
-  static const FaceList tetra = { 4, { 3, 3, 3, 3 },
-    { { 0, 1, 3 }, { 1, 2, 3 }, { 2, 0, 3 }, { 0, 2, 1 } } };
-  static const FaceList pyramid = { 5, { 4, 3, 3, 3, 3 },
-    { { 0, 3, 2, 1 }, { 0, 1, 4 }, { 1, 2, 4 }, { 2, 3, 4 }, { 3, 0, 4 } } };
-  static const FaceList wedge = { 5, { 3, 3, 4, 4, 4 },
-    { { 0, 1, 2 }, { 3, 5, 4 }, { 0, 3, 4, 1 }, { 1, 4, 5, 2 }, { 2, 5, 3, 0 } } };
-  static const FaceList hexahedron = { 6, { 4, 4, 4, 4, 4, 4 },
-    { { 0, 4, 7, 3 }, { 1, 2, 6, 5 }, { 0, 1, 5, 4 }, { 3, 7, 6, 2 }, { 0, 3, 2, 1 },
-      { 4, 5, 6, 7 } } };
-  switch (shape)
-  {
-    case CellShape::Tetra:
-      return tetra;
-    case CellShape::Pyramid:
-      return pyramid;
-    case CellShape::Wedge:
-      return wedge;
-    default:
-      return hexahedron;
-  }
-}
-
 // The plane of a face computed from its points in canonical order, so that both cells
 // sharing the face get the same numbers (see the header). Returns false for a face with no
 // area (collapsed corners), which then constrains nothing.
@@ -135,6 +105,9 @@ bool CellMesh::Finalize(std::string* error)
   const double inf = std::numeric_limits<double>::infinity();
   this->MeshBounds = { inf, -inf, inf, -inf, inf, -inf };
   this->SkippedCells = 0;
+  this->NonFiniteCornerCells = 0;
+  this->FlatCells = 0;
+  this->NonFiniteScalarCells = 0;
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
     const int64_t* ids = this->GetCellPoints(cell);
@@ -158,9 +131,21 @@ bool CellMesh::Finalize(std::string* error)
     if (!finite)
     {
       this->SkipCell(cell);
+      ++this->NonFiniteCornerCells;
       continue;
     }
-    const FaceList& faces = FacesOf(this->Shapes[cell]);
+    std::array<std::array<double, 3>, 8> x;
+    for (int i = 0; i < corners; ++i)
+    {
+      x[i] = this->Points[ids[i]];
+    }
+    if (IsFlat(this->Shapes[cell], x))
+    {
+      this->SkipCell(cell);
+      ++this->FlatCells;
+      continue;
+    }
+    const CellFaces& faces = FacesOf(this->Shapes[cell]);
     for (int f = 0; f < faces.Count; ++f)
     {
       int64_t faceIds[4];
@@ -187,7 +172,12 @@ bool CellMesh::Finalize(std::string* error)
     {
       this->Planes.resize(this->PlaneOffsets.back());
       this->SkipCell(cell);
+      ++this->FlatCells;
       continue;
+    }
+    if (std::isnan(this->ScalarRanges[cell][0]))
+    {
+      ++this->NonFiniteScalarCells;
     }
     this->PlaneOffsets.push_back(static_cast<int64_t>(this->Planes.size()));
     for (int d = 0; d < 3; ++d)
@@ -206,27 +196,27 @@ bool CellMesh::Finalize(std::string* error)
 //------------------------------------------------------------------------------
 std::array<float, 2> CellMesh::ScalarRangeOf(int64_t cell) const
 {
+  // One non-finite corner (NaN or +-inf) makes the whole cell NaN, hence transparent: an
+  // infinite corner would otherwise interpolate to +-inf (clamped to an end of the transfer
+  // function) in some samples and to NaN (inf - inf) in others.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
   if (this->HasCellScalars())
   {
-    return { this->CellScalars[cell], this->CellScalars[cell] };
+    const float s = this->CellScalars[cell];
+    return std::isfinite(s) ? std::array<float, 2>{ s, s } : std::array<float, 2>{ nan, nan };
   }
   const int64_t* ids = this->GetCellPoints(cell);
-  float lo = this->PointScalars[ids[0]];
-  float hi = lo;
-  for (int i = 1; i < static_cast<int>(this->Shapes[cell]); ++i)
+  float lo = std::numeric_limits<float>::infinity();
+  float hi = -lo;
+  for (int i = 0; i < static_cast<int>(this->Shapes[cell]); ++i)
   {
     const float s = this->PointScalars[ids[i]];
-    if (std::isnan(s))
+    if (!std::isfinite(s))
     {
-      lo = hi = s;
-      break;
+      return { nan, nan };
     }
     lo = std::min(lo, s);
     hi = std::max(hi, s);
-  }
-  if (std::isnan(lo))
-  {
-    hi = lo;
   }
   return { lo, hi };
 }

@@ -34,7 +34,7 @@ class CellMesh
 {
 public:
   // Points and scalars. Exactly one of PointScalars (one per point) or CellScalars (one per
-  // cell) is filled. NaN scalars are allowed: such samples are skipped.
+  // cell) is filled. Non-finite scalars (NaN, +-inf) are allowed: their cells are transparent.
   std::vector<std::array<double, 3>> Points;
   std::vector<float> PointScalars;
   std::vector<float> CellScalars;
@@ -64,7 +64,8 @@ public:
   const std::array<double, 6>& GetBounds() const { return this->MeshBounds; }
 
   // The smallest and largest corner scalar of a cell (its own value for cell scalars), NaN
-  // for both if a corner scalar is NaN, which makes every sample of the cell NaN. Computed
+  // for both if a corner scalar is not finite (NaN or +-inf), which makes every sample of the
+  // cell transparent, whatever the transfer function. Computed
   // by Finalize, once per data change: with it a frame skips the cells its transfer function
   // hides (TransferTable::MayBeVisible) without interpolating them.
   const std::array<float, 2>& GetScalarRange(int64_t cell) const
@@ -72,9 +73,14 @@ public:
     return this->ScalarRanges[cell];
   }
 
-  // Cells Finalize left out: non-finite corners, or too few faces with area to enclose
-  // anything (collapsed or flat cells). They have no planes and empty bounds.
+  // Cells Finalize left out: non-finite corners, or no volume to render (collapsed or flat
+  // cells: too few faces with area to enclose anything, or too thin, see apcCellShapeCheck.h).
+  // They have no planes and empty bounds.
   int64_t GetNumberOfSkippedCells() const { return this->SkippedCells; }
+  int64_t GetNumberOfNonFiniteCornerCells() const { return this->NonFiniteCornerCells; }
+  int64_t GetNumberOfFlatCells() const { return this->FlatCells; }
+  // Rendered cells with a non-finite scalar (NaN or +-inf): transparent, see GetScalarRange.
+  int64_t GetNumberOfNonFiniteScalarCells() const { return this->NonFiniteScalarCells; }
 
   // Corners and scalars of one cell, ready for interpolation.
   void GetCorners(int64_t cell, CellCorners& corners) const;
@@ -93,6 +99,9 @@ private:
   std::vector<std::array<float, 2>> ScalarRanges;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
   int64_t SkippedCells = 0;
+  int64_t NonFiniteCornerCells = 0;
+  int64_t FlatCells = 0;
+  int64_t NonFiniteScalarCells = 0;
 };
 
 } // namespace apc

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <vector>
 
 namespace apc
@@ -31,10 +32,11 @@ public:
     const std::vector<std::array<float, 3>>& colours, const std::vector<double>& opacities,
     double sampleSpacing, double unitDistance);
 
-  // NaN scalars give a fully transparent sample.
+  // Non-finite scalars (NaN, +-inf) give a fully transparent sample: one rule for all of
+  // them, as CellMesh's scalar ranges have.
   TransferSample Lookup(double scalar) const
   {
-    if (!(scalar == scalar))
+    if (!std::isfinite(scalar))
     {
       return { { 0.f, 0.f, 0.f }, 0.f };
     }

@@ -79,11 +79,14 @@ RAMP = [LO, 0, 0.5, 0, HI, 1, 0.5, 0]
 CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
               CameraViewUp=[0, 0, 1], CameraViewAngle=30, CameraParallelProjection=0)
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
+# APCLastTimings: STAGES, total, bytes, pixels composited, mode ran, covered pixels, tiles.
+TIMINGS = 14
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s"] +
-           [s + "_s" for s in STAGES] + [s + "_s" for s in SEGMENT_STAGES] +
-           ["bytes_display_rank", "messages_display_rank", "pixels_composited",
+           [s + "_s" for s in STAGES] + ["tiles_s"] + [s + "_s" for s in SEGMENT_STAGES] +
+           ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
+            "covered_pixels", "bytes_per_covered_pixel",
             "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
             "cells_per_rank_after", "note"])
 
@@ -233,6 +236,7 @@ def main(args):
         "apc": ("APC Volume", "APC", args.sample_distance),
         "apc-default": ("APC Volume", "APC", 0.0),
         "segments": ("APC Volume", "Exact (segments)", 0.0),
+        "auto": ("APC Volume", "Auto", 0.0),
         "pt": ("Volume", "Projected tetra", None),
         "bunyk": ("Volume", "Bunyk ray cast", None),
     }
@@ -293,18 +297,31 @@ def main(args):
         notes = ["later frames %s s" % " ".join("%.2f" % t for t in later)]
         if apc:
             # Median of each stage over the later frames (the first frame's are in the note).
-            segments = mapper == "Exact (segments)"
+            # Auto may change mode between frames: the later frames' modes are listed and the
+            # stage columns are those of the last frame's mode.
+            modes = {0: "APC", 1: "segments", 2: "local exact"}
+            ran = [modes.get(int(t[11]), "none") for t in timings[1:]]
+            row["mode_ran"] = "/".join(sorted(set(ran)))
+            segments = int(timings[-1][11]) == 1
+            same = [t for t in timings[1:] if int(t[11]) == int(timings[-1][11])]
             for i, s in enumerate(STAGES):
                 if not segments or s in ("agree", "depth", "blend"):
-                    row[s + "_s"] = "%.4f" % statistics.median(t[i] for t in timings[1:])
+                    row[s + "_s"] = "%.4f" % statistics.median(t[i] for t in same)
             if segments:
                 for i, s in enumerate(SEGMENT_STAGES):
-                    row[s + "_s"] = "%.4f" % statistics.median(t[11 + i] for t in timings[1:])
-                row["avg_segments_per_pixel"] = "%.4f" % timings[-1][16]
-                row["max_segments_per_pixel"] = "%d" % timings[-1][17]
-            row["messages_display_rank"] = "%d" % timings[-1][15]
-            row["bytes_display_rank"] = "%d" % statistics.median(t[9] for t in timings[1:])
-            row["pixels_composited"] = "%d" % statistics.median(t[10] for t in timings[1:])
+                    row[s + "_s"] = "%.4f" % statistics.median(t[TIMINGS + i] for t in same)
+                row["avg_segments_per_pixel"] = "%.4f" % timings[-1][TIMINGS + 5]
+                row["max_segments_per_pixel"] = "%d" % timings[-1][TIMINGS + 6]
+            else:
+                row["tiles_s"] = "%.4f" % statistics.median(t[13] for t in same)
+                covered = statistics.median(t[12] for t in same)
+                row["covered_pixels"] = "%d" % covered
+                if covered > 0:
+                    row["bytes_per_covered_pixel"] = "%.2f" % (
+                        statistics.median(t[9] for t in same) / covered)
+            row["messages_display_rank"] = "%d" % timings[-1][TIMINGS + 4]
+            row["bytes_display_rank"] = "%d" % statistics.median(t[9] for t in same)
+            row["pixels_composited"] = "%d" % statistics.median(t[10] for t in same)
             row["cells_per_rank_before"] = "/".join(str(s["cells"]) for s in before)
             after = apcparaview.rank_summaries(reader)
             row["cells_per_rank_after"] = "/".join(str(s["cells"]) for s in after)

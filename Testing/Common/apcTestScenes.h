@@ -35,6 +35,7 @@ struct Scene
   TransferFunction TF;
   View Camera;
   double SampleDistance = 0.0;
+  int Moments = 4; // the MBOIT order, for tests that vary it
 };
 
 // Points the renderer's camera as view says; the clipping range is left to the caller, who

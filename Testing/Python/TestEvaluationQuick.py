@@ -3,9 +3,10 @@ scratch folder and checks what it produced, so the one-command benchmark cannot 
 
 - every step wrote its CSV, and docs/evaluation.md has its four sections, each with a table,
   and every figure it links exists;
-- APC on 2 ranks is one-process MBOIT (gear teeth, max |Δ| = 0) and the segment baseline is
-  the one-process exact render (<= 1e-5), as the scaling benchmark measured them;
-- the real data's float images on 2 ranks equal the 1-rank ones (APC: 0; segments <= 1e-4);
+- APC on 2 ranks is one-process MBOIT to the wire's rounding (gear teeth, max |Δ| <= 5e-5: the
+  moments travel in 32-bit fixed point) and the segment baseline is the one-process exact
+  render (<= 1e-5), as the scaling benchmark measured them;
+- the real data's float images on 2 ranks equal the 1-rank ones (APC <= 1e-5; segments <= 1e-4);
 - the segment analysis agrees with what the distributed segment compositing counted.
 
     python3 TestEvaluationQuick.py <scratch folder>
@@ -64,7 +65,10 @@ def main(scratch):
     check(len(two) == 8, "scaling: 2 modes x 4 cameras on 2 ranks")
     for r in two:
         d = float(r["max_abs_diff_vs_1process"])
-        bound = 0.0 if r["mode"] == "APC" else 1e-5
+        # APC: the moments travel in 32-bit fixed point, which the moment solve amplifies on
+        # the gear teeth's nearly degenerate slabs (1.4e-5 at 2 ranks, 128^2; float sums:
+        # 4.9e-5); segments: float runs.
+        bound = 5e-5 if r["mode"] == "APC" else 1e-5
         check(d <= bound, "scaling %s camera %s: max |2 ranks - 1 process| = %g <= %g" % (
             r["mode"], r["camera"], d, bound))
 
@@ -73,7 +77,8 @@ def main(scratch):
     # Segments: float runs pre-blended over hundreds of samples, cut differently on 1 and 2
     # ranks, round differently (3.6e-5 measured at 96x96; the C++ tests hold the exact
     # one-process render to 1e-5 on the same data).
-    for case, bound in (("apc-default", 0.0), ("segments", 1e-4)):
+    # APC: the moments travel in 32-bit fixed point, the colour sums in float.
+    for case, bound in (("apc-default", 1e-5), ("segments", 1e-4)):
         a, b = by.get(("2", "1", case)), by.get(("1", "1", case))
         fa = report.read_vti_rgba(os.path.join(results, "realdata", a["float_image"])) if a else None
         fb = report.read_vti_rgba(os.path.join(results, "realdata", b["float_image"])) if b else None

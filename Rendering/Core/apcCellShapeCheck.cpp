@@ -1,0 +1,112 @@
+#include "apcCellShapeCheck.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace apc
+{
+namespace
+{
+using Vec = std::array<double, 3>;
+
+Vec Sub(const Vec& a, const Vec& b)
+{
+  return { a[0] - b[0], a[1] - b[1], a[2] - b[2] };
+}
+
+Vec Cross(const Vec& a, const Vec& b)
+{
+  return { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0] };
+}
+
+double Dot(const Vec& a, const Vec& b)
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+}
+
+//------------------------------------------------------------------------------
+const CellFaces& FacesOf(CellShape shape)
+{
+  static const CellFaces tetra = { 4, { 3, 3, 3, 3 },
+    { { 0, 1, 3 }, { 1, 2, 3 }, { 2, 0, 3 }, { 0, 2, 1 } } };
+  static const CellFaces pyramid = { 5, { 4, 3, 3, 3, 3 },
+    { { 0, 3, 2, 1 }, { 0, 1, 4 }, { 1, 2, 4 }, { 2, 3, 4 }, { 3, 0, 4 } } };
+  static const CellFaces wedge = { 5, { 3, 3, 4, 4, 4 },
+    { { 0, 1, 2 }, { 3, 5, 4 }, { 0, 3, 4, 1 }, { 1, 4, 5, 2 }, { 2, 5, 3, 0 } } };
+  static const CellFaces hexahedron = { 6, { 4, 4, 4, 4, 4, 4 },
+    { { 0, 4, 7, 3 }, { 1, 2, 6, 5 }, { 0, 1, 5, 4 }, { 3, 7, 6, 2 }, { 0, 3, 2, 1 },
+      { 4, 5, 6, 7 } } };
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      return tetra;
+    case CellShape::Pyramid:
+      return pyramid;
+    case CellShape::Wedge:
+      return wedge;
+    default:
+      return hexahedron;
+  }
+}
+
+//------------------------------------------------------------------------------
+double RelativeThickness(CellShape shape, const std::array<std::array<double, 3>, 8>& corners)
+{
+  const int n = NumberOfCorners(shape);
+  // Everything relative to the centroid: far from the origin, absolute coordinates would
+  // cancel the cell's own digits away.
+  Vec centroid = { 0, 0, 0 };
+  Vec lo = corners[0];
+  Vec hi = corners[0];
+  for (int i = 0; i < n; ++i)
+  {
+    for (int d = 0; d < 3; ++d)
+    {
+      centroid[d] += corners[i][d] / n;
+      lo[d] = std::min(lo[d], corners[i][d]);
+      hi[d] = std::max(hi[d], corners[i][d]);
+    }
+  }
+  std::array<Vec, 8> x;
+  for (int i = 0; i < n; ++i)
+  {
+    x[i] = Sub(corners[i], centroid);
+  }
+  const Vec extent = Sub(hi, lo);
+  const double diagonal = std::sqrt(Dot(extent, extent));
+
+  double volume6 = 0;  // six times the signed volume
+  double maxArea2 = 0; // twice the largest face area
+  const CellFaces& faces = FacesOf(shape);
+  for (int f = 0; f < faces.Count; ++f)
+  {
+    const int* c = faces.Corner[f];
+    Vec area2 = { 0, 0, 0 };
+    for (int k = 1; k + 1 < faces.Size[f]; ++k)
+    {
+      const Vec& a = x[c[0]];
+      const Vec& b = x[c[k]];
+      const Vec& d = x[c[k + 1]];
+      const Vec t = Cross(Sub(b, a), Sub(d, a));
+      for (int i = 0; i < 3; ++i)
+      {
+        area2[i] += t[i];
+      }
+      volume6 += Dot(a, Cross(b, d));
+    }
+    maxArea2 = std::max(maxArea2, std::sqrt(Dot(area2, area2)));
+  }
+  if (std::isnan(volume6) || std::isnan(maxArea2) || std::isnan(diagonal))
+  {
+    return volume6 + maxArea2 + diagonal; // NaN
+  }
+  const double denominator = 0.5 * maxArea2 * diagonal;
+  if (!(denominator > 0) || !std::isfinite(denominator))
+  {
+    return 0;
+  }
+  return std::abs(volume6) / 6.0 / denominator;
+}
+
+} // namespace apc

@@ -1,0 +1,133 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The compact wire of the compositing pass (the paper's OSPRay implementation sends only
+// non-empty tiles): a pixel rectangle cut into square tiles, one occupancy byte per tile, and
+// the marked tiles' pixels packed one after the other. Processes agree on the union of their
+// masks first (a bytewise MAX allreduce), so every process packs the same tiles in the same
+// order and the packed buffers can be summed element by element.
+#ifndef apcCoveredTiles_h
+#define apcCoveredTiles_h
+
+#include <cstddef>
+#include <vector>
+
+namespace apc
+{
+
+// Tiles of TileSize x TileSize pixels over the rectangle [I0, I1) x [J0, J1) of an image whose
+// rows are Width pixels long; the last column and row of tiles are clipped to the rectangle.
+class TileGrid
+{
+public:
+  static constexpr int kDefaultTileSize = 8;
+
+  TileGrid() = default;
+  TileGrid(int width, int i0, int j0, int i1, int j1, int tileSize = kDefaultTileSize);
+
+  size_t Tiles() const { return static_cast<size_t>(this->TilesX) * this->TilesY; }
+
+  // A byte per tile, 1 where pixelIsCovered(pixel index in the image) holds for a pixel of it.
+  template <class Predicate>
+  std::vector<unsigned char> Mark(Predicate pixelIsCovered) const;
+
+  // The pixels of the marked tiles: the length, in pixels, of a packed buffer.
+  size_t PixelsIn(const std::vector<unsigned char>& mask) const;
+
+  // Copies the marked tiles' pixels (components values each) from the full image to packed,
+  // tile by tile in row-major tile order, and back.
+  template <class Packed, class Full>
+  void Pack(
+    const std::vector<unsigned char>& mask, const Full* full, int components, Packed* packed) const;
+  template <class Packed, class Full>
+  void Unpack(
+    const std::vector<unsigned char>& mask, const Packed* packed, int components, Full* full) const;
+
+private:
+  // Calls visit(row start in the image, pixels in the row) for each row of tile t.
+  template <class Visit>
+  void ForEachRow(size_t t, Visit visit) const;
+
+  int Width = 0;
+  int I0 = 0, J0 = 0, I1 = 0, J1 = 0;
+  int TileSize = kDefaultTileSize;
+  int TilesX = 0, TilesY = 0;
+};
+
+//------------------------------------------------------------------------------
+template <class Visit>
+void TileGrid::ForEachRow(size_t t, Visit visit) const
+{
+  const int ti = static_cast<int>(t % this->TilesX);
+  const int tj = static_cast<int>(t / this->TilesX);
+  const int i0 = this->I0 + ti * this->TileSize;
+  const int i1 = i0 + this->TileSize < this->I1 ? i0 + this->TileSize : this->I1;
+  const int j0 = this->J0 + tj * this->TileSize;
+  const int j1 = j0 + this->TileSize < this->J1 ? j0 + this->TileSize : this->J1;
+  for (int j = j0; j < j1; ++j)
+  {
+    visit(static_cast<size_t>(j) * this->Width + i0, static_cast<size_t>(i1 - i0));
+  }
+}
+
+template <class Predicate>
+std::vector<unsigned char> TileGrid::Mark(Predicate pixelIsCovered) const
+{
+  std::vector<unsigned char> mask(this->Tiles(), 0);
+  for (size_t t = 0; t < mask.size(); ++t)
+  {
+    this->ForEachRow(t,
+      [&](size_t first, size_t count)
+      {
+        for (size_t p = first; p < first + count && !mask[t]; ++p)
+        {
+          mask[t] = pixelIsCovered(p) ? 1 : 0;
+        }
+      });
+  }
+  return mask;
+}
+
+template <class Packed, class Full>
+void TileGrid::Pack(
+  const std::vector<unsigned char>& mask, const Full* full, int components, Packed* packed) const
+{
+  for (size_t t = 0; t < mask.size(); ++t)
+  {
+    if (mask[t])
+    {
+      this->ForEachRow(t,
+        [&](size_t first, size_t count)
+        {
+          const Full* row = full + first * components;
+          for (size_t v = 0; v < count * components; ++v)
+          {
+            *packed++ = static_cast<Packed>(row[v]);
+          }
+        });
+    }
+  }
+}
+
+template <class Packed, class Full>
+void TileGrid::Unpack(
+  const std::vector<unsigned char>& mask, const Packed* packed, int components, Full* full) const
+{
+  for (size_t t = 0; t < mask.size(); ++t)
+  {
+    if (mask[t])
+    {
+      this->ForEachRow(t,
+        [&](size_t first, size_t count)
+        {
+          Full* row = full + first * components;
+          for (size_t v = 0; v < count * components; ++v)
+          {
+            row[v] = static_cast<Full>(*packed++);
+          }
+        });
+    }
+  }
+}
+
+} // namespace apc
+
+#endif
