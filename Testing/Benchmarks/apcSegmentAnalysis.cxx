@@ -1,20 +1,34 @@
-// What exact sort-last compositing of segments would move, against APC's fixed payload, in
-// one process: for each configuration the ranks' pieces are rendered one after the other
-// into their segment lists, exactly as vtkAPCCompositePass's SEGMENTS mode renders them on
-// each rank (same mapper stage API, global bounds, sample lattice and screen rectangle), and
+// What exact sort-last compositing of segments would move, against APC's payload, in one
+// process: for each configuration the ranks' pieces are rendered one after the other into
+// their segment lists, exactly as vtkAPCCompositePass's SEGMENTS mode renders them on each
+// rank (same mapper stage API, global bounds, sample lattice and screen rectangle), and
 // apc::CountSegmentTransfer counts direct send to the strip owners and binary swap (computed:
-// the paper's table, "average number of segments transferred per non-empty pixel").
+// the paper's table, "average number of segments transferred per non-empty pixel"), per rank
+// as well as in total (the busiest rank sets the time in scaling_model.py's alpha-beta model),
+// and the 8 x 8 tiles of the screen rectangle that some rank covers (APC's compact wire).
 //
 //   apcSegmentAnalysis --out DIR [--data DIR] [--size S] [--wind-size W H]
-//                      [--gear-ranks 1,2,4,8] [--wind-ranks 2,4,8] [--wind-distances 0.6,1,1.6]
+//                      [--gear-ranks 1,2,4,8] [--gear-large-size S] [--gear-large-cameras C]
+//                      [--wind-ranks 2,4,8] [--wind-distances 0.6,1,1.6]
+//                      [--flange-size S] [--flange-ranks 2,4]
 //
-// Configurations: the gear teeth of apcScalingBenchmark (one piece per rank, 4 orbit cameras)
-// and the real wind data (8 Scotch pieces shared out to the ranks as ParaView's reader does,
-// the camera of paraview_vs_apc.py moved to each distance factor along its line of sight).
+// Configurations:
+// - the gear teeth of apcScalingBenchmark (one piece per rank, 4 orbit cameras). Up to 8
+//   ranks exactly the benchmark's frames. Beyond 8 the box stays [-1,1]^3, so its 4N slabs
+//   thin as 1/N: the sample distance shrinks to 0.08/N to keep the ~6 samples across a slab
+//   that the paper's fixed-thickness slabs have (otherwise slabs fall between samples and the
+//   segments stop growing as 4N); such ranks counts use --gear-large-size pixels and the first
+//   --gear-large-cameras cameras (the cost grows as N: every piece is rendered here);
+// - the real meshes (wind: 8 Scotch pieces; flange: 4 pieces) shared out to the ranks as
+//   ParaView's reader does; the wind from the camera of paraview_vs_apc.py moved to each
+//   distance factor along its line of sight, the flange from apcBenchmarkMappers' camera. Rank
+//   counts above a mesh's piece count need the graph partitioner (vtkAPCGraphPartition, not on
+//   this branch yet) and are refused.
 // Writes (creating DIR) DIR/segment_transfer.csv and, for the first camera of each configuration,
 // the per-pixel segment count over all ranks as DIR/heatmap_<case>_np<N>.pgm (16-bit binary PGM,
-// top row first). APC's bytes are the pass's payload for the same rectangle: every rank sends
-// (moments + 1 + 4 colour) doubles per pixel, the display rank also 4 bytes of depth.
+// top row first). apc_bytes is the pass's payload on main before the compact wire: every rank
+// sends (moments + 1 + 4 colour) doubles per pixel of the rectangle, the display rank also
+// 4 bytes of depth; scaling_model.py derives the compact wire's bytes from the tile columns.
 // Not run by ctest; run-evaluation.sh runs it.
 
 #include "apcFrameEngine.h"
@@ -33,6 +47,8 @@
 #include "vtkVolume.h"
 #include "vtkXMLPUnstructuredGridReader.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -93,6 +109,7 @@ public:
     const std::vector<vtkSmartPointer<vtkUnstructuredGrid>>& pieces, vtkVolume* volume,
     vtkAPCVolumeMapper* mapper, const double bounds[6], const std::string& out)
   {
+    const auto start = std::chrono::steady_clock::now();
     std::vector<float> depth(static_cast<size_t>(this->Width) * this->Height, 1.0f);
     std::vector<apc::SegmentImage> images(pieces.size());
     for (size_t r = 0; r < pieces.size(); ++r)
@@ -118,7 +135,13 @@ public:
     int rect[4];
     vtkAPCCompositePass::GetScreenRectangle(
       this->Renderer, bounds, this->Width, this->Height, rect);
-    const apc::SegmentTransferCounts c = apc::CountSegmentTransfer(ranks, rect[1], rect[3]);
+    const apc::SegmentTransferCounts c =
+      apc::CountSegmentTransfer(ranks, rect[1], rect[3], rect[0], rect[2]);
+    if (!Consistent(c))
+    {
+      std::cerr << "error: per-rank segment counts do not add up to the totals\n";
+      std::exit(1);
+    }
     const long long rectPixels =
       static_cast<long long>(rect[2] - rect[0]) * static_cast<long long>(rect[3] - rect[1]);
     const int n = config.Ranks;
@@ -131,26 +154,57 @@ public:
       heatmap = "heatmap_" + config.Case + "_np" + std::to_string(n) + ".pgm";
       WriteHeatmap(out + "/" + heatmap, apc::SegmentCountImage(ranks));
     }
+    const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     char line[1024];
     std::snprintf(line, sizeof(line),
-      "%s,%d,%s,%d,%d,%lld,%lld,%lld,%.4f,%lld,%lld,%lld,%lld,%.0f,%.0f,%.0f,%s\n",
+      "%s,%d,%s,%d,%d,%lld,%lld,%lld,%.4f,%lld,%lld,%lld,%lld,%.0f,%.0f,%.0f,%s,"
+      "%.6g,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%lld,%.1f\n",
       config.Case.c_str(), n, config.Camera.c_str(), this->Width, this->Height, rectPixels,
       static_cast<long long>(c.NonEmptyPixels), static_cast<long long>(c.Segments),
       c.PerNonEmptyPixel(c.Segments), static_cast<long long>(c.MaxSegmentsPerPixel),
       static_cast<long long>(c.DirectSend), static_cast<long long>(c.BinarySwap),
       static_cast<long long>(c.BinarySwapUnmerged), apcBytes,
       static_cast<double>(kSegmentBytes) * c.DirectSend,
-      c.BinarySwap < 0 ? -1.0 : static_cast<double>(kSegmentBytes) * c.BinarySwap, heatmap.c_str());
-    std::printf("%s %d ranks, camera %s: %.2f segments per non-empty pixel (max %lld); "
-                "transferred per non-empty pixel: direct send %.2f, binary swap %.2f\n",
-      config.Case.c_str(), n, config.Camera.c_str(), c.PerNonEmptyPixel(c.Segments),
-      static_cast<long long>(c.MaxSegmentsPerPixel), c.PerNonEmptyPixel(c.DirectSend),
-      c.BinarySwap < 0 ? -1.0 : c.PerNonEmptyPixel(c.BinarySwap));
+      c.BinarySwap < 0 ? -1.0 : static_cast<double>(kSegmentBytes) * c.BinarySwap, heatmap.c_str(),
+      mapper->GetSampleDistance(), static_cast<long long>(c.Tiles),
+      static_cast<long long>(c.CoveredTiles), static_cast<long long>(c.CoveredTilePixels),
+      static_cast<long long>(c.DirectSendMaxSent()),
+      static_cast<long long>(c.DirectSendMaxReceived()),
+      static_cast<long long>(c.DirectSendPairwiseCritical()),
+      static_cast<long long>(c.DirectSendMessages()),
+      static_cast<long long>(c.BinarySwapCritical()), seconds);
+    std::printf("%s %d ranks, camera %s, %dx%d: %.2f segments per non-empty pixel (max %lld); "
+                "transferred per non-empty pixel: direct send %.2f, binary swap %.2f; "
+                "%lld of %lld tiles covered; %.1f s\n",
+      config.Case.c_str(), n, config.Camera.c_str(), this->Width, this->Height,
+      c.PerNonEmptyPixel(c.Segments), static_cast<long long>(c.MaxSegmentsPerPixel),
+      c.PerNonEmptyPixel(c.DirectSend), c.BinarySwap < 0 ? -1.0 : c.PerNonEmptyPixel(c.BinarySwap),
+      static_cast<long long>(c.CoveredTiles), static_cast<long long>(c.Tiles), seconds);
     std::fflush(stdout);
     return line;
   }
 
 private:
+  // The per-rank counts must add up to the totals the paper's table is made of.
+  static bool Consistent(const apc::SegmentTransferCounts& c)
+  {
+    int64_t offDiagonal = 0;
+    for (int p = 0; p < c.Ranks; ++p)
+    {
+      for (int o = 0; o < c.Ranks; ++o)
+      {
+        offDiagonal += p == o ? 0 : c.DirectSendMatrix[static_cast<size_t>(p) * c.Ranks + o];
+      }
+    }
+    int64_t swapped = 0;
+    for (int64_t sent : c.BinarySwapSent)
+    {
+      swapped += sent;
+    }
+    return offDiagonal == c.DirectSend && (c.BinarySwap < 0 || swapped == c.BinarySwap);
+  }
+
   void WriteHeatmap(const std::string& path, const std::vector<int32_t>& counts) const
   {
     std::ofstream f(path, std::ios::binary);
@@ -178,8 +232,60 @@ void Usage(const char* program)
 {
   std::fprintf(stderr,
     "usage: %s --out DIR [--data DIR] [--size S] [--wind-size W H] [--gear-ranks 1,2,4,8]\n"
-    "          [--wind-ranks 2,4,8] [--wind-distances 0.6,1,1.6]\n",
+    "          [--gear-large-size S] [--gear-large-cameras C] [--wind-ranks 2,4,8]\n"
+    "          [--wind-distances 0.6,1,1.6] [--flange-size S] [--flange-ranks 2,4]\n",
     program);
+}
+
+// The gear teeth's sample distance: the scaling benchmark's up to 8 ranks; beyond, ~6 samples
+// across each of the thinning slabs (see the file comment).
+double GearSampleDistance(int ranks)
+{
+  return std::min(apcbench::kGearSampleDistance, 8 * apcbench::kGearSampleDistance / ranks);
+}
+
+// The pieces of a .pvtu shared out to n ranks as vtkXMLPUnstructuredGridReader does, with
+// field as active scalars, and their common bounds. Empty when the field is missing or the
+// mesh has fewer pieces than ranks (an empty rank would not model a partition into n parts).
+std::vector<vtkSmartPointer<vtkUnstructuredGrid>> ReaderPieces(
+  const std::string& path, const char* field, int n, double bounds[6])
+{
+  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+  for (int d = 0; d < 3; ++d)
+  {
+    bounds[2 * d] = 1e300;
+    bounds[2 * d + 1] = -1e300;
+  }
+  for (int r = 0; r < n; ++r)
+  {
+    vtkNew<vtkXMLPUnstructuredGridReader> reader;
+    reader->SetFileName(path.c_str());
+    reader->UpdateInformation();
+    if (reader->GetNumberOfPieces() < n)
+    {
+      std::cerr << "error: " << path << " has " << reader->GetNumberOfPieces()
+                << " pieces, fewer than " << n
+                << " ranks (more need the graph partitioner, not on this branch yet)\n";
+      return {};
+    }
+    reader->UpdatePiece(r, n, 0);
+    vtkSmartPointer<vtkUnstructuredGrid> piece = reader->GetOutput();
+    if (!piece || !piece->GetPointData()->GetArray(field))
+    {
+      std::cerr << "error: could not read " << field << " from " << path << "\n";
+      return {};
+    }
+    piece->GetPointData()->SetActiveScalars(field);
+    double b[6];
+    piece->GetBounds(b);
+    for (int d = 0; d < 3; ++d)
+    {
+      bounds[2 * d] = std::min(bounds[2 * d], b[2 * d]);
+      bounds[2 * d + 1] = std::max(bounds[2 * d + 1], b[2 * d + 1]);
+    }
+    pieces.push_back(piece);
+  }
+  return pieces;
 }
 }
 
@@ -188,11 +294,15 @@ int main(int argc, char* argv[])
   std::string out;
   std::string data = std::string(APC_SOURCE_DIR) + "/Data";
   int size = 512;
+  int largeSize = -1; // the gear teeth beyond 8 ranks; -1: size
+  int largeCameras = 4;
   int windWidth = 1024;
   int windHeight = 1024;
+  int flangeSize = 512;
   std::vector<double> gearRanks = { 1, 2, 4, 8 };
   std::vector<double> windRanks = { 2, 4, 8 };
   std::vector<double> distances = { 0.6, 1.0, 1.6 };
+  std::vector<double> flangeRanks;
   for (int a = 1; a < argc; ++a)
   {
     const bool hasValue = a + 1 < argc;
@@ -208,10 +318,22 @@ int main(int argc, char* argv[])
     {
       size = std::atoi(argv[++a]);
     }
+    else if (!std::strcmp(argv[a], "--gear-large-size") && hasValue)
+    {
+      largeSize = std::atoi(argv[++a]);
+    }
+    else if (!std::strcmp(argv[a], "--gear-large-cameras") && hasValue)
+    {
+      largeCameras = std::atoi(argv[++a]);
+    }
     else if (!std::strcmp(argv[a], "--wind-size") && a + 2 < argc)
     {
       windWidth = std::atoi(argv[++a]);
       windHeight = std::atoi(argv[++a]);
+    }
+    else if (!std::strcmp(argv[a], "--flange-size") && hasValue)
+    {
+      flangeSize = std::atoi(argv[++a]);
     }
     else if (!std::strcmp(argv[a], "--gear-ranks") && hasValue)
     {
@@ -225,13 +347,19 @@ int main(int argc, char* argv[])
     {
       distances = ParseList(argv[++a]);
     }
+    else if (!std::strcmp(argv[a], "--flange-ranks") && hasValue)
+    {
+      flangeRanks = ParseList(argv[++a]);
+    }
     else
     {
       Usage(argv[0]);
       return 2;
     }
   }
-  if (out.empty() || size < 1 || windWidth < 1 || windHeight < 1)
+  largeSize = largeSize < 0 ? size : largeSize;
+  if (out.empty() || size < 1 || largeSize < 1 || windWidth < 1 || windHeight < 1 ||
+    flangeSize < 1 || largeCameras < 1 || largeCameras > 4)
   {
     Usage(argv[0]);
     return 2;
@@ -248,32 +376,48 @@ int main(int argc, char* argv[])
   rows << "case,ranks,camera,width,height,rect_pixels,nonempty_pixels,segments,"
           "avg_segments_per_pixel,max_segments_per_pixel,direct_send_segments,"
           "binary_swap_segments,binary_swap_unmerged_segments,apc_bytes,direct_send_bytes,"
-          "binary_swap_bytes,heatmap\n";
-
-  // The gear teeth, as apcScalingBenchmark renders them.
+          "binary_swap_bytes,heatmap,sample_distance,tiles,covered_tiles,covered_tile_pixels,"
+          "ds_max_sent_segments,ds_max_received_segments,ds_pairwise_critical_segments,"
+          "ds_messages,bs_critical_segments,seconds\n";
+  // Written after every configuration, so that a long run killed part way keeps its rows.
+  const std::string csv = out + "/segment_transfer.csv";
+  auto save = [&]
   {
-    Analysis analysis(size, size);
-    for (double value : gearRanks)
+    std::ofstream file(csv);
+    file << rows.str();
+    return static_cast<bool>(file);
+  };
+
+  // The gear teeth, as apcScalingBenchmark renders them (beyond 8 ranks, see above).
+  for (double value : gearRanks)
+  {
+    const int n = static_cast<int>(value);
+    const bool large = n > 8;
+    Analysis analysis(large ? largeSize : size, large ? largeSize : size);
+    std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+    for (int r = 0; r < n; ++r)
     {
-      const int n = static_cast<int>(value);
-      std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
-      for (int r = 0; r < n; ++r)
+      pieces.push_back(apcbench::GearTeethPiece(r, n));
+    }
+    vtkNew<vtkAPCVolumeMapper> mapper;
+    vtkNew<vtkVolume> volume;
+    apcbench::ConfigureGearTeethVolume(volume, mapper, n);
+    mapper->SetSampleDistance(GearSampleDistance(n));
+    for (int camera = 0; camera < (large ? largeCameras : 4); ++camera)
+    {
+      apcbench::SetGearTeethCamera(analysis.GetRenderer(), camera);
+      rows << analysis.Run({ "gearteeth", n, std::to_string(camera), camera == 0 }, pieces, volume,
+        mapper, apcbench::kGearBounds, out);
+      if (!save())
       {
-        pieces.push_back(apcbench::GearTeethPiece(r, n));
-      }
-      vtkNew<vtkAPCVolumeMapper> mapper;
-      vtkNew<vtkVolume> volume;
-      apcbench::ConfigureGearTeethVolume(volume, mapper, n);
-      for (int camera = 0; camera < 4; ++camera)
-      {
-        apcbench::SetGearTeethCamera(analysis.GetRenderer(), camera);
-        rows << analysis.Run({ "gearteeth", n, std::to_string(camera), camera == 0 }, pieces,
-          volume, mapper, apcbench::kGearBounds, out);
+        std::cerr << "error: cannot write " << csv << "\n";
+        return 1;
       }
     }
   }
 
   // The wind data, pieces per rank as vtkXMLPUnstructuredGridReader gives them.
+  if (!windRanks.empty())
   {
     const std::string path = data + "/windAroundBuildings/wind.pvtu";
     Analysis analysis(windWidth, windHeight);
@@ -282,28 +426,11 @@ int main(int argc, char* argv[])
     for (double value : windRanks)
     {
       const int n = static_cast<int>(value);
-      std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
-      double bounds[6] = { 1e300, -1e300, 1e300, -1e300, 1e300, -1e300 };
-      for (int r = 0; r < n; ++r)
+      double bounds[6];
+      const auto pieces = ReaderPieces(path, "U_mag", n, bounds);
+      if (pieces.empty())
       {
-        vtkNew<vtkXMLPUnstructuredGridReader> reader;
-        reader->SetFileName(path.c_str());
-        reader->UpdatePiece(r, n, 0);
-        vtkSmartPointer<vtkUnstructuredGrid> piece = reader->GetOutput();
-        if (!piece || !piece->GetPointData()->GetArray("U_mag"))
-        {
-          std::cerr << "error: could not read U_mag from " << path << "\n";
-          return 1;
-        }
-        piece->GetPointData()->SetActiveScalars("U_mag");
-        double b[6];
-        piece->GetBounds(b);
-        for (int d = 0; d < 3; ++d)
-        {
-          bounds[2 * d] = std::min(bounds[2 * d], b[2 * d]);
-          bounds[2 * d + 1] = std::max(bounds[2 * d + 1], b[2 * d + 1]);
-        }
-        pieces.push_back(piece);
+        return 1;
       }
       // The transfer function of apctest::WindTF (paraview_vs_apc.py's opacity).
       vtkNew<vtkAPCVolumeMapper> mapper;
@@ -328,14 +455,60 @@ int main(int argc, char* argv[])
         std::snprintf(label, sizeof(label), "%g", distances[d]);
         rows << analysis.Run(
           { "wind-" + std::string(label), n, label, true }, pieces, volume, mapper, bounds, out);
+        if (!save())
+        {
+          std::cerr << "error: cannot write " << csv << "\n";
+          return 1;
+        }
       }
     }
   }
 
-  const std::string csv = out + "/segment_transfer.csv";
-  std::ofstream file(csv);
-  file << rows.str();
-  if (!file)
+  // The flange (field T), from apcBenchmarkMappers' camera and with its transfer function.
+  if (!flangeRanks.empty())
+  {
+    const std::string path = data + "/flange/flange.pvtu";
+    Analysis analysis(flangeSize, flangeSize);
+    apctest::TransferFunction tf;
+    tf.Colours = { { 273.0, 0.23, 0.3, 0.75 }, { 423.0, 0.87, 0.87, 0.87 },
+      { 573.0, 0.7, 0.02, 0.15 } };
+    tf.Opacities = { { 273.0, 0.15 }, { 423.0, 0.02 }, { 573.0, 0.6 } };
+    tf.UnitDistance = 0.002;
+    for (double value : flangeRanks)
+    {
+      const int n = static_cast<int>(value);
+      double bounds[6];
+      const auto pieces = ReaderPieces(path, "T", n, bounds);
+      if (pieces.empty())
+      {
+        return 1;
+      }
+      vtkNew<vtkAPCVolumeMapper> mapper;
+      vtkNew<vtkVolume> volume;
+      volume->SetMapper(mapper);
+      volume->SetProperty(apctest::MakeVolumeProperty(tf));
+      vtkRenderer* renderer = analysis.GetRenderer();
+      vtkCamera* camera = renderer->GetActiveCamera();
+      camera->SetFocalPoint(0, 0, 0);
+      camera->SetPosition(0, -1, 0);
+      camera->SetViewUp(0, 0, 1);
+      camera->ParallelProjectionOff();
+      renderer->ResetCamera(bounds);
+      camera->Azimuth(35);
+      camera->Elevation(30);
+      camera->OrthogonalizeViewUp();
+      camera->Dolly(1.6);
+      renderer->ResetCameraClippingRange(bounds);
+      rows << analysis.Run({ "flange", n, "0", true }, pieces, volume, mapper, bounds, out);
+      if (!save())
+      {
+        std::cerr << "error: cannot write " << csv << "\n";
+        return 1;
+      }
+    }
+  }
+
+  if (!save())
   {
     std::cerr << "error: cannot write " << csv << "\n";
     return 1;
