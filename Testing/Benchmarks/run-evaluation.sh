@@ -127,5 +127,5 @@ machine="$(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | s
 machine+=" $(awk '/MemTotal/ {printf "%.0f GiB", $2 / 1048576}' /proc/meminfo) RAM"
 /usr/bin/python3 "$top/Testing/Benchmarks/make_evaluation_report.py" --results "$out" \
   --docs "$docs" --machine "$machine" --seconds "$(($(date +%s) - start))" \
-  $([ "$quick" = 1 ] && echo --quick) | tee -a "$log"
+  $([ "$quick" = 1 ] && echo --quick) $([ "$model_only" = 1 ] && echo --model-only) | tee -a "$log"
 step "done: $docs/evaluation.md; log $log"
