@@ -11,6 +11,8 @@
 //                      [--gear-ranks 1,2,4,8] [--gear-large-size S] [--gear-large-cameras C]
 //                      [--wind-ranks 2,4,8] [--wind-distances 0.6,1,1.6]
 //                      [--flange-size S] [--flange-ranks 2,4]
+//                      [--partition-ranks 2,4,...,256] [--partition-size S]
+//                      [--partition-meshes wind,flange]
 //
 // Configurations:
 // - the gear teeth of apcScalingBenchmark (one piece per rank, 4 orbit cameras). Up to 8
@@ -21,9 +23,12 @@
 //   --gear-large-cameras cameras (the cost grows as N: every piece is rendered here);
 // - the real meshes (wind: 8 Scotch pieces; flange: 4 pieces) shared out to the ranks as
 //   ParaView's reader does; the wind from the camera of paraview_vs_apc.py moved to each
-//   distance factor along its line of sight, the flange from apcBenchmarkMappers' camera. Rank
-//   counts above a mesh's piece count need the graph partitioner (vtkAPCGraphPartition, not on
-//   this branch yet) and are refused.
+//   distance factor along its line of sight, the flange from apcBenchmarkMappers' camera
+//   (--wind-ranks, --flange-ranks: at most the stored pieces);
+// - the same meshes cut into N pieces by the graph partitioner (vtkAPCGraphPartition,
+//   label-only, K = N, split by PartitionId) at --partition-size pixels, cases wind-metis-<d>
+//   and flange-metis (--partition-ranks). The switch is the filter's header: without it
+//   (before the graph-partition branch is merged) these runs are skipped with a message.
 // Writes (creating DIR) DIR/segment_transfer.csv and, for the first camera of each configuration,
 // the per-pixel segment count over all ranks as DIR/heatmap_<case>_np<N>.pgm (16-bit binary PGM,
 // top row first). apc_bytes is the pass's payload on main before the compact wire: every rank
@@ -47,6 +52,19 @@
 #include "vtkVolume.h"
 #include "vtkXMLPUnstructuredGridReader.h"
 
+// The graph partitioner lives on its own branch until it is merged; the mesh runs it feeds
+// switch on with its header.
+#if __has_include("vtkAPCGraphPartition.h")
+#include "vtkAPCGraphPartition.h"
+#include "vtkCellData.h"
+#include "vtkDataArray.h"
+#include "vtkExtractCells.h"
+#include "vtkIdList.h"
+#define APC_HAVE_GRAPH_PARTITION 1
+#else
+#define APC_HAVE_GRAPH_PARTITION 0
+#endif
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -55,6 +73,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -65,6 +84,8 @@
 
 namespace
 {
+constexpr bool kHaveGraphPartition = APC_HAVE_GRAPH_PARTITION != 0;
+
 // Bytes of one segment on the wire (vtkAPCCompositePass's WireSegment).
 constexpr int kSegmentBytes = 24;
 
@@ -233,7 +254,8 @@ void Usage(const char* program)
   std::fprintf(stderr,
     "usage: %s --out DIR [--data DIR] [--size S] [--wind-size W H] [--gear-ranks 1,2,4,8]\n"
     "          [--gear-large-size S] [--gear-large-cameras C] [--wind-ranks 2,4,8]\n"
-    "          [--wind-distances 0.6,1,1.6] [--flange-size S] [--flange-ranks 2,4]\n",
+    "          [--wind-distances 0.6,1,1.6] [--flange-size S] [--flange-ranks 2,4]\n"
+    "          [--partition-ranks 2,4,...] [--partition-size S] [--partition-meshes wind,flange]\n",
     program);
 }
 
@@ -287,6 +309,154 @@ std::vector<vtkSmartPointer<vtkUnstructuredGrid>> ReaderPieces(
   }
   return pieces;
 }
+
+// The whole mesh of a .pvtu (all pieces in one grid) with field as active scalars.
+vtkSmartPointer<vtkUnstructuredGrid> ReadWhole(const std::string& path, const char* field)
+{
+  vtkNew<vtkXMLPUnstructuredGridReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkSmartPointer<vtkUnstructuredGrid> grid = reader->GetOutput();
+  if (!grid || !grid->GetPointData()->GetArray(field))
+  {
+    std::cerr << "error: could not read " << field << " from " << path << "\n";
+    return nullptr;
+  }
+  grid->GetPointData()->SetActiveScalars(field);
+  return grid;
+}
+
+// The whole mesh cut into n pieces by the graph partitioner in this one process (label-only,
+// K = n, METIS on the cell dual graph: jagged, interleaved pieces as a CFD code writes them),
+// split by PartitionId; and their common bounds. Empty when the partitioner is not built.
+std::vector<vtkSmartPointer<vtkUnstructuredGrid>> PartitionPieces(
+  vtkUnstructuredGrid* whole, int n, double bounds[6])
+{
+  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+  whole->GetBounds(bounds);
+#if APC_HAVE_GRAPH_PARTITION
+  vtkNew<vtkAPCGraphPartition> partition;
+  partition->SetController(nullptr); // one process: every cell is here
+  partition->SetNumberOfPartitions(n);
+  partition->LabelOnlyOn();
+  partition->SetInputData(whole);
+  partition->Update();
+  vtkUnstructuredGrid* labelled = vtkUnstructuredGrid::SafeDownCast(partition->GetOutput());
+  vtkDataArray* ids = labelled
+    ? labelled->GetCellData()->GetArray(vtkAPCGraphPartition::GetPartitionIdArrayName())
+    : nullptr;
+  if (!ids)
+  {
+    std::cerr << "error: the graph partitioner gave no PartitionId\n";
+    return pieces;
+  }
+  std::vector<vtkSmartPointer<vtkIdList>> cells(n);
+  for (auto& list : cells)
+  {
+    list = vtkSmartPointer<vtkIdList>::New();
+  }
+  for (vtkIdType c = 0; c < labelled->GetNumberOfCells(); ++c)
+  {
+    const int part = static_cast<int>(ids->GetTuple1(c));
+    if (part >= 0 && part < n)
+    {
+      cells[part]->InsertNextId(c);
+    }
+  }
+  for (int part = 0; part < n; ++part)
+  {
+    vtkNew<vtkExtractCells> extract;
+    extract->SetInputData(labelled);
+    extract->SetCellList(cells[part]);
+    extract->Update();
+    vtkSmartPointer<vtkUnstructuredGrid> piece = extract->GetOutput();
+    piece->GetPointData()->SetActiveScalars(whole->GetPointData()->GetScalars()->GetName());
+    pieces.push_back(piece);
+  }
+  std::printf("graph partition into %d pieces: edge cut %lld, imbalance %.3f, %.1f s\n", n,
+    static_cast<long long>(partition->GetLastEdgeCut()), partition->GetLastImbalance(),
+    partition->GetLastGraphSeconds() + partition->GetLastPartitionSeconds());
+#else
+  (void)n;
+  std::cerr << "error: vtkAPCGraphPartition is not in this build\n";
+#endif
+  return pieces;
+}
+
+enum class MeshKind
+{
+  Wind,
+  Flange
+};
+
+const char* MeshName(MeshKind kind)
+{
+  return kind == MeshKind::Wind ? "wind" : "flange";
+}
+
+struct Mesh
+{
+  std::string Path;
+  std::string Field;
+  apctest::TransferFunction TF;
+};
+
+// The wind (U_mag, paraview_vs_apc.py's transfer function) and the flange (T, with
+// apcBenchmarkMappers' transfer function).
+Mesh LoadMesh(MeshKind kind, const std::string& data)
+{
+  Mesh mesh;
+  if (kind == MeshKind::Wind)
+  {
+    mesh.Path = data + "/windAroundBuildings/wind.pvtu";
+    mesh.Field = "U_mag";
+    mesh.TF = apctest::WindTF();
+    return mesh;
+  }
+  mesh.Path = data + "/flange/flange.pvtu";
+  mesh.Field = "T";
+  mesh.TF.Colours = { { 273.0, 0.23, 0.3, 0.75 }, { 423.0, 0.87, 0.87, 0.87 },
+    { 573.0, 0.7, 0.02, 0.15 } };
+  mesh.TF.Opacities = { { 273.0, 0.15 }, { 423.0, 0.02 }, { 573.0, 0.6 } };
+  mesh.TF.UnitDistance = 0.002;
+  return mesh;
+}
+
+// paraview_vs_apc.py's wind camera moved to `distance` times its focal distance along its
+// line of sight.
+void SetWindCamera(
+  vtkRenderer* renderer, const double bounds[6], double distance, int width, int height)
+{
+  const apctest::View view = apctest::WindView(width, height);
+  vtkCamera* camera = renderer->GetActiveCamera();
+  double position[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    position[k] = view.FocalPoint[k] + distance * (view.Position[k] - view.FocalPoint[k]);
+  }
+  camera->SetFocalPoint(view.FocalPoint.data());
+  camera->SetPosition(position);
+  camera->SetViewUp(view.ViewUp.data());
+  camera->SetViewAngle(view.ViewAngle);
+  camera->ParallelProjectionOff();
+  renderer->ResetCameraClippingRange(bounds);
+}
+
+// apcBenchmarkMappers' flange camera: from -y, azimuth 35, elevation 30, dolly 1.6.
+void SetFlangeCamera(vtkRenderer* renderer, const double bounds[6])
+{
+  vtkCamera* camera = renderer->GetActiveCamera();
+  camera->SetFocalPoint(0, 0, 0);
+  camera->SetPosition(0, -1, 0);
+  camera->SetViewUp(0, 0, 1);
+  camera->ParallelProjectionOff();
+  renderer->ResetCamera(bounds);
+  camera->Azimuth(35);
+  camera->Elevation(30);
+  camera->OrthogonalizeViewUp();
+  camera->Dolly(1.6);
+  renderer->ResetCameraClippingRange(bounds);
+}
 }
 
 int main(int argc, char* argv[])
@@ -303,6 +473,9 @@ int main(int argc, char* argv[])
   std::vector<double> windRanks = { 2, 4, 8 };
   std::vector<double> distances = { 0.6, 1.0, 1.6 };
   std::vector<double> flangeRanks;
+  std::vector<double> partitionRanks;
+  std::set<std::string> partitionMeshes = { "wind", "flange" };
+  int partitionSize = 512;
   for (int a = 1; a < argc; ++a)
   {
     const bool hasValue = a + 1 < argc;
@@ -351,6 +524,24 @@ int main(int argc, char* argv[])
     {
       flangeRanks = ParseList(argv[++a]);
     }
+    else if (!std::strcmp(argv[a], "--partition-ranks") && hasValue)
+    {
+      partitionRanks = ParseList(argv[++a]);
+    }
+    else if (!std::strcmp(argv[a], "--partition-size") && hasValue)
+    {
+      partitionSize = std::atoi(argv[++a]);
+    }
+    else if (!std::strcmp(argv[a], "--partition-meshes") && hasValue)
+    {
+      partitionMeshes.clear();
+      std::stringstream list(argv[++a]);
+      std::string item;
+      while (std::getline(list, item, ','))
+      {
+        partitionMeshes.insert(item);
+      }
+    }
     else
     {
       Usage(argv[0]);
@@ -359,7 +550,7 @@ int main(int argc, char* argv[])
   }
   largeSize = largeSize < 0 ? size : largeSize;
   if (out.empty() || size < 1 || largeSize < 1 || windWidth < 1 || windHeight < 1 ||
-    flangeSize < 1 || largeCameras < 1 || largeCameras > 4)
+    flangeSize < 1 || partitionSize < 1 || largeCameras < 1 || largeCameras > 4)
   {
     Usage(argv[0]);
     return 2;
@@ -416,94 +607,85 @@ int main(int argc, char* argv[])
     }
   }
 
-  // The wind data, pieces per rank as vtkXMLPUnstructuredGridReader gives them.
-  if (!windRanks.empty())
+  // The real meshes: the reader's pieces (case wind-<distance>, flange) and, where the graph
+  // partitioner is built, its pieces (wind-metis-<distance>, flange-metis).
+  struct MeshRuns
   {
-    const std::string path = data + "/windAroundBuildings/wind.pvtu";
-    Analysis analysis(windWidth, windHeight);
-    const apctest::View view = apctest::WindView(windWidth, windHeight);
-    const apctest::TransferFunction tf = apctest::WindTF();
-    for (double value : windRanks)
+    MeshKind Kind;
+    bool Partitioned;
+    std::vector<double> Ranks;
+    int Width;
+    int Height;
+  };
+  const MeshRuns runs[] = { { MeshKind::Wind, false, windRanks, windWidth, windHeight },
+    { MeshKind::Flange, false, flangeRanks, flangeSize, flangeSize },
+    { MeshKind::Wind, true, partitionRanks, partitionSize, partitionSize },
+    { MeshKind::Flange, true, partitionRanks, partitionSize, partitionSize } };
+  for (const MeshRuns& run : runs)
+  {
+    if (run.Ranks.empty() || (run.Partitioned && !partitionMeshes.count(MeshName(run.Kind))))
+    {
+      continue;
+    }
+    if (run.Partitioned && !kHaveGraphPartition)
+    {
+      std::printf("skipping %s cut by the graph partitioner: vtkAPCGraphPartition is not in "
+                  "this build\n",
+        MeshName(run.Kind));
+      continue;
+    }
+    Analysis analysis(run.Width, run.Height);
+    const Mesh mesh = LoadMesh(run.Kind, data);
+    vtkSmartPointer<vtkUnstructuredGrid> whole;
+    for (double value : run.Ranks)
     {
       const int n = static_cast<int>(value);
       double bounds[6];
-      const auto pieces = ReaderPieces(path, "U_mag", n, bounds);
+      std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+      if (run.Partitioned)
+      {
+        if (!whole)
+        {
+          whole = ReadWhole(mesh.Path, mesh.Field.c_str());
+        }
+        pieces = whole ? PartitionPieces(whole, n, bounds) : pieces;
+      }
+      else
+      {
+        pieces = ReaderPieces(mesh.Path, mesh.Field.c_str(), n, bounds);
+      }
       if (pieces.empty())
       {
         return 1;
       }
-      // The transfer function of apctest::WindTF (paraview_vs_apc.py's opacity).
       vtkNew<vtkAPCVolumeMapper> mapper;
       vtkNew<vtkVolume> volume;
       volume->SetMapper(mapper);
-      volume->SetProperty(apctest::MakeVolumeProperty(tf));
-      for (size_t d = 0; d < distances.size(); ++d)
+      volume->SetProperty(apctest::MakeVolumeProperty(mesh.TF));
+      const std::string prefix =
+        std::string(MeshName(run.Kind)) + (run.Partitioned ? "-metis" : "");
+      const std::vector<double> views =
+        run.Kind == MeshKind::Wind ? distances : std::vector<double>{ 0 };
+      for (size_t v = 0; v < views.size(); ++v)
       {
-        vtkCamera* camera = analysis.GetRenderer()->GetActiveCamera();
-        double position[3];
-        for (int k = 0; k < 3; ++k)
-        {
-          position[k] = view.FocalPoint[k] + distances[d] * (view.Position[k] - view.FocalPoint[k]);
-        }
-        camera->SetFocalPoint(view.FocalPoint.data());
-        camera->SetPosition(position);
-        camera->SetViewUp(view.ViewUp.data());
-        camera->SetViewAngle(view.ViewAngle);
-        camera->ParallelProjectionOff();
-        analysis.GetRenderer()->ResetCameraClippingRange(bounds);
         char label[32];
-        std::snprintf(label, sizeof(label), "%g", distances[d]);
-        rows << analysis.Run(
-          { "wind-" + std::string(label), n, label, true }, pieces, volume, mapper, bounds, out);
+        std::snprintf(label, sizeof(label), "%g", views[v]);
+        std::string name = prefix;
+        if (run.Kind == MeshKind::Wind)
+        {
+          SetWindCamera(analysis.GetRenderer(), bounds, views[v], run.Width, run.Height);
+          name += "-" + std::string(label);
+        }
+        else
+        {
+          SetFlangeCamera(analysis.GetRenderer(), bounds);
+        }
+        rows << analysis.Run({ name, n, label, true }, pieces, volume, mapper, bounds, out);
         if (!save())
         {
           std::cerr << "error: cannot write " << csv << "\n";
           return 1;
         }
-      }
-    }
-  }
-
-  // The flange (field T), from apcBenchmarkMappers' camera and with its transfer function.
-  if (!flangeRanks.empty())
-  {
-    const std::string path = data + "/flange/flange.pvtu";
-    Analysis analysis(flangeSize, flangeSize);
-    apctest::TransferFunction tf;
-    tf.Colours = { { 273.0, 0.23, 0.3, 0.75 }, { 423.0, 0.87, 0.87, 0.87 },
-      { 573.0, 0.7, 0.02, 0.15 } };
-    tf.Opacities = { { 273.0, 0.15 }, { 423.0, 0.02 }, { 573.0, 0.6 } };
-    tf.UnitDistance = 0.002;
-    for (double value : flangeRanks)
-    {
-      const int n = static_cast<int>(value);
-      double bounds[6];
-      const auto pieces = ReaderPieces(path, "T", n, bounds);
-      if (pieces.empty())
-      {
-        return 1;
-      }
-      vtkNew<vtkAPCVolumeMapper> mapper;
-      vtkNew<vtkVolume> volume;
-      volume->SetMapper(mapper);
-      volume->SetProperty(apctest::MakeVolumeProperty(tf));
-      vtkRenderer* renderer = analysis.GetRenderer();
-      vtkCamera* camera = renderer->GetActiveCamera();
-      camera->SetFocalPoint(0, 0, 0);
-      camera->SetPosition(0, -1, 0);
-      camera->SetViewUp(0, 0, 1);
-      camera->ParallelProjectionOff();
-      renderer->ResetCamera(bounds);
-      camera->Azimuth(35);
-      camera->Elevation(30);
-      camera->OrthogonalizeViewUp();
-      camera->Dolly(1.6);
-      renderer->ResetCameraClippingRange(bounds);
-      rows << analysis.Run({ "flange", n, "0", true }, pieces, volume, mapper, bounds, out);
-      if (!save())
-      {
-        std::cerr << "error: cannot write " << csv << "\n";
-        return 1;
       }
     }
   }

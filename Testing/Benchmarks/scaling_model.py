@@ -26,7 +26,8 @@ Model (n: bytes of a rank's buffer, p: ranks; Thakur, Rabenseifner & Gropp 2005)
   allreduce Rabenseifner  2 log2 p a + 2(p-1)/p n b + (p-1)/p n g
   reduce binomial tree    ceil(log2 p) (a + n b + n g)
   reduce Rabenseifner     2 log2 p a + 2(p-1)/p n b + (p-1)/p n g   (reduce-scatter + gather)
-  bcast binomial          ceil(log2 p) (a + n b)
+  bcast                   min(binomial ceil(log2 p) (a + n b),
+                              scatter + allgather (log2 p + p - 1) a + 2(p-1)/p n b)
   gather to one rank      (p-1) a + (p-1)/p N b                     (N: the whole result)
 An MPI library picks an algorithm per size; "best" is the cheapest of the above.
 APC, old wire (main before the compact wire): allreduce of (M+1) doubles and reduce of 4
@@ -175,7 +176,11 @@ def best_reduce(p, n, c):
 
 
 def bcast(p, n, c):
-    return log2c(p) * (c["alpha"] + n * c["beta"]) if p > 1 else 0.0
+    """The cheaper of a binomial tree and scatter + ring allgather (van de Geijn)."""
+    if p < 2:
+        return 0.0
+    return min(log2c(p) * (c["alpha"] + n * c["beta"]),
+               (log2c(p) + p - 1) * c["alpha"] + 2 * (p - 1) / p * n * c["beta"])
 
 
 def gather(p, total, c):
