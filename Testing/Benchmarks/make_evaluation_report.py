@@ -593,7 +593,7 @@ class Report:
             return
         kept = os.path.join(self.figures, "model")
         os.makedirs(kept, exist_ok=True)
-        for name in ("comm.csv", "segment_transfer.csv", "scaling.csv"):
+        for name in ("comm.csv", "segment_transfer.csv", "scaling.csv", "scaling_old_wire.csv"):
             if os.path.exists(os.path.join(self.results, name)):
                 shutil.copyfile(os.path.join(self.results, name), os.path.join(kept, name))
         for name in sorted(os.listdir(source)):

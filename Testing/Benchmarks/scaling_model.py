@@ -9,6 +9,7 @@ Inputs in --results (written by run-evaluation.sh):
   segment_transfer.csv  apcSegmentAnalysis: per configuration the segments, what direct send
                         and binary swap move in total and for the busiest rank, covered tiles
   scaling.csv           apcScalingBenchmark: measured compositing stages at 1-8 ranks
+  scaling_old_wire.csv  optional: the same from a build before the compact wire
 Outputs in --out (default <results>/model), the CSVs docs/evaluation.md's "Scaling model"
 section is made from:
   constants.csv    alpha, beta, gamma per calibration (this machine at each rank count; the
@@ -32,10 +33,12 @@ Model (n: bytes of a rank's buffer, p: ranks; Thakur, Rabenseifner & Gropp 2005)
 An MPI library picks an algorithm per size; "best" is the cheapest of the above.
 APC, old wire (main before the compact wire): allreduce of (M+1) doubles and reduce of 4
 doubles per pixel of the data's screen rectangle; depth: bcast of 4 B per pixel.
-APC, compact wire: MAX-allreduce of 1 B per 8x8 tile, allreduce of (M+1) floats and reduce of
-4 floats per pixel of the covered tiles (a tile is covered where some rank has a segment),
-the display rank's depth only where opaque geometry is (none in these scenes): a 1 B/tile
-mask bcast. M = 4. Packing costs one copy per byte (g_copy) each way.
+APC, compact wire (main at 0e54ff2): MAX-allreduce of 1 B per 8x8 tile; then over the pixels
+of the covered tiles (a tile is covered where some rank has a segment) a MAX-allreduce of a
+1-byte exponent per pixel and a SUM-allreduce of (M+1) 32-bit fixed-point moments, and a
+reduce of 4 floats of colour; the display rank's depth only where opaque geometry is (none in
+these scenes): a 1 B/tile mask bcast. M = 4: 1 + 20 + 16 = 37 B per covered pixel. Packing
+costs one copy per byte (g_copy) each way.
 Segments: 24 B each. Direct send (ideal: every pair at once, bound by the busiest rank)
 (p-1) a + b max(sent, received); as vtkAPCCompositePass runs it (pairs meet in rounds
 partner = rank XOR round, one way then the other) ceil(log2 p) a (counts) + g_copy 24 s_own +
@@ -197,12 +200,17 @@ def apc_old(p, rect, c, alg=None):
     return ar + copy * n1, rd + copy * n2, bcast(p, rect * 4, c)
 
 
+COMPACT_BYTES_PER_PIXEL = 1 + (MOMENTS + 1) * 4 + 4 * 4
+
+
 def apc_compact(p, tiles, covered, c):
-    """The compact wire: (mask allreduce, moments allreduce, colour reduce, depth mask) s."""
+    """The compact wire: (mask allreduce, exponent + moments allreduce, colour reduce, depth
+    mask) s. gamma of the 32-bit sums: the float sum's (same width)."""
     n1, n2 = covered * (MOMENTS + 1) * 4, covered * 4 * 4
     cf = dict(c, gamma=c["gamma_float"])
     copy = 2 * c["copy"]
-    return (best_allreduce(p, tiles, cf), best_allreduce(p, n1, cf) + copy * n1,
+    return (best_allreduce(p, tiles, cf),
+            best_allreduce(p, covered, cf) + best_allreduce(p, n1, cf) + copy * (n1 + covered),
             best_reduce(p, n2, cf) + copy * n2, bcast(p, tiles, c))
 
 
@@ -211,7 +219,7 @@ def apc_bytes_old(p, rect):
 
 
 def apc_bytes_compact(p, tiles, covered):
-    return p * (tiles + covered * (MOMENTS + 1 + 4) * 4) + tiles if p > 1 else 0.0
+    return p * (tiles + covered * COMPACT_BYTES_PER_PIXEL) + tiles if p > 1 else 0.0
 
 
 def direct_send_ideal(p, row, c):
@@ -353,7 +361,8 @@ def mpi_alone(comm, p, mode, a, compact=False):
     float for the compact wire's covered tiles); the segments' busiest pair rounds and gather
     approximated by ping-pongs of the same sizes."""
     if mode == "APC" and compact:
-        return (measured_at(comm, p, "allreduce", "float",
+        return (measured_at(comm, p, "allreduce", "float", a["covered_tile_pixels"]) +
+                measured_at(comm, p, "allreduce", "float",
                             a["covered_tile_pixels"] * (MOMENTS + 1) * 4) +
                 measured_at(comm, p, "reduce", "float", a["covered_tile_pixels"] * 4 * 4))
     if mode == "APC":
@@ -366,16 +375,11 @@ def mpi_alone(comm, p, mode, a, compact=False):
             (p - 1) * measured_at(comm, p, "pingpong", "byte", strip))
 
 
-# The stages of apcScalingBenchmark's CSV that are APC's communication (a compact wire may
-# add its mask stage; the lead's format change decides the name).
-APC_COMM_STAGES = ("allreduce_s", "reduce_s", "mask_s", "occupancy_s", "depth_s")
-
-
 def compact_wire(p, a, bytes_sent):
     """Whether the measured run shipped the compact wire: its bytes (all ranks, as the pass
     counts them: the summed buffers) are closer to the compact than to the old prediction."""
     old = p * a["rect_pixels"] * (MOMENTS + 1 + 4) * 8
-    compact = p * (a["tiles"] + a["covered_tile_pixels"] * (MOMENTS + 1 + 4) * 4)
+    compact = p * (a["tiles"] + a["covered_tile_pixels"] * COMPACT_BYTES_PER_PIXEL)
     return bytes_sent == bytes_sent and abs(bytes_sent - compact) < abs(bytes_sent - old)
 
 
@@ -395,10 +399,11 @@ def validation_rows(scaling, analysis, constants, comm):
             continue
         a, c = match[0], constants[p]
         if r["mode"] == "APC" and compact_wire(p, a, num(r["bytes_sent"])):
-            # The pass already ships the compact wire: every collective is timed in its stages.
-            measured = sum(num(r[k]) for k in APC_COMM_STAGES if num(r.get(k)) == num(r.get(k)))
-            model = {"compact wire, best": sum(apc_compact(p, a["tiles"],
-                                                           a["covered_tile_pixels"], c)[:3])}
+            # The compact wire: the tile mask's allreduce (its own stage, not in the CSV) is
+            # where ranks wait for the slowest pass 1, so allreduce_s is the transfer.
+            measured = num(r["allreduce_s"]) + num(r["reduce_s"])
+            t = apc_compact(p, a["tiles"], a["covered_tile_pixels"], c)
+            model = {"compact wire (best algorithms)": t[1] + t[2]}
         elif r["mode"] == "APC":
             measured = num(r["allreduce_s"]) + num(r["reduce_s"])
             ring = sum(apc_old(p, a["rect_pixels"], c, ("ring", "binomial"))[:2])
@@ -447,7 +452,8 @@ def paper_rows(analysis, calibrations):
                              "%.4g" % per_pixel(lambda a: a["covered_tile_pixels"] /
                                                 a["rect_pixels"]),
                              "%.4g" % per_pixel(lambda a: (a["tiles"] + a["covered_tile_pixels"]
-                                                           * (MOMENTS + 1 + 4) * 4) / nonempty(a)),
+                                                           * COMPACT_BYTES_PER_PIXEL) /
+                                                nonempty(a)),
                              "%.4g" % per_pixel(lambda a: a["direct_send_segments"] *
                                                 SEGMENT_BYTES / p / nonempty(a))])
     return rows
@@ -489,7 +495,10 @@ def crossover_rows(paper):
 def run(results, out):
     comm = read_csv(os.path.join(results, "comm.csv"))
     analysis = analysis_rows(read_csv(os.path.join(results, "segment_transfer.csv")))
-    scaling = read_csv(os.path.join(results, "scaling.csv"))
+    # scaling_old_wire.csv: a run of the pass before the compact wire, kept to validate the
+    # old wire's model too (the wire of each row is told by its bytes).
+    scaling = read_csv(os.path.join(results, "scaling.csv")) + \
+        read_csv(os.path.join(results, "scaling_old_wire.csv"))
     constants = calibrate(comm)
     if not constants or not analysis:
         print("scaling_model: no comm.csv or per-rank segment counts in %s" % results)

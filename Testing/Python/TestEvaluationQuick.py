@@ -56,8 +56,8 @@ def main(scratch):
     md_path = os.path.join(docs, "evaluation.md")
     check(os.path.exists(md_path), "evaluation.md written")
     md = open(md_path).read() if os.path.exists(md_path) else ""
-    for section in ("## 1. Weak scaling", "## 2. Segments", "## 3. Real data", "## 4. Image quality",
-                    "## 5. Scaling model"):
+    for section in ("## 1. Weak scaling", "## 2. Segments", "## 3. Real data",
+                    "## 4. Image quality", "## 5. Scaling model"):
         body = md.split(section, 1)[1].split("\n## ", 1)[0] if section in md else ""
         check("|---" in body and "No results" not in body, "%s has a table" % section)
     links = re.findall(r"\]\((evaluation/[^)]+)\)", md)
