@@ -614,9 +614,10 @@ class Report:
             "rank; their sort and blend is not counted (as in section 1's compositing time), "
             "which favours them. APC is modelled with the wire of main before the compact "
             "format (72 B per pixel of the data's screen rectangle: (M+1)+4 doubles, M = 4) "
-            "and with the compact wire (a 1-byte-per-8×8-tile MAX allreduce, then 20 B of "
-            "float moments and 16 B of float colour per pixel of the tiles some rank covers; "
-            "no opaque geometry here, so the depth is a tile mask). Every CSV is in "
+            "and with the compact wire that replaced it (a 1-byte-per-8×8-tile MAX allreduce, "
+            "then per pixel of the tiles some rank covers a 1-byte exponent, 20 B of 32-bit "
+            "fixed-point moments and 16 B of float colour: 37 B; no opaque geometry here, so "
+            "the depth is a tile mask). Every CSV is in "
             "[evaluation/model/](evaluation/model/).\n" % fmt(num(constants[0]
                                                                   ["gamma_double_s_per_byte"])))
 
@@ -667,7 +668,9 @@ class Report:
                      pct(num(r["rel_error"])), pct(num(r["worst_rel_error_per_camera"]))]
                     for r in validation]
             self.add("Validation against the measured compositing of section 1 (APC: allreduce + "
-                     "reduce of the old wire; segments: exchange + gather as "
+                     "reduce, of the old wire from `scaling_old_wire.csv` when present, of the "
+                     "compact wire otherwise, told apart by the bytes sent; segments: exchange + "
+                     "gather as "
                      "`vtkAPCCompositePass` runs them, pairs in rounds, one way then the "
                      "other), for the same frames (rank count and camera; the analysis gives "
                      "the bytes), each rank count with the constants measured at that rank "

@@ -44,8 +44,17 @@ Segments: 24 B each. Direct send (ideal: every pair at once, bound by the busies
 partner = rank XOR round, one way then the other) ceil(log2 p) a (counts) + g_copy 24 s_own +
 sum over rounds (2 a + 24 b (s_pq + s_qp)_max). Binary swap: sum over log2 p rounds of
 (a + 24 b max_rank sent). Both then gather 16 B (float RGBA) per rectangle pixel to the
-display rank. Sorting and blending the segments is not counted (as in the measured
-"compositing" = exchange + gather), which favours the baselines.
+display rank. Local work, on the busiest rank: APC's reductions (g per byte, inside the
+collectives) and pack/unpack copies; the segments' packing (a copy of what is sent) and sort
+and blend (blend s per segment: the measured sort+blend stage at 2 ranks over the busiest
+strip's segments). paper_scale.csv gives the time with local work (time_s) and of latency and
+bandwidth alone (time_comm_s). Validation uses the pass's measured exchange + gather, which
+has packing but not the sort and blend.
+
+Calibrations: "this machine, N ranks" (medians of the repetitions at N ranks: the validation's,
+oversubscribed above 2); at the paper's scale "this machine (2 ranks, min)" (minimum of the
+repetitions: the machine without the other users' load) and the interconnect below with that
+calibration's local costs.
 """
 
 import argparse
@@ -121,7 +130,7 @@ def calibrate(comm, stat="median_s"):
         local = {(r["op"], r["type"]): num(r[stat]) / int(r["bytes"]) for r in rows
                  if r["op"] in ("copy", "sum")}
         constants[p] = {
-            "name": "this machine, %d ranks" % p,
+            "name": "this machine np%d (median)" % p,
             "alpha": num(pp[0][stat]),
             "beta": beta,
             "gamma": local.get(("sum", "double"), float("nan")),
@@ -137,7 +146,7 @@ def interconnect(machine):
     """The published interconnect's alpha and beta with this machine's gamma and copy."""
     c = dict(INFINIBAND)
     c.update(gamma=machine["gamma"], gamma_float=machine["gamma_float"], copy=machine["copy"],
-             load=float("nan"), ranks=0)
+             blend=machine.get("blend", float("nan")), load=float("nan"), ranks=0)
     return c
 
 
@@ -288,21 +297,45 @@ def scaled(row, pixels):
     return q
 
 
+def communication_only(c):
+    """The constants without local work: only latency and bandwidth."""
+    return dict(c, gamma=0.0, gamma_float=0.0, copy=0.0, blend=0.0)
+
+
+def segment_local(p, row, c, method):
+    """The segments' local work on the busiest rank: packing what it sends (a copy of 24 B
+    each) and sorting and blending what it composites (blend s per segment, calibrated on the
+    measured runs' sort+blend stage)."""
+    blend = c.get("blend", 0.0)
+    blend = 0.0 if blend != blend else blend
+    if method == "direct send":
+        sent, blended = row["ds_max_sent_segments"], row["ds_max_received_segments"] * p / (p - 1)
+    else:
+        sent = blended = row["bs_critical_segments"]
+    return SEGMENT_BYTES * sent * c["copy"] + blended * blend if sent >= 0 else float("nan")
+
+
 def methods(p, row, c):
-    """Modelled time (s) and bytes (all ranks) per method for one configuration."""
-    old = apc_old(p, row["rect_pixels"], c)
-    new = apc_compact(p, row["tiles"], row["covered_tile_pixels"], c)
-    ds = direct_send_ideal(p, row, c)
-    bs = binary_swap(p, row, c)
-    return {
-        "APC (old wire)": (sum(old), apc_bytes_old(p, row["rect_pixels"])),
-        "APC (compact wire)": (sum(new), apc_bytes_compact(p, row["tiles"],
-                                                             row["covered_tile_pixels"])),
-        "direct send": (sum(ds), segment_bytes(p, row["direct_send_segments"],
-                                               row["rect_pixels"])),
-        "binary swap": (sum(bs), segment_bytes(p, row["binary_swap_segments"],
-                                               row["rect_pixels"])),
+    """Per method for one configuration: (time with local work, time of latency and bandwidth
+    alone, bytes of all ranks)."""
+    bare = communication_only(c)
+    out = {}
+    for name, cal in (("total", c), ("comm", bare)):
+        ds, bs = sum(direct_send_ideal(p, row, cal)), sum(binary_swap(p, row, cal))
+        out[name] = {
+            "APC (old wire)": sum(apc_old(p, row["rect_pixels"], cal)),
+            "APC (compact wire)": sum(apc_compact(p, row["tiles"], row["covered_tile_pixels"],
+                                                  cal)),
+            "direct send": ds + segment_local(p, row, cal, "direct send"),
+            "binary swap": bs + segment_local(p, row, cal, "binary swap"),
+        }
+    sizes = {
+        "APC (old wire)": apc_bytes_old(p, row["rect_pixels"]),
+        "APC (compact wire)": apc_bytes_compact(p, row["tiles"], row["covered_tile_pixels"]),
+        "direct send": segment_bytes(p, row["direct_send_segments"], row["rect_pixels"]),
+        "binary swap": segment_bytes(p, row["binary_swap_segments"], row["rect_pixels"]),
     }
+    return {m: (out["total"][m], out["comm"][m], sizes[m]) for m in sizes}
 
 
 METHODS = ("APC (old wire)", "APC (compact wire)", "direct send", "binary swap")
@@ -315,7 +348,7 @@ def constants_rows(constants, infiniband):
         rows.append([c["name"], c["ranks"], "%.4g" % c["alpha"], "%.4g" % c["beta"],
                      "%.4g" % (1 / c["beta"] / 1e9 if c["beta"] > 0 else float("nan")),
                      "%.4g" % c["gamma"], "%.4g" % c["gamma_float"], "%.4g" % c["copy"],
-                     "%.3g" % c["load"]])
+                     "%.3g" % c["load"], "%.4g" % c.get("blend", float("nan"))])
     return rows
 
 
@@ -437,59 +470,69 @@ def paper_rows(analysis, calibrations):
     for (data, case, p), rs in sorted(groups.items()):
         if p < 2:
             continue
+        per_pixel = lambda f: median([f(a) for a in rs])  # noqa: E731
+        nonempty = lambda a: max(a["nonempty_pixels"], 1)  # noqa: E731
+        stats = ["%.4g" % per_pixel(lambda a: a["segments"] / nonempty(a)),
+                 "%.4g" % per_pixel(lambda a: a["covered_tile_pixels"] / a["rect_pixels"]),
+                 "%.4g" % per_pixel(lambda a: (a["tiles"] + a["covered_tile_pixels"] *
+                                               COMPACT_BYTES_PER_PIXEL) / nonempty(a)),
+                 "%.4g" % per_pixel(lambda a: a["ds_max_sent_segments"] * SEGMENT_BYTES /
+                                    nonempty(a))]
         for c in calibrations:
-            per_method = {m: ([], []) for m in METHODS}
+            per_method = {m: ([], [], []) for m in METHODS}
             for a in rs:
-                for m, (t, b) in methods(p, scaled(a, PAPER_PIXELS), c).items():
-                    per_method[m][0].append(t)
-                    per_method[m][1].append(b)
-            per_pixel = lambda f: median([f(a) for a in rs])  # noqa: E731
-            nonempty = lambda a: max(a["nonempty_pixels"], 1)  # noqa: E731
+                for m, values in methods(p, scaled(a, PAPER_PIXELS), c).items():
+                    for k in range(3):
+                        per_method[m][k].append(values[k])
             for m in METHODS:
-                rows.append([data, case, p, c["name"], m, len(rs),
-                             "%.5g" % median(per_method[m][0]), "%.5g" % median(per_method[m][1]),
-                             "%.4g" % per_pixel(lambda a: a["segments"] / nonempty(a)),
-                             "%.4g" % per_pixel(lambda a: a["covered_tile_pixels"] /
-                                                a["rect_pixels"]),
-                             "%.4g" % per_pixel(lambda a: (a["tiles"] + a["covered_tile_pixels"]
-                                                           * COMPACT_BYTES_PER_PIXEL) /
-                                                nonempty(a)),
-                             "%.4g" % per_pixel(lambda a: a["direct_send_segments"] *
-                                                SEGMENT_BYTES / p / nonempty(a))])
+                rows.append([data, case, p, c["name"], m, len(rs)] +
+                            ["%.5g" % median(v) for v in per_method[m]] + stats)
     return rows
 
 
 PAPER_HEADER = ["dataset", "case", "ranks", "calibration", "method", "cameras", "time_s",
-                "bytes", "segments_per_nonempty_pixel", "covered_fraction_of_rect",
+                "time_comm_s", "bytes", "segments_per_nonempty_pixel", "covered_fraction_of_rect",
                 "apc_compact_bytes_per_nonempty_pixel_per_rank",
-                "direct_send_bytes_per_nonempty_pixel_per_rank"]
+                "direct_send_busiest_rank_bytes_per_nonempty_pixel"]
 
 
 def crossover_rows(paper):
     """Per case and calibration: the smallest rank count from which APC (each wire) stays
-    cheaper than the cheaper segment baseline, in time and in bytes."""
+    cheaper than the cheaper segment baseline, in time (with local work, and latency and
+    bandwidth alone) and in bytes."""
     rows = []
     table = {}
     for r in paper:
-        case, p, cal, m, t, b = r[1], r[2], r[3], r[4], float(r[6]), float(r[7])
-        table.setdefault((case, cal), {}).setdefault(p, {})[m] = (t, b)
+        values = (float(r[6]), float(r[7]), float(r[8]))
+        table.setdefault((r[1], r[3]), {}).setdefault(r[2], {})[r[4]] = values
     for (case, cal), by_p in sorted(table.items()):
         ranks = sorted(by_p)
         for apc in ("APC (old wire)", "APC (compact wire)"):
             result = []
-            for k in (0, 1):  # time, bytes
+            for k in (0, 1, 2):
                 def cheaper(p):
                     seg = [by_p[p][m][k] for m in ("direct send", "binary swap")
                            if by_p[p][m][k] == by_p[p][m][k]]
                     return by_p[p][apc][k] < min(seg) if seg else False
-                cross = None
-                for i, p in enumerate(ranks):
-                    if all(cheaper(q) for q in ranks[i:]):
-                        cross = p
-                        break
+                cross = next((p for i, p in enumerate(ranks)
+                              if all(cheaper(q) for q in ranks[i:])), None)
                 result.append(str(cross) if cross is not None else "> %d" % ranks[-1])
-            rows.append([case, cal, apc, ranks[0], ranks[-1], result[0], result[1]])
+            rows.append([case, cal, apc, ranks[0], ranks[-1]] + result)
     return rows
+
+
+def calibrate_blend(scaling, analysis):
+    """Seconds per segment of the segments' sort and blend: the measured stage on 2 ranks
+    (median over the cameras) over the busiest strip's segments from the analysis."""
+    per = []
+    for r in scaling:
+        if r["mode"] != "SEGMENTS" or r["ranks"] != "2" or not r.get("blend_segments_s"):
+            continue
+        match = [a for a in analysis if a["case"] == "gearteeth" and a["ranks"] == 2 and
+                 a["camera"] == r["camera"] and a["width"] == r["size"]]
+        if match and match[0]["ds_max_received_segments"] > 0:
+            per.append(num(r["blend_segments_s"]) / (2 * match[0]["ds_max_received_segments"]))
+    return median(per)
 
 
 def run(results, out):
@@ -504,12 +547,19 @@ def run(results, out):
         print("scaling_model: no comm.csv or per-rank segment counts in %s" % results)
         return 1
     os.makedirs(out, exist_ok=True)
-    machine = constants[min(constants)]
+    blend = calibrate_blend(scaling, analysis)
+    for c in constants.values():
+        c["blend"] = blend
+    # At the paper's scale: this machine's 2 ranks (not oversubscribed) at the minimum over
+    # the repetitions, the best estimate of the machine without the other users' load.
+    machine = dict(calibrate(comm, "min_s")[min(constants)], blend=blend)
+    machine["name"] = "this machine np2 (min)"
     infiniband = interconnect(machine)
     write_csv(os.path.join(out, "constants.csv"),
               ["calibration", "ranks", "alpha_s", "beta_s_per_byte", "bandwidth_GBps",
                "gamma_double_s_per_byte", "gamma_float_s_per_byte", "copy_s_per_byte",
-               "load1"], constants_rows(constants, infiniband))
+               "load1", "blend_s_per_segment"],
+              constants_rows(dict(constants, machine=machine), infiniband))
     write_csv(os.path.join(out, "collectives.csv"),
               ["ranks", "op", "type", "bytes", "measured_s", "model_1_s", "model_2_s",
                "model_3_s", "closest", "closest_rel_error"], collectives_rows(comm, constants))
@@ -522,7 +572,7 @@ def run(results, out):
     write_csv(os.path.join(out, "paper_scale.csv"), PAPER_HEADER, paper)
     write_csv(os.path.join(out, "crossover.csv"),
               ["case", "calibration", "apc", "from_ranks", "to_ranks", "crossover_time",
-               "crossover_bytes"], crossover_rows(paper))
+               "crossover_time_comm", "crossover_bytes"], crossover_rows(paper))
     print("scaling_model: wrote constants, collectives, validation, paper_scale, crossover "
           "CSVs to %s" % out)
     return 0
