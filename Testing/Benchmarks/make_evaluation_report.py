@@ -697,40 +697,50 @@ class Report:
         machine, cluster = calibrations[0], calibrations[-1]
         at = {(r["case"], int(r["ranks"]), r["calibration"], r["method"]): r for r in paper}
         ranks = sorted({int(r["ranks"]) for r in gear})
+        trio = ("APC (compact wire)", "direct send", "binary swap")
         if gear:
             body = []
             for n in ranks:
-                row = [n, at[("gearteeth", n, cluster, "direct send")][
-                    "segments_per_nonempty_pixel"],
-                    fmt(num(at[("gearteeth", n, cluster, "APC (compact wire)")][
-                        "covered_fraction_of_rect"]))]
-                for m in ("APC (old wire)", "APC (compact wire)", "direct send", "binary swap"):
+                first = at[("gearteeth", n, cluster, "direct send")]
+                row = [n, fmt(num(first["segments_per_nonempty_pixel"])),
+                       fmt(num(first["covered_fraction_of_rect"])),
+                       fmt(num(first["apc_compact_bytes_per_nonempty_pixel_per_rank"])),
+                       fmt(num(first["direct_send_busiest_rank_bytes_per_nonempty_pixel"]))]
+                for m in ("APC (old wire)",) + trio:
                     row.append(mb(num(at[("gearteeth", n, cluster, m)]["bytes"])))
                 for cal in (machine, cluster):
-                    for m in ("APC (compact wire)", "direct send", "binary swap"):
-                        row.append(fmt(num(at[("gearteeth", n, cal, m)]["time_s"])))
+                    row.append(" / ".join(fmt(num(at[("gearteeth", n, cal, m)]["time_comm_s"]))
+                                          for m in trio))
+                    row.append(" / ".join(fmt(num(at[("gearteeth", n, cal, m)]["time_s"]))
+                                          for m in trio))
                 body.append(row)
             self.add("The gear teeth at 2560² (counts from the analysis at its size, scaled "
                      "by the pixels; up to 8 ranks at 512² and the benchmark's sample distance, "
-                     "beyond at 256² with the sample distance 0.08/N, see section 2):\n\n")
+                     "beyond at 256² with the sample distance 0.08/N, see section 2). Times "
+                     "are APC (compact) / direct send / binary swap, first latency and "
+                     "bandwidth alone, then with the local work:\n\n")
             self.add(table(["ranks", "segments / non-empty px", "covered fraction of rect",
-                            "APC old MB", "APC compact MB", "direct send MB",
-                            "binary swap MB", "APC compact s (here)", "direct send s (here)",
-                            "binary swap s (here)", "APC compact s (IB)",
-                            "direct send s (IB)", "binary swap s (IB)"], body))
+                            "APC compact B / non-empty px / rank",
+                            "direct send: busiest rank's B / non-empty px", "APC old MB",
+                            "APC compact MB", "direct send MB", "binary swap MB",
+                            "s, α β only (%s)" % machine, "s, with local work (%s)" % machine,
+                            "s, α β only (%s)" % cluster, "s, with local work (%s)" % cluster],
+                           body))
 
         # Plots: time and bytes vs ranks, per calibration, gear teeth (lines) and real data.
         cases = list(dict.fromkeys(r["case"] for r in paper))
         styles = {"APC (old wire)": ("C0", ":"), "APC (compact wire)": ("C0", "-"),
                   "direct send": ("C1", "-"), "binary swap": ("C2", "-")}
         markers = {c: m for c, m in zip(cases, "os^vDP<>*")}
-        fig, axes = plt.subplots(1, 3, figsize=(17, 4.6))
-        for ax, cal in zip(axes[:2], (machine, cluster)):
+        fig, axes = plt.subplots(1, 4, figsize=(22, 4.6))
+        panels = ((machine, "time_s", "with local work"), (cluster, "time_s", "with local work"),
+                  (cluster, "time_comm_s", "latency and bandwidth only"))
+        for ax, (cal, key, what) in zip(axes[:3], panels):
             for case in cases:
                 for m, (colour, line) in styles.items():
-                    pts = sorted((int(r["ranks"]), num(r["time_s"])) for r in paper
+                    pts = sorted((int(r["ranks"]), num(r[key])) for r in paper
                                  if r["case"] == case and r["calibration"] == cal and
-                                 r["method"] == m and num(r["time_s"]) == num(r["time_s"]))
+                                 r["method"] == m and num(r[key]) == num(r[key]))
                     if pts:
                         ax.plot([p for p, _ in pts], [t for _, t in pts], line,
                                 color=colour, marker=markers[case], markersize=4,
@@ -740,46 +750,51 @@ class Report:
             ax.set_yscale("log")
             ax.set_xlabel("ranks")
             ax.set_ylabel("modelled compositing s per frame")
-            ax.set_title(cal, fontsize=10)
+            ax.set_title("%s: %s" % (cal, what), fontsize=9)
         for case in cases:
             for m, (colour, line) in styles.items():
                 pts = sorted((int(r["ranks"]), num(r["bytes"])) for r in paper
                              if r["case"] == case and r["calibration"] == cluster and
                              r["method"] == m and num(r["bytes"]) == num(r["bytes"]))
                 if pts:
-                    axes[2].plot([p for p, _ in pts], [b / 1e6 for _, b in pts], line,
+                    axes[3].plot([p for p, _ in pts], [b / 1e6 for _, b in pts], line,
                                  color=colour, marker=markers[case], markersize=4,
                                  label="%s, %s" % (m, case),
                                  alpha=1 if case == "gearteeth" else 0.55)
-        axes[2].set_xscale("log", base=2)
-        axes[2].set_yscale("log")
-        axes[2].set_xlabel("ranks")
-        axes[2].set_ylabel("MB per frame, all ranks")
-        axes[2].set_title("bytes sent")
-        axes[2].legend(fontsize=6, ncol=2, loc="upper left")
+        axes[3].set_xscale("log", base=2)
+        axes[3].set_yscale("log")
+        axes[3].set_xlabel("ranks")
+        axes[3].set_ylabel("MB per frame, all ranks")
+        axes[3].set_title("bytes sent")
+        axes[3].legend(fontsize=6, ncol=2, loc="upper left")
         self.figure(fig, "model_scaling.png",
-                    "The model at 2560²: compositing time with this machine's 2-rank α, β, γ "
-                    "(left) and with 100 Gb/s InfiniBand (middle), and bytes (right), against "
-                    "ranks. Solid blue: APC with the compact wire; dotted blue: the old wire; "
-                    "orange: direct send; green: binary swap; markers: data sets (gear teeth "
-                    "opaque, real meshes pale).")
+                    "The model at 2560² against ranks: compositing time with local work on "
+                    "this machine's 2-rank constants and with 100 Gb/s InfiniBand, the "
+                    "InfiniBand time of latency and bandwidth alone, and bytes of all ranks. "
+                    "Solid blue: APC with the compact wire; dotted blue: the old wire; orange: "
+                    "direct send; green: binary swap; markers: data sets (gear teeth opaque, "
+                    "real meshes pale).")
 
         if crossover:
             body = [[r["case"], r["calibration"], r["apc"], "%s–%s" % (r["from_ranks"],
                                                                        r["to_ranks"]),
-                     r["crossover_time"], r["crossover_bytes"]] for r in crossover]
+                     r["crossover_time"], r.get("crossover_time_comm", "–"),
+                     r["crossover_bytes"]] for r in crossover]
             self.add("Crossover: the smallest rank count from which APC stays cheaper than the "
                      "cheaper segment baseline (direct send or binary swap) up to the largest "
-                     "rank count analysed; '> N' = not within the range:\n\n")
+                     "rank count analysed; '> N' = not within the range; '2' = from the "
+                     "start:\n\n")
             self.add(table(["case", "calibration", "APC wire", "ranks analysed",
-                            "crossover (time)", "crossover (bytes)"], body))
+                            "crossover (time with local work)", "crossover (α β time only)",
+                            "crossover (bytes)"], body))
             for r in crossover:
                 if r["case"] == "gearteeth" and r["apc"] == "APC (compact wire)":
                     self.headline.append(
                         "Scaling model, gear teeth at 2560², APC's compact wire vs the "
-                        "cheaper segment baseline, %s: APC is cheaper in time from **%s** "
-                        "ranks, in bytes from %s." % (r["calibration"], r["crossover_time"],
-                                                      r["crossover_bytes"]))
+                        "cheaper segment baseline, %s: APC is cheaper with local work from "
+                        "**%s** ranks, in latency and bandwidth alone from %s, in bytes from "
+                        "%s." % (r["calibration"], r["crossover_time"],
+                                 r.get("crossover_time_comm", "–"), r["crossover_bytes"]))
         if validation:
             two = [r for r in validation if r["ranks"] == "2"]
             if two:
