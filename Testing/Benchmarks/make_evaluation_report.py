@@ -721,7 +721,7 @@ class Report:
                      "bandwidth alone, then with the local work:\n\n")
             self.add(table(["ranks", "segments / non-empty px", "covered fraction of rect",
                             "APC compact B / non-empty px / rank",
-                            "direct send: busiest rank's B / non-empty px", "APC old MB",
+                            "direct send: busiest rank's B sent or received / non-empty px", "APC old MB",
                             "APC compact MB", "direct send MB", "binary swap MB",
                             "s, α β only (%s)" % machine, "s, with local work (%s)" % machine,
                             "s, α β only (%s)" % cluster, "s, with local work (%s)" % cluster],
@@ -737,8 +737,9 @@ class Report:
             self.add(
                 "Reading it: under weak scaling every rank's own traffic stays about constant "
                 "for both approaches: at %d ranks APC's compact wire moves %s B per non-empty "
-                "pixel per rank and direct send's busiest rank %s B (a rank sends only its own "
-                "segments, ~4 slabs' worth per pixel, whatever N). So with a full-bisection "
+                "pixel per rank and direct send's busiest rank %s B sent or received (a rank "
+                "sends only its own segments, ~4 slabs' worth per pixel, and a strip owner "
+                "receives its strip's, whatever N; medians over the cameras). So with a full-bisection "
                 "network the two's latency–bandwidth times stay close (APC / direct send = "
                 "%.2f at %d ranks; crossover in α–β time: %s, in bytes: %s); what "
                 "grows with N for the segments is the total traffic (%s MB at %d ranks, the "

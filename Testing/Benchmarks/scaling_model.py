@@ -476,8 +476,9 @@ def paper_rows(analysis, calibrations):
                  "%.4g" % per_pixel(lambda a: a["covered_tile_pixels"] / a["rect_pixels"]),
                  "%.4g" % per_pixel(lambda a: (a["tiles"] + a["covered_tile_pixels"] *
                                                COMPACT_BYTES_PER_PIXEL) / nonempty(a)),
-                 "%.4g" % per_pixel(lambda a: a["ds_max_sent_segments"] * SEGMENT_BYTES /
-                                    nonempty(a))]
+                 "%.4g" % per_pixel(lambda a: max(a["ds_max_sent_segments"],
+                                                  a["ds_max_received_segments"]) *
+                                    SEGMENT_BYTES / nonempty(a))]
         for c in calibrations:
             per_method = {m: ([], [], []) for m in METHODS}
             for a in rs:
