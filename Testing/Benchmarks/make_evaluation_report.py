@@ -627,9 +627,10 @@ class Report:
             body.append([c["calibration"], fmt(num(c["alpha_s"]) * 1e6), fmt(num(
                 c["bandwidth_GBps"])), fmt(num(c["gamma_double_s_per_byte"]) * 1e9),
                 fmt(num(c["gamma_float_s_per_byte"]) * 1e9),
-                fmt(num(c["copy_s_per_byte"]) * 1e9), c["load1"]])
+                fmt(num(c["copy_s_per_byte"]) * 1e9), c["load1"],
+                fmt(num(c.get("blend_s_per_segment")) * 1e9)])
         self.add(table(["calibration", "α µs", "1/β GB/s", "γ double ns/B", "γ float ns/B",
-                        "copy ns/B", "load average (1 min)"], body))
+                        "copy ns/B", "load average (1 min)", "segment sort+blend ns"], body))
         self.add(
             "Medians of the repetitions (the machine is shared: the load average is the one "
             "during the measurement; 4 and 8 ranks share 2 cores, so their α and β include the "
@@ -678,18 +679,26 @@ class Report:
                      "measured collectives or ping-pongs (interpolated between its sizes), each "
                      "after a barrier. Errors = (model − measured) / measured, of the medians "
                      "over the cameras:\n\n")
-            self.add(table(["ranks", "cores", "mode", "model", "cameras", "model s",
+            self.add(table(["ranks", "cores", "mode", "model", "frames (cameras × runs)", "model s",
                             "MPI alone s", "model vs MPI alone", "pass measured s",
                             "model vs pass", "worst camera vs pass"], body))
             self.add(
                 "The pass's stage times are the slowest rank's lap from the end of its render "
-                "to the end of the collective: they include the wait for the slowest rank's "
-                "render (the pieces' render times differ; the collective synchronises), and on "
-                "this loaded 2-core machine the time slices the ranks wait to be scheduled "
-                "together. A communication model does not see either; the gap between *MPI "
-                "alone* and *pass measured* is that wait, not communication. Above 2 ranks the "
-                "ranks share 2 cores: read the 2-rank rows as the model's accuracy and the 4–8 "
-                "rank rows as how far oversubscription is from it.\n")
+                "to the end of the collective. On the old wire (and for the segments, whose "
+                "counts allgather opens the exchange) that lap includes the wait for the "
+                "slowest rank's render, which a communication model does not see: the "
+                "collective synchronises, and the ranks' renders differ by a large part of a "
+                "second on this loaded machine. The compact wire's tile-mask allreduce takes "
+                "that wait in its own stage (not in the CSV), so its *allreduce stage only* row "
+                "compares transfer with transfer; the reduce still waits for the slowest pass "
+                "2. That allreduce stage is still 10–100× the model and MPI alone here; not "
+                "explained yet (suspects: the render's TBB worker threads spinning on the 2 "
+                "cores while MPI polls, and the other users' load of ~15–20 during the runs; "
+                "re-run `run-evaluation.sh --model-only` on a quiet machine). The model "
+                "against *MPI alone* (the same bytes through the same MPI, each call after a "
+                "barrier) is the model's own error. Above 2 ranks the ranks share 2 cores: "
+                "read the 2-rank rows as the model's accuracy and the 4–8-rank rows as how "
+                "far oversubscription is from it.\n")
 
         # The gear teeth's per-rank traffic from the analysis, at the paper's size.
         gear = [r for r in paper if r["case"] == "gearteeth"]
@@ -747,13 +756,21 @@ class Report:
                 "pixel's list (%s segments per non-empty pixel at %d ranks) that the strip "
                 "owners sort and blend. With the local work counted (the sort and blend cost "
                 "per segment measured here, linear: the log factor of deeper sorts is left "
-                "out, which favours the segments), the crossover is at %s ranks (%s).\n" % (
+                "out, which favours the segments), the crossover is at %s ranks (%s): APC's "
+                "compact wire is the cheaper at %d ranks as soon as sorting and blending "
+                "costs the busiest strip owner more than %s ns per segment (direct send; "
+                "binary swap %s ns), against %s ns measured here (median over the 2-rank "
+                "frames, section 1's sort+blend stage).\n" % (
                     top, fmt(num(last["apc_compact_bytes_per_nonempty_pixel_per_rank"])),
                     fmt(num(last["direct_send_busiest_rank_bytes_per_nonempty_pixel"])),
                     num(at[("gearteeth", top, cluster, "APC (compact wire)")]["time_comm_s"]) /
                     num(last["time_comm_s"]), top, cross("crossover_time_comm"),
                     cross("crossover_bytes"), mb(num(last["bytes"])), top, fmt(num(last["segments_per_nonempty_pixel"])),
-                    top, cross("crossover_time"), cluster))
+                    top, cross("crossover_time"), cluster, top,
+                    fmt(1e9 * num(last["break_even_blend_s_per_segment"])),
+                    fmt(1e9 * num(at[("gearteeth", top, cluster, "binary swap")][
+                        "break_even_blend_s_per_segment"])),
+                    fmt(1e9 * num(constants[-1].get("blend_s_per_segment")))))
 
         # Plots: time and bytes vs ranks, per calibration, gear teeth (lines) and real data.
         cases = list(dict.fromkeys(r["case"] for r in paper))
@@ -817,12 +834,17 @@ class Report:
                             "crossover (bytes)"], body))
             for r in crossover:
                 if r["case"] == "gearteeth" and r["apc"] == "APC (compact wire)":
+                    top = int(r["to_ranks"])
+                    be = at.get(("gearteeth", top, r["calibration"], "direct send"), {})
                     self.headline.append(
                         "Scaling model, gear teeth at 2560², APC's compact wire vs the "
                         "cheaper segment baseline, %s: APC is cheaper with local work from "
                         "**%s** ranks, in latency and bandwidth alone from %s, in bytes from "
-                        "%s." % (r["calibration"], r["crossover_time"],
-                                 r.get("crossover_time_comm", "–"), r["crossover_bytes"]))
+                        "%s (at %d ranks it wins once the segments' sort+blend costs more than "
+                        "%s ns per segment)." % (
+                            r["calibration"], r["crossover_time"],
+                            r.get("crossover_time_comm", "–"), r["crossover_bytes"], top,
+                            fmt(1e9 * num(be.get("break_even_blend_s_per_segment")))))
         if validation:
             two = [r for r in validation if r["ranks"] == "2"]
             if two:

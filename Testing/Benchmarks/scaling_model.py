@@ -437,6 +437,13 @@ def validation_rows(scaling, analysis, constants, comm):
             measured = num(r["allreduce_s"]) + num(r["reduce_s"])
             t = apc_compact(p, a["tiles"], a["covered_tile_pixels"], c)
             model = {"compact wire (best algorithms)": t[1] + t[2]}
+            # The allreduce stage alone starts with every rank past the mask's allreduce, so
+            # no rank waits there for another's render.
+            alone = (measured_at(comm, p, "allreduce", "float", a["covered_tile_pixels"]) +
+                     measured_at(comm, p, "allreduce", "float",
+                                 a["covered_tile_pixels"] * (MOMENTS + 1) * 4))
+            groups.setdefault((p, r["mode"], "compact wire: allreduce stage only"), []).append(
+                (num(r["allreduce_s"]), t[1], alone))
         elif r["mode"] == "APC":
             measured = num(r["allreduce_s"]) + num(r["reduce_s"])
             ring = sum(apc_old(p, a["rect_pixels"], c, ("ring", "binomial"))[:2])
@@ -480,21 +487,33 @@ def paper_rows(analysis, calibrations):
                                                   a["ds_max_received_segments"]) *
                                     SEGMENT_BYTES / nonempty(a))]
         for c in calibrations:
-            per_method = {m: ([], [], []) for m in METHODS}
+            per_method = {m: ([], [], [], []) for m in METHODS}
             for a in rs:
-                for m, values in methods(p, scaled(a, PAPER_PIXELS), c).items():
+                big = scaled(a, PAPER_PIXELS)
+                values = methods(p, big, c)
+                unblended = methods(p, big, dict(c, blend=0.0))
+                for m in METHODS:
                     for k in range(3):
-                        per_method[m][k].append(values[k])
+                        per_method[m][k].append(values[m][k])
+                    # The sort+blend cost per segment at which this baseline would take as
+                    # long as APC's compact wire.
+                    blended = {"direct send": big["ds_max_received_segments"] * p / (p - 1),
+                               "binary swap": big["bs_critical_segments"]}.get(m, 0)
+                    per_method[m][3].append(
+                        (values["APC (compact wire)"][0] - unblended[m][0]) / blended
+                        if blended > 0 else float("nan"))
             for m in METHODS:
                 rows.append([data, case, p, c["name"], m, len(rs)] +
-                            ["%.5g" % median(v) for v in per_method[m]] + stats)
+                            ["%.5g" % median(v) for v in per_method[m][:3]] + stats +
+                            ["%.4g" % median(per_method[m][3])])
     return rows
 
 
 PAPER_HEADER = ["dataset", "case", "ranks", "calibration", "method", "cameras", "time_s",
                 "time_comm_s", "bytes", "segments_per_nonempty_pixel", "covered_fraction_of_rect",
                 "apc_compact_bytes_per_nonempty_pixel_per_rank",
-                "direct_send_busiest_rank_bytes_per_nonempty_pixel"]
+                "direct_send_busiest_rank_bytes_per_nonempty_pixel",
+                "break_even_blend_s_per_segment"]
 
 
 def crossover_rows(paper):
@@ -524,8 +543,8 @@ def crossover_rows(paper):
 
 def calibrate_blend(scaling, analysis):
     """Seconds per segment of the segments' sort and blend: the measured stage on 2 ranks
-    over the busiest strip's segments from the analysis, the least over the cameras (the
-    stage is local work, so the least is the least disturbed by the machine's other users)."""
+    over the busiest strip's segments from the analysis, the median over the frames (it
+    varies with the cameras: deeper lists sort slower per segment, and with the load)."""
     per = []
     for r in scaling:
         if r["mode"] != "SEGMENTS" or r["ranks"] != "2" or not r.get("blend_segments_s"):
@@ -534,7 +553,7 @@ def calibrate_blend(scaling, analysis):
                  a["camera"] == r["camera"] and a["width"] == r["size"]]
         if match and match[0]["ds_max_received_segments"] > 0:
             per.append(num(r["blend_segments_s"]) / (2 * match[0]["ds_max_received_segments"]))
-    return min(per) if per else float("nan")
+    return median(per)
 
 
 def run(results, out):
