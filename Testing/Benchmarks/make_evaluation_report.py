@@ -131,7 +131,8 @@ class Report:
             "180, 270°, 30° elevation), %s timed frame(s) per camera after an untimed one. Times "
             "are the maximum over ranks of each stage, median over frames, then median over the "
             "4 cameras; bytes and messages are summed over all ranks (payloads as sent by "
-            "`vtkAPCCompositePass`: APC in double precision).\n" % (size, rows[0]["frames"]))
+            "`vtkAPCCompositePass`, whose wire the build decides: section 5 tells the old "
+            "from the compact one by these bytes).\n" % (size, rows[0]["frames"]))
         self.add(
             "**Caveat: this machine has %s cores.** Runs on more than 2 ranks are "
             "oversubscribed (`mpirun --oversubscribe`): their times measure ranks taking turns "
@@ -251,7 +252,8 @@ class Report:
             "'unmerged' is the same exchange without merging). Counts are per pixel with at "
             "least one segment, as in the paper's table. Bytes: 24 B per segment (the pass's "
             "wire format); APC's payload is the pass's: every rank sends (moments + 1) + 4 "
-            "doubles per pixel of the data's screen rectangle, the display rank also 4 B of "
+            "doubles per pixel of the data's screen rectangle (the wire before the compact one; "
+            "section 5 models both), the display rank also 4 B of "
             "depth, whatever the number of segments.\n")
         header = ["case", "ranks", "camera", "segments / non-empty px", "max", "direct send",
                   "binary swap", "binary swap unmerged", "APC B / non-empty px",
