@@ -839,14 +839,18 @@ class Report:
                     top = int(r["to_ranks"])
                     be = at.get(("gearteeth", top, r["calibration"], "direct send"), {})
                     self.headline.append(
-                        "Scaling model, gear teeth at 2560², APC's compact wire vs the "
-                        "cheaper segment baseline, %s: APC is cheaper with local work from "
-                        "**%s** ranks, in latency and bandwidth alone from %s, in bytes from "
-                        "%s (at %d ranks it wins once the segments' sort+blend costs more than "
-                        "%s ns per segment)." % (
-                            r["calibration"], r["crossover_time"],
-                            r.get("crossover_time_comm", "–"), r["crossover_bytes"], top,
-                            fmt(1e9 * num(be.get("break_even_blend_s_per_segment")))))
+                        "Scaling model, gear teeth at 2560², %d ranks, APC's compact wire vs the "
+                        "cheaper segment baseline, %s: crossover in latency and bandwidth alone "
+                        "at %s ranks, in bytes at %s (every rank's traffic stays "
+                        "about constant for both under weak scaling); APC wins on the segments' "
+                        "sort+blend, once that costs more than **%s ns per segment** (section "
+                        "1's sort+blend stage: %s ns per segment, median, on this loaded 2-core "
+                        "machine), which makes APC the cheaper from **%s** ranks." % (
+                            top, r["calibration"], r.get("crossover_time_comm", "–"),
+                            r["crossover_bytes"],
+                            fmt(1e9 * num(be.get("break_even_blend_s_per_segment"))),
+                            fmt(1e9 * num(constants[-1].get("blend_s_per_segment"))),
+                            r["crossover_time"]))
         if validation:
             two = [r for r in validation if r["ranks"] == "2"]
             if two:
