@@ -24,7 +24,8 @@
 #
 # Results go to $APC_EVAL_OUT (default out/evaluation), the report to $APC_EVAL_DOCS (default
 # docs). --quick runs every step at toy sizes (a minute or two; what ctest's EvaluationQuick
-# runs, into a temporary folder); the full run took 25 minutes here. --model-only re-runs
+# runs, into a temporary folder); the full run took 25 minutes here before steps 3 and 4 grew
+# (MPI constants ~5 min, segment analysis to 256 ranks ~6 min at load ~17). --model-only re-runs
 # steps 2, 3, 4, 6 and 7 at full size into the existing results (keeping steps 1 and 5's):
 # the one command to re-measure the model's constants and validation on a quiet machine.
 #
