@@ -12,7 +12,7 @@
 //                      [--wind-ranks 2,4,8] [--wind-distances 0.6,1,1.6]
 //                      [--flange-size S] [--flange-ranks 2,4]
 //                      [--partition-ranks 2,4,...,256] [--partition-size S]
-//                      [--partition-meshes wind,flange]
+//                      [--partition-meshes wind,flange] [--partition-distances 1]
 //
 // Configurations:
 // - the gear teeth of apcScalingBenchmark (one piece per rank, 4 orbit cameras). Up to 8
@@ -27,8 +27,9 @@
 //   (--wind-ranks, --flange-ranks: at most the stored pieces);
 // - the same meshes cut into N pieces by the graph partitioner (vtkAPCGraphPartition,
 //   label-only, K = N, split by PartitionId) at --partition-size pixels, cases wind-metis-<d>
-//   and flange-metis (--partition-ranks). The switch is the filter's header: without it
-//   (before the graph-partition branch is merged) these runs are skipped with a message.
+//   (the wind at --partition-distances) and flange-metis (--partition-ranks). The switch is the
+//   filter's header: without it (before the graph-partition branch is merged) these runs are
+//   skipped with a message.
 // Writes (creating DIR) DIR/segment_transfer.csv and, for the first camera of each configuration,
 // the per-pixel segment count over all ranks as DIR/heatmap_<case>_np<N>.pgm (16-bit binary PGM,
 // top row first). apc_bytes is the pass's payload on main before the compact wire: every rank
@@ -255,7 +256,8 @@ void Usage(const char* program)
     "usage: %s --out DIR [--data DIR] [--size S] [--wind-size W H] [--gear-ranks 1,2,4,8]\n"
     "          [--gear-large-size S] [--gear-large-cameras C] [--wind-ranks 2,4,8]\n"
     "          [--wind-distances 0.6,1,1.6] [--flange-size S] [--flange-ranks 2,4]\n"
-    "          [--partition-ranks 2,4,...] [--partition-size S] [--partition-meshes wind,flange]\n",
+    "          [--partition-ranks 2,4,...] [--partition-size S] [--partition-meshes wind,flange]\n"
+    "          [--partition-distances 1]\n",
     program);
 }
 
@@ -476,6 +478,7 @@ int main(int argc, char* argv[])
   std::vector<double> partitionRanks;
   std::set<std::string> partitionMeshes = { "wind", "flange" };
   int partitionSize = 512;
+  std::vector<double> partitionDistances = { 1.0 };
   for (int a = 1; a < argc; ++a)
   {
     const bool hasValue = a + 1 < argc;
@@ -531,6 +534,10 @@ int main(int argc, char* argv[])
     else if (!std::strcmp(argv[a], "--partition-size") && hasValue)
     {
       partitionSize = std::atoi(argv[++a]);
+    }
+    else if (!std::strcmp(argv[a], "--partition-distances") && hasValue)
+    {
+      partitionDistances = ParseList(argv[++a]);
     }
     else if (!std::strcmp(argv[a], "--partition-meshes") && hasValue)
     {
@@ -664,8 +671,9 @@ int main(int argc, char* argv[])
       volume->SetProperty(apctest::MakeVolumeProperty(mesh.TF));
       const std::string prefix =
         std::string(MeshName(run.Kind)) + (run.Partitioned ? "-metis" : "");
-      const std::vector<double> views =
-        run.Kind == MeshKind::Wind ? distances : std::vector<double>{ 0 };
+      const std::vector<double> views = run.Kind == MeshKind::Wind
+        ? (run.Partitioned ? partitionDistances : distances)
+        : std::vector<double>{ 0 };
       for (size_t v = 0; v < views.size(); ++v)
       {
         char label[32];

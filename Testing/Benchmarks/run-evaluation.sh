@@ -13,7 +13,7 @@
 # 4. segment transfers: apcSegmentAnalysis (direct send and computed binary swap vs APC's
 #    payload, per rank and in total, covered tiles, per-pixel segment-count heatmaps) for the
 #    gear-teeth frames of step 2, the gear teeth on up to 256 ranks, the wind data and the
-#    flange;
+#    flange in their stored pieces and cut by the graph partitioner into up to 256 pieces;
 # 5. real data: paraview_vs_apc.py in pvbatch (APC, Exact (segments), ParaView's Volume with
 #    projected tetrahedra) at 2 and 4 ranks, 3 camera distances, first and later frames; APC
 #    and segments also on 1 rank, the reference for the N-rank images;
@@ -56,7 +56,8 @@ if [ "$quick" = 1 ]; then
   scaling_ranks="1 2"
   comm=(--max-bytes 1048576 --repetitions 3 --budget 0.2)
   analysis=(--size 64 --wind-size 96 96 --gear-ranks 1,2,16 --gear-large-size 32
-    --gear-large-cameras 1 --wind-ranks 2 --wind-distances 1 --flange-size 48 --flange-ranks 2)
+    --gear-large-cameras 1 --wind-ranks 2 --wind-distances 1 --flange-size 48 --flange-ranks 2
+    --partition-ranks 4 --partition-size 48 --partition-meshes flange)
   realdata=(--size 96 96 --frames 1 --distances 1)
   realdata_ranks="2"
 else
@@ -68,7 +69,8 @@ else
   # process, and the work grows as the ranks (see apcSegmentAnalysis.cxx).
   analysis=(--size 512 --wind-size 1024 1024 --gear-ranks 1,2,4,8,16,32,64,128,256
     --gear-large-size 256 --gear-large-cameras 2 --wind-ranks 2,4,8 --wind-distances 0.6,1,1.6
-    --flange-size 512 --flange-ranks 2,4)
+    --flange-size 512 --flange-ranks 2,4 --partition-ranks 2,4,8,16,32,64,128,256
+    --partition-size 512 --partition-distances 1)
   realdata=(--size 1024 1024 --frames 2 --distances 0.6,1,1.6)
   realdata_ranks="2 4"
 fi
