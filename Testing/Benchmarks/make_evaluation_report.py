@@ -681,7 +681,8 @@ class Report:
                      "measured collectives or ping-pongs (interpolated between its sizes), each "
                      "after a barrier. Errors = (model − measured) / measured, of the medians "
                      "over the cameras:\n\n")
-            self.add(table(["ranks", "cores", "mode", "model", "frames (cameras × runs)", "model s",
+            self.add(table(["ranks", "cores", "mode", "model", "frames (cameras × runs)",
+                            "model s",
                             "MPI alone s", "model vs MPI alone", "pass measured s",
                             "model vs pass", "worst camera vs pass"], body))
             self.add(
@@ -732,7 +733,8 @@ class Report:
                      "bandwidth alone, then with the local work:\n\n")
             self.add(table(["ranks", "segments / non-empty px", "covered fraction of rect",
                             "APC compact B / non-empty px / rank",
-                            "direct send: busiest rank's B sent or received / non-empty px", "APC old MB",
+                            "direct send: busiest rank's B sent or received / non-empty px",
+                            "APC old MB",
                             "APC compact MB", "direct send MB", "binary swap MB",
                             "s, α β only (%s)" % machine, "s, with local work (%s)" % machine,
                             "s, α β only (%s)" % cluster, "s, with local work (%s)" % cluster],
@@ -750,7 +752,8 @@ class Report:
                 "for both approaches: at %d ranks APC's compact wire moves %s B per non-empty "
                 "pixel per rank and direct send's busiest rank %s B sent or received (a rank "
                 "sends only its own segments, ~4 slabs' worth per pixel, and a strip owner "
-                "receives its strip's, whatever N; medians over the cameras). So with a full-bisection "
+                "receives its strip's, whatever N; medians over the cameras). So with a "
+                "full-bisection "
                 "network the two's latency–bandwidth times stay close (APC / direct send = "
                 "%.2f at %d ranks; crossover in α–β time: %s, in bytes: %s); what "
                 "grows with N for the segments is the total traffic (%s MB at %d ranks, the "
@@ -767,7 +770,8 @@ class Report:
                     fmt(num(last["direct_send_busiest_rank_bytes_per_nonempty_pixel"])),
                     num(at[("gearteeth", top, cluster, "APC (compact wire)")]["time_comm_s"]) /
                     num(last["time_comm_s"]), top, cross("crossover_time_comm"),
-                    cross("crossover_bytes"), mb(num(last["bytes"])), top, fmt(num(last["segments_per_nonempty_pixel"])),
+                    cross("crossover_bytes"), mb(num(last["bytes"])), top,
+                    fmt(num(last["segments_per_nonempty_pixel"])),
                     top, cross("crossover_time"), cluster, top,
                     fmt(1e9 * num(last["break_even_blend_s_per_segment"])),
                     fmt(1e9 * num(at[("gearteeth", top, cluster, "binary swap")][
@@ -826,14 +830,16 @@ class Report:
             body = [[r["case"], r["calibration"], r["apc"], "%s–%s" % (r["from_ranks"],
                                                                        r["to_ranks"]),
                      r["crossover_time"], r.get("crossover_time_comm", "–"),
-                     r["crossover_bytes"]] for r in crossover]
+                     r["crossover_bytes"], r.get("apc_cheaper_time_at", "–"),
+                     r.get("apc_cheaper_time_comm_at", "–")] for r in crossover]
             self.add("Crossover: the smallest rank count from which APC stays cheaper than the "
                      "cheaper segment baseline (direct send or binary swap) up to the largest "
                      "rank count analysed; '> N' = not within the range; '2' = from the "
                      "start:\n\n")
             self.add(table(["case", "calibration", "APC wire", "ranks analysed",
                             "crossover (time with local work)", "crossover (α β time only)",
-                            "crossover (bytes)"], body))
+                            "crossover (bytes)", "APC cheaper at (time with local work)",
+                            "APC cheaper at (α β time)"], body))
             for r in crossover:
                 if r["case"] == "gearteeth" and r["apc"] == "APC (compact wire)":
                     top = int(r["to_ranks"])
@@ -861,6 +867,26 @@ class Report:
                         "%s %s %+.0f %% / %+.0f %%" % (
                             r["mode"], r["model"], 100 * num(r.get("rel_error_vs_mpi_alone")),
                             100 * num(r["rel_error"])) for r in two))
+        for case in [c for c in cases if "metis" in c]:
+            rs = sorted({int(r["ranks"]) for r in paper if r["case"] == case})
+            lo = at[(case, rs[0], cluster, "direct send")]
+            hi = at[(case, rs[-1], cluster, "direct send")]
+            row = next((r for r in crossover if r["case"] == case and
+                        r["apc"] == "APC (compact wire)" and r["calibration"] == cluster), {})
+            self.add(
+                "%s (a fixed mesh cut finer, i.e. strong scaling): direct send's busiest rank "
+                "moves %s B per non-empty pixel at %d ranks and %s B at %d, APC's compact wire "
+                "%s B whatever N (every rank sends the union of covered tiles); the segments "
+                "per pixel grow only from %s to %s. APC is the cheaper in α–β time at: %s; "
+                "in bytes at: %s; with the measured sort+blend at: %s (%s).\n" % (
+                    case, fmt(num(lo["direct_send_busiest_rank_bytes_per_nonempty_pixel"])),
+                    rs[0], fmt(num(hi["direct_send_busiest_rank_bytes_per_nonempty_pixel"])),
+                    rs[-1], fmt(num(hi["apc_compact_bytes_per_nonempty_pixel_per_rank"])),
+                    fmt(num(lo["segments_per_nonempty_pixel"])),
+                    fmt(num(hi["segments_per_nonempty_pixel"])),
+                    row.get("apc_cheaper_time_comm_at", "–"),
+                    row.get("apc_cheaper_bytes_at", "–"),
+                    row.get("apc_cheaper_time_at", "–"), cluster))
         if any("metis" in r["case"] for r in paper):
             self.add("The real meshes appear twice: in their stored pieces (wind: 8 Scotch "
                      "pieces, flange: 4; cases wind-<distance>, flange) and cut by "

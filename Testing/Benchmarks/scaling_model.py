@@ -537,8 +537,17 @@ def crossover_rows(paper):
                 cross = next((p for i, p in enumerate(ranks)
                               if all(cheaper(q) for q in ranks[i:])), None)
                 result.append(str(cross) if cross is not None else "> %d" % ranks[-1])
+            for k in (0, 1, 2):  # where APC is the cheaper (real meshes: a fixed mesh cut
+                # finer sends fewer segments per rank, so APC can lose again at large N)
+                result.append(" ".join(str(p) for p in ranks if cheaper_at(by_p, p, apc, k))
+                              or "none")
             rows.append([case, cal, apc, ranks[0], ranks[-1]] + result)
     return rows
+
+
+def cheaper_at(by_p, p, apc, k):
+    seg = [by_p[p][m][k] for m in ("direct send", "binary swap") if by_p[p][m][k] == by_p[p][m][k]]
+    return by_p[p][apc][k] < min(seg) if seg else False
 
 
 def calibrate_blend(scaling, analysis):
@@ -593,7 +602,8 @@ def run(results, out):
     write_csv(os.path.join(out, "paper_scale.csv"), PAPER_HEADER, paper)
     write_csv(os.path.join(out, "crossover.csv"),
               ["case", "calibration", "apc", "from_ranks", "to_ranks", "crossover_time",
-               "crossover_time_comm", "crossover_bytes"], crossover_rows(paper))
+               "crossover_time_comm", "crossover_bytes", "apc_cheaper_time_at",
+               "apc_cheaper_time_comm_at", "apc_cheaper_bytes_at"], crossover_rows(paper))
     print("scaling_model: wrote constants, collectives, validation, paper_scale, crossover "
           "CSVs to %s" % out)
     return 0
