@@ -59,7 +59,7 @@ int64_t MergedRuns(const std::vector<const SegmentImage*>& ranks, int first, int
 }
 
 SegmentTransferCounts CountSegmentTransfer(
-  const std::vector<const SegmentImage*>& ranks, int rowBegin, int rowEnd)
+  const std::vector<const SegmentImage*>& ranks, int rowBegin, int rowEnd, int colBegin, int colEnd)
 {
   Validate(ranks);
   const int width = ranks[0]->Width;
@@ -100,6 +100,15 @@ SegmentTransferCounts CountSegmentTransfer(
   {
     throw std::invalid_argument("CountSegmentTransfer: rows outside the image");
   }
+  if (colBegin < 0)
+  {
+    colBegin = 0;
+    colEnd = width;
+  }
+  if (colBegin > colEnd || colEnd > width)
+  {
+    throw std::invalid_argument("CountSegmentTransfer: columns outside the image");
+  }
 
   SegmentTransferCounts counts;
   counts.Ranks = n;
@@ -111,10 +120,12 @@ SegmentTransferCounts CountSegmentTransfer(
   {
     ++rounds;
   }
+  counts.DirectSendMatrix.assign(static_cast<size_t>(n) * n, 0);
   if (powerOfTwo)
   {
     counts.BinarySwap = 0;
     counts.BinarySwapUnmerged = 0;
+    counts.BinarySwapSent.assign(static_cast<size_t>(rounds) * n, 0);
   }
   const int rows = rowEnd - rowBegin;
   const int64_t regionPixels = static_cast<int64_t>(rows) * width;
@@ -140,6 +151,10 @@ SegmentTransferCounts CountSegmentTransfer(
       counts.Segments += total;
       counts.MaxSegmentsPerPixel = std::max(counts.MaxSegmentsPerPixel, total);
       counts.DirectSend += total - ranks[owner]->Count(pixel);
+      for (int p = 0; p < n; ++p)
+      {
+        counts.DirectSendMatrix[static_cast<size_t>(p) * n + owner] += ranks[p]->Count(pixel);
+      }
       if (!powerOfTwo)
       {
         continue;
@@ -148,6 +163,9 @@ SegmentTransferCounts CountSegmentTransfer(
       const int64_t position = static_cast<int64_t>(j - rowBegin) * width + i;
       int64_t lo = 0;
       int64_t hi = regionPixels;
+      // Which rank of its block of 2^r holds the pixel before round r: bit r' is set where
+      // the pixel went to the upper rank in round r'.
+      int holder = 0;
       for (int r = 0; r < rounds; ++r)
       {
         const int64_t middle = lo + (hi - lo) / 2;
@@ -158,16 +176,129 @@ SegmentTransferCounts CountSegmentTransfer(
         const int block = 1 << r;
         for (int b = lowerKeeps ? 1 : 0; b < n / block; b += 2)
         {
-          counts.BinarySwap += MergedRuns(ranks, b * block, block, pixel, scratch);
+          const int64_t runs = MergedRuns(ranks, b * block, block, pixel, scratch);
+          counts.BinarySwap += runs;
+          counts.BinarySwapSent[static_cast<size_t>(r) * n + b * block + holder] += runs;
           for (int k = b * block; k < (b + 1) * block; ++k)
           {
             counts.BinarySwapUnmerged += ranks[k]->Count(pixel);
           }
         }
+        holder |= lowerKeeps ? 0 : block;
+      }
+    }
+  }
+
+  // Tiles of the rectangle [colBegin, colEnd) x [rowBegin, rowEnd), clipped at its far edges.
+  constexpr int kTile = 8;
+  for (int tj = rowBegin; tj < rowEnd; tj += kTile)
+  {
+    for (int ti = colBegin; ti < colEnd; ti += kTile)
+    {
+      const int j1 = std::min(tj + kTile, rowEnd);
+      const int i1 = std::min(ti + kTile, colEnd);
+      bool covered = false;
+      for (int j = tj; j < j1 && !covered; ++j)
+      {
+        for (int i = ti; i < i1 && !covered; ++i)
+        {
+          covered = count(static_cast<int64_t>(j) * width + i) > 0;
+        }
+      }
+      ++counts.Tiles;
+      if (covered)
+      {
+        ++counts.CoveredTiles;
+        counts.CoveredTilePixels += static_cast<int64_t>(j1 - tj) * (i1 - ti);
       }
     }
   }
   return counts;
+}
+
+int64_t SegmentTransferCounts::DirectSendMaxSent() const
+{
+  int64_t most = 0;
+  for (int p = 0; p < this->Ranks; ++p)
+  {
+    int64_t sent = 0;
+    for (int o = 0; o < this->Ranks; ++o)
+    {
+      sent += o == p ? 0 : this->DirectSendMatrix[static_cast<size_t>(p) * this->Ranks + o];
+    }
+    most = std::max(most, sent);
+  }
+  return most;
+}
+
+int64_t SegmentTransferCounts::DirectSendMaxReceived() const
+{
+  int64_t most = 0;
+  for (int o = 0; o < this->Ranks; ++o)
+  {
+    int64_t received = 0;
+    for (int p = 0; p < this->Ranks; ++p)
+    {
+      received += o == p ? 0 : this->DirectSendMatrix[static_cast<size_t>(p) * this->Ranks + o];
+    }
+    most = std::max(most, received);
+  }
+  return most;
+}
+
+int64_t SegmentTransferCounts::DirectSendMessages() const
+{
+  int64_t messages = 0;
+  for (int p = 0; p < this->Ranks; ++p)
+  {
+    for (int o = 0; o < this->Ranks; ++o)
+    {
+      messages += o != p && this->DirectSendMatrix[static_cast<size_t>(p) * this->Ranks + o] > 0;
+    }
+  }
+  return messages;
+}
+
+int64_t SegmentTransferCounts::DirectSendPairwiseCritical() const
+{
+  const int n = this->Ranks;
+  int rounds = 1;
+  while (rounds < n)
+  {
+    rounds *= 2;
+  }
+  int64_t critical = 0;
+  for (int round = 1; round < rounds; ++round)
+  {
+    int64_t busiest = 0;
+    for (int p = 0; p < n; ++p)
+    {
+      const int q = p ^ round;
+      if (q < n)
+      {
+        busiest = std::max(busiest,
+          this->DirectSendMatrix[static_cast<size_t>(p) * n + q] +
+            this->DirectSendMatrix[static_cast<size_t>(q) * n + p]);
+      }
+    }
+    critical += busiest;
+  }
+  return critical;
+}
+
+int64_t SegmentTransferCounts::BinarySwapCritical() const
+{
+  if (this->BinarySwap < 0)
+  {
+    return -1;
+  }
+  int64_t critical = 0;
+  for (size_t first = 0; first < this->BinarySwapSent.size(); first += this->Ranks)
+  {
+    critical += *std::max_element(
+      this->BinarySwapSent.begin() + first, this->BinarySwapSent.begin() + first + this->Ranks);
+  }
+  return critical;
 }
 
 std::vector<int32_t> SegmentCountImage(const std::vector<const SegmentImage*>& ranks)

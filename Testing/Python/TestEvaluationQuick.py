@@ -7,7 +7,9 @@ scratch folder and checks what it produced, so the one-command benchmark cannot 
   moments travel in 32-bit fixed point) and the segment baseline is the one-process exact
   render (<= 1e-5), as the scaling benchmark measured them;
 - the real data's float images on 2 ranks equal the 1-rank ones (APC <= 1e-5; segments <= 1e-4);
-- the segment analysis agrees with what the distributed segment compositing counted.
+- the segment analysis agrees with what the distributed segment compositing counted;
+- the scaling model (section 5) has its constants, a validation row per mode on 2 ranks and
+  its CSVs next to the report.
 
     python3 TestEvaluationQuick.py <scratch folder>
 """
@@ -45,14 +47,17 @@ def main(scratch):
     if run.returncode != 0 and os.path.exists(os.path.join(results, "evaluation.log")):
         print(open(os.path.join(results, "evaluation.log")).read()[-4000:])
 
-    for name in ("quality/quality.csv", "scaling.csv", "segment_transfer.csv",
+    for name in ("quality/quality.csv", "scaling.csv", "segment_transfer.csv", "comm.csv",
+                 "model/constants.csv", "model/validation.csv", "model/paper_scale.csv",
+                 "model/crossover.csv",
                  "realdata/paraview_vs_apc_np1.csv", "realdata/paraview_vs_apc_np2.csv"):
         check(os.path.exists(os.path.join(results, name)), "%s written" % name)
 
     md_path = os.path.join(docs, "evaluation.md")
     check(os.path.exists(md_path), "evaluation.md written")
     md = open(md_path).read() if os.path.exists(md_path) else ""
-    for section in ("## 1. Weak scaling", "## 2. Segments", "## 3. Real data", "## 4. Image quality"):
+    for section in ("## 1. Weak scaling", "## 2. Segments", "## 3. Real data",
+                    "## 4. Image quality", "## 5. Scaling model"):
         body = md.split(section, 1)[1].split("\n## ", 1)[0] if section in md else ""
         check("|---" in body and "No results" not in body, "%s has a table" % section)
     links = re.findall(r"\]\((evaluation/[^)]+)\)", md)
@@ -71,6 +76,16 @@ def main(scratch):
         bound = 5e-5 if r["mode"] == "APC" else 1e-5
         check(d <= bound, "scaling %s camera %s: max |2 ranks - 1 process| = %g <= %g" % (
             r["mode"], r["camera"], d, bound))
+
+    for name in ("comm.csv", "segment_transfer.csv", "scaling.csv", "paper_scale.csv",
+                 "validation.csv"):
+        check(os.path.exists(os.path.join(docs, "evaluation", "model", name)),
+              "docs/evaluation/model/%s kept next to the report" % name)
+    validation = list(csv.DictReader(open(os.path.join(results, "model", "validation.csv"))))
+    for mode in ("APC", "SEGMENTS"):
+        two = [r for r in validation if r["ranks"] == "2" and r["mode"] == mode]
+        check(two and all(float(r["model_s"]) > 0 for r in two),
+              "scaling model validated against the measured %s compositing on 2 ranks" % mode)
 
     rows = report.Report(results, os.path.join(scratch, "unused-docs"), True).realdata_rows()
     by = {(r["ranks"], r["distance"], r["case"]): r for r in rows}
