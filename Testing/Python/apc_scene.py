@@ -34,7 +34,40 @@ parser.add_argument("--drop-array-on-rank", type=int, default=-1,
 parser.add_argument("--server", help="host:port of a pvserver to connect to")
 parser.add_argument("--expect-blank", action="store_true",
                     help="the frame must be skipped (no float image written)")
+parser.add_argument("--client-timings", action="store_true",
+                    help="APCLastTimings must reach this client (total > 0): client-server")
+parser.add_argument("--tiled", help="folder: a screenshot at twice the view size (ParaView "
+                    "renders it in tiles) must equal one render of a view of that size")
 args = parser.parse_args()
+
+def check_tiled(view, check):
+    """A screenshot at twice the view size is rendered by ParaView in 2x2 tiles (the window's
+    tile scale and viewport, the camera's window centre); it must equal a single render of a
+    view that size, to one 8-bit step (the float images equal to rounding)."""
+    import numpy
+    from PIL import Image
+
+    os.makedirs(args.tiled, exist_ok=True)
+    size = [2 * args.size[0], 2 * args.size[1]]
+    tiled = os.path.join(args.tiled, "tiled.png")
+    single = os.path.join(args.tiled, "single.png")
+    SaveScreenshot(tiled, view, ImageResolution=size)
+    view.ViewSize = size
+    Render(view)
+    SaveScreenshot(single, view, ImageResolution=size)
+    view.ViewSize = args.size
+    Render(view)
+    a = numpy.asarray(Image.open(tiled).convert("RGB"), dtype=int)
+    b = numpy.asarray(Image.open(single).convert("RGB"), dtype=int)
+    check(a.shape == b.shape, "tiled screenshot size %s vs %s" % (a.shape, b.shape))
+    if a.shape == b.shape:
+        diff = numpy.abs(a - b)
+        print("tiled %dx%d screenshot vs one render at that size: max |diff| = %d/255, "
+              "pixels differing %d" % (size[0], size[1], int(diff.max()),
+                                       int((diff.max(axis=2) > 0).sum())))
+        check(int(diff.max()) <= 1, "the tiled screenshot equals the single render")
+        check(int((b < 250).any(axis=2).sum()) > 100, "the single render shows the volume")
+
 
 # Everything lives in main(): pvbatch runs programmable filters in this interpreter, and their
 # helpers rebind module globals (e.g. "source").
@@ -136,6 +169,9 @@ def main():
     if args.png:
         SaveScreenshot(args.png, view, ImageResolution=args.size)
 
+    if args.tiled:
+        check_tiled(view, check)
+
     display.UpdatePropertyInformation()
     t = display.GetProperty("APCLastTimings").GetData()
     names = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend", "total"]
@@ -143,6 +179,11 @@ def main():
         "%s %.4f s" % (n, v) for n, v in zip(names, t[:9])) +
         ", bytes sent %.0f, pixels composited %.0f, mode ran %d (0 APC, 1 segments)"
         % (t[9], t[10], t[11]))
+    if args.client_timings:
+        # The pass runs on the render server; these values were pulled from its display rank.
+        check(len(t) == 15 and t[8] > 0 and t[2] > 0 and t[14] == 1,
+              "the client sees the display rank's timings (total %.4f s, image reduction %g)"
+              % (t[8], t[14] if len(t) > 14 else -1))
 
     after = apcparaview.rank_summaries(scene_source)
     check([s["cells"] for s in after] == [s["cells"] for s in before],
