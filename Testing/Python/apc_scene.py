@@ -34,6 +34,9 @@ parser.add_argument("--drop-array-on-rank", type=int, default=-1,
 parser.add_argument("--server", help="host:port of a pvserver to connect to")
 parser.add_argument("--expect-blank", action="store_true",
                     help="the frame must be skipped (no float image written)")
+parser.add_argument("--interactive", help="folder: interactive renders (camera moving) run "
+                    "reduced, the next still render is bit-identical to the one before, and "
+                    "the interactive picture reads as the still one (SSIM)")
 parser.add_argument("--client-timings", action="store_true",
                     help="APCLastTimings must reach this client (total > 0): client-server")
 parser.add_argument("--tiled", help="folder: a screenshot at twice the view size (ParaView "
@@ -67,6 +70,90 @@ def check_tiled(view, check):
                                        int((diff.max(axis=2) > 0).sum())))
         check(int(diff.max()) <= 1, "the tiled screenshot equals the single render")
         check(int((b < 250).any(axis=2).sum()) > 100, "the single render shows the volume")
+
+
+def float_rgba(path):
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    reader = vtkXMLImageDataReader()
+    reader.SetFileName(path)
+    reader.Update()
+    image = reader.GetOutput()
+    return image.GetDimensions(), vtk_to_numpy(image.GetPointData().GetArray("RGBA")).copy()
+
+
+def ssim_of(a_png, b_png):
+    """SSIM of two screenshots (RGB in [0, 1]) by APC's metrics tool (held to scikit-image)."""
+    import json
+    import subprocess
+    import tempfile
+
+    import numpy
+    from PIL import Image
+
+    tool = os.environ.get("APC_METRICS_TOOL")
+    if not tool:
+        return None
+    a = numpy.asarray(Image.open(a_png).convert("RGB"), dtype=numpy.float32) / 255.0
+    b = numpy.asarray(Image.open(b_png).convert("RGB"), dtype=numpy.float32) / 255.0
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = [os.path.join(tmp, n) for n in ("a.raw", "b.raw")]
+        for path, image in zip(paths, (a, b)):
+            image.astype("<f4").tofile(path)
+        out = subprocess.run([tool] + paths + [str(a.shape[1]), str(a.shape[0]), "3", "1"],
+                             stdout=subprocess.PIPE, text=True, check=True).stdout
+    return json.loads(out)["ssim"]
+
+
+def check_interactive(view, display, check):
+    """Interactive renders (what ParaView does while the camera moves) render a reduced
+    image; the still render after them is bit-identical to the still render before; the
+    interactive picture reads as the still one."""
+    import numpy
+
+    os.makedirs(args.interactive, exist_ok=True)
+    still, still_after, fast = (os.path.join(args.interactive, n + ".vti")
+                                for n in ("still", "still_after", "interactive"))
+    display.APCImageFile = still
+    Render(view)
+    SaveScreenshot(os.path.join(args.interactive, "still.png"), view, ImageResolution=args.size)
+    display.APCImageFile = ""
+    camera = GetActiveCamera()
+    for step in range(4):
+        camera.Azimuth(10)
+        view.SMProxy.InteractiveRender()
+    for step in range(4):
+        camera.Azimuth(-10)
+        if step == 3:
+            display.APCImageFile = fast
+        view.SMProxy.InteractiveRender()
+    display.UpdatePropertyInformation()
+    t = display.GetProperty("APCLastTimings").GetData()
+    reduction = display.APCInteractiveImageReduction
+    check(t[14] == reduction, "the interactive frame ran with image reduction %d (got %g)"
+          % (reduction, t[14]))
+    dims, _ = float_rgba(fast)
+    expected = [(n + reduction - 1) // reduction for n in args.size]
+    check(list(dims[:2]) == expected, "interactive float image %s, expected %s" % (dims[:2], expected))
+    # The interactive picture, as ParaView would show it while rotating.
+    view.UseInteractiveRenderingForScreenshots = 1
+    SaveScreenshot(os.path.join(args.interactive, "interactive.png"), view,
+                   ImageResolution=args.size)
+    view.UseInteractiveRenderingForScreenshots = 0
+    display.APCImageFile = still_after
+    Render(view)
+    display.APCImageFile = ""
+    display.UpdatePropertyInformation()
+    check(display.GetProperty("APCLastTimings").GetData()[14] == 1, "the still frame is full size")
+    (_, a), (_, b) = float_rgba(still), float_rgba(still_after)
+    check(a.shape == b.shape and bool(numpy.array_equal(a, b)),
+          "the still frame after interaction is bit-identical to the one before")
+    ssim = ssim_of(os.path.join(args.interactive, "interactive.png"),
+                   os.path.join(args.interactive, "still.png"))
+    if ssim is not None:
+        print("interactive vs still picture: SSIM %.4f" % ssim)
+        check(ssim > 0.9, "the interactive picture reads as the still one (SSIM > 0.9)")
 
 
 # Everything lives in main(): pvbatch runs programmable filters in this interpreter, and their
@@ -171,6 +258,8 @@ def main():
 
     if args.tiled:
         check_tiled(view, check)
+    if args.interactive:
+        check_interactive(view, display, check)
 
     display.UpdatePropertyInformation()
     t = display.GetProperty("APCLastTimings").GetData()
