@@ -180,6 +180,7 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
     }
   }
   this->Marcher.SetNumberOfThreads(mapper->GetNumberOfThreads());
+  this->Marcher.SetLatticeJitter(mapper->GetLatticeJitter());
   this->Marcher.SetMesh(&this->Mesh);
   this->Marcher.SetView(*this->Camera, rayEnds.data());
   this->Samples = 0;

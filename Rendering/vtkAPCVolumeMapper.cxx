@@ -155,6 +155,7 @@ void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ResolveMode: " << (this->ResolveMode == PAPER_SUM ? "PAPER_SUM" : "RENORMALISED")
      << "\n";
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
+  os << indent << "LatticeJitter: " << this->LatticeJitter << "\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "ComputeSegmentCount: " << this->ComputeSegmentCount << "\n";
   os << indent << "VectorMode: " << this->VectorMode << "\n";

@@ -136,6 +136,19 @@ public:
 
   ///@{
   /**
+   * Shift each pixel's sample lattice by a fraction of SampleDistance that varies from pixel
+   * to pixel (interleaved gradient noise; apcLatticeJitter.h), so that the bands a fixed
+   * lattice draws where thin layers meet the rays at a grazing angle become fine noise.
+   * The offset depends only on the pixel: every rank still samples the same points. Off by
+   * default (see the README for the measurement).
+   */
+  vtkSetMacro(LatticeJitter, bool);
+  vtkGetMacro(LatticeJitter, bool);
+  vtkBooleanMacro(LatticeJitter, bool);
+  ///@}
+
+  ///@{
+  /**
    * TBB threads for ray marching; 0 (default) lets TBB decide.
    */
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
@@ -215,6 +228,7 @@ protected:
   double MomentBias;     // apc::kUseDefaultMomentBias
   int ResolveMode = RENORMALISED;
   double SampleDistance = 0.0;
+  bool LatticeJitter = false;
   int NumberOfThreads = 0;
   bool ComputeSegmentCount = false;
   int VectorMode = vtkScalarsToColors::MAGNITUDE;

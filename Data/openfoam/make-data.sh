@@ -11,6 +11,9 @@
 # Partitioning route: Debian's decomposePar links dummy stubs for "method scotch"/"metis", so
 # scotch_partition.py builds the cell graph from owner/neighbour, partitions it with Debian's
 # real `scotch_gpart` (deterministic mode) and decomposePar applies it with `method manual`.
+# APC_PARTITIONER=apc uses APC's own filter instead (apc_partition.py: vtkAPCGraphPartition,
+# METIS on the dual graph of the OpenFOAM cells, through pvpython and the APC plugin, which
+# must be built first). The bundled data were made with the default, scotch.
 set -euo pipefail
 export LC_ALL=C  # printf/awk decimal points
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
@@ -42,9 +45,14 @@ step() {
   printf '%-34s %7.1f s\n' "$(basename "$PWD"): $name" "$(awk "BEGIN { print $t1 - $t0 }")" | tee -a "$work/timings.txt"
 }
 
-# manual_decomposition N: scotch partition into N parts, and a decomposeParDict that uses it.
+# manual_decomposition N: graph partition into N parts (Scotch, or APC's filter with
+# APC_PARTITIONER=apc), and a decomposeParDict that uses it.
 manual_decomposition() {
-  "$python" "$here/scotch_partition.py" . "$1" "cellDecomposition$1"
+  if [ "${APC_PARTITIONER:-scotch}" = apc ]; then
+    PYTHONPATH="$repo/Plugin/Python" pvpython "$here/apc_partition.py" . "$1" "cellDecomposition$1"
+  else
+    "$python" "$here/scotch_partition.py" . "$1" "cellDecomposition$1"
+  fi
   cat > system/decomposeParDict << EOF
 FoamFile { version 2.0; format ascii; class dictionary; object decomposeParDict; }
 numberOfSubdomains $1;

@@ -209,6 +209,12 @@ void vtkAPCVolumeRepresentation::SetNumberOfMoments(int moments)
   this->MarkModified();
 }
 
+void vtkAPCVolumeRepresentation::SetLatticeJitter(bool jitter)
+{
+  this->Mapper->SetLatticeJitter(jitter);
+  this->MarkModified();
+}
+
 void vtkAPCVolumeRepresentation::SetOverestimation(double beta)
 {
   this->Mapper->SetOverestimation(beta);

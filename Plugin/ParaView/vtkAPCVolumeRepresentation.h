@@ -58,6 +58,7 @@ public:
    */
   void SetSampleDistance(double distance);
   void SetNumberOfMoments(int moments);
+  void SetLatticeJitter(bool jitter);
   void SetOverestimation(double beta);
   void SetResolveMode(int mode);
   ///@}

@@ -2,6 +2,7 @@
 
 #include "apcCellInterpolation.h"
 #include "apcCompressedRows.h"
+#include "apcLatticeJitter.h"
 #include "apcParallel.h"
 #include "apcRayVisitors.h"
 #include "apcSampleCache.h"
@@ -24,6 +25,7 @@ struct RaySetup
   double O[3];
   double D[3];
   double End;
+  double Offset; // the ray's lattice offset, in units of the spacing: 0, or apcLatticeJitter
 };
 
 // True for exactly one of n and -n (n non-zero): the first non-zero component is positive.
@@ -103,10 +105,11 @@ struct CellPlanes
 // steps on distorted cells.
 constexpr double kSampleTolerance = 1e-7;
 
-// The lattice t_k = k * spacing. A sample belongs to the cell whose [tin, tout) holds the
-// rounded product k * spacing, so the first index of an interval must be the smallest k
-// whose product is >= tin, exactly; a quotient only gives a first guess, which rounding can
-// leave one off in either direction.
+// The lattice t_k = (k + offset) * spacing of one ray (offset 0 unless jittered). A sample
+// belongs to the cell whose [tin, tout) holds the rounded value, so the first index of an
+// interval must be the smallest k whose value is >= tin, exactly; a quotient only gives a
+// first guess, which rounding can leave one off in either direction. Every cell computes
+// t_k with the same expression, so neighbours agree on which of them takes a sample.
 struct Lattice
 {
   double Spacing;
@@ -117,14 +120,18 @@ struct Lattice
     , InverseSpacing(1.0 / spacing)
   {
   }
-  int64_t First(double t) const
+  double At(int64_t k, double offset) const
   {
-    int64_t k = static_cast<int64_t>(std::ceil(t * this->InverseSpacing));
-    while (static_cast<double>(k - 1) * this->Spacing >= t)
+    return (static_cast<double>(k) + offset) * this->Spacing;
+  }
+  int64_t First(double t, double offset) const
+  {
+    int64_t k = static_cast<int64_t>(std::ceil(t * this->InverseSpacing - offset));
+    while (this->At(k - 1, offset) >= t)
     {
       --k;
     }
-    while (static_cast<double>(k) * this->Spacing < t)
+    while (this->At(k, offset) < t)
     {
       ++k;
     }
@@ -232,10 +239,9 @@ struct VolumeRayMarcher::Walker
         }
         double pcoords[3] = { centre[0], centre[1], centre[2] };
         bool first = follow;
-        // Lattice samples in [tin, tout): t_k = k * spacing, the same points on every rank.
-        int64_t k = lattice.First(tin);
-        for (double t = static_cast<double>(k) * lattice.Spacing; t < tout;
-             ++k, t = static_cast<double>(k) * lattice.Spacing)
+        // Lattice samples in [tin, tout), the same points on every rank.
+        int64_t k = lattice.First(tin, ray.Offset);
+        for (double t = lattice.At(k, ray.Offset); t < tout; ++k, t = lattice.At(k, ray.Offset))
         {
           TransferSample s = cellSample;
           double scalar = cellScalar;
@@ -356,6 +362,9 @@ void VolumeRayMarcher::March(
           std::copy(ray.Origin.begin(), ray.Origin.end(), r.O);
           std::copy(ray.Direction.begin(), ray.Direction.end(), r.D);
           r.End = this->RayEnds[tile.ImagePixel(p, grid.Width)];
+          r.Offset = this->LatticeJitter
+            ? LatticeOffset(tile.I0 + p % tile.Width(), tile.J0 + p / tile.Width())
+            : 0.0;
         }
         samples.local() += walker.Tile(rays, tile, visitor);
       }

@@ -51,6 +51,10 @@ public:
   // 0 = as many as TBB offers.
   void SetNumberOfThreads(int threads) { this->Threads = threads; }
 
+  // Shift each pixel's sample lattice by its apcLatticeJitter offset (banding becomes noise).
+  // Set it before a frame's passes: pass 2 replays pass 1's samples.
+  void SetLatticeJitter(bool jitter) { this->LatticeJitter = jitter; }
+
   // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
   // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
   // the tiles beyond the budget are marched again. 0 disables. Default 1 GiB.
@@ -103,6 +107,7 @@ private:
   std::unique_ptr<SampleCache> Cache;
   double LastColourCacheShare = 0;
   int Threads = 0;
+  bool LatticeJitter = false;
   int64_t LastSamples = 0;
 };
 

@@ -9,6 +9,12 @@
 //
 // DIR/quality.csv gets the rows, DIR/<scene>_exact.png the reference pictures and
 // DIR/<scene>_b<beta>_m<moments>_<resolve>.png every MBOIT picture (over black, as compared).
+//
+//   apcQualitySweep --lattice [--out DIR] [--data DIR] [--size S] [--scenes ...]
+//
+// instead measures the sample lattice: EXACT and default MBOIT at the scene's spacing with and
+// without the per-pixel lattice jitter, against the same mode at a 4x finer spacing (where
+// banding is 4x finer and fainter): DIR/lattice.csv and DIR/lattice_<scene>_<case>.png.
 
 #include "apcTestImages.h"
 #include "apcTestPuzzles.h"
@@ -104,15 +110,16 @@ std::vector<apctest::Scene> MakeScenes(const std::string& data, const std::strin
 }
 
 // The volume alone, premultiplied RGB over black, of one frame.
-std::vector<float> RenderRGB(
-  const apctest::Scene& scene, int mode, double beta, int moments, int resolve)
+std::vector<float> RenderRGB(const apctest::Scene& scene, int mode, double beta, int moments,
+  int resolve, double spacingFactor = 1.0, bool jitter = false)
 {
   const apctest::Frame frame = apctest::Render(
     scene.Grid,
     [&](vtkAPCVolumeMapper* m)
     {
       m->SetMode(mode);
-      m->SetSampleDistance(scene.SampleDistance);
+      m->SetSampleDistance(scene.SampleDistance * spacingFactor);
+      m->SetLatticeJitter(jitter);
       m->SetOverestimation(beta);
       m->SetNumberOfMoments(moments);
       m->SetResolveMode(resolve);
@@ -151,6 +158,50 @@ std::string CsvLine(const Row& r)
   return s.str();
 }
 
+void WriteRGBPNG(const std::vector<float>& rgb, const std::string& path)
+{
+  std::vector<float> rgba(4 * kSize * kSize);
+  for (int p = 0; p < kSize * kSize; ++p)
+  {
+    std::copy_n(&rgb[3 * p], 3, &rgba[4 * p]);
+    rgba[4 * p + 3] = 1.0f;
+  }
+  apctest::WritePNG(path, rgba, kSize, kSize);
+}
+
+// The --lattice study (see the top of the file).
+int LatticeStudy(const std::vector<apctest::Scene>& scenes, const std::string& out)
+{
+  std::ofstream csv(out + "/lattice.csv");
+  const std::string header = "scene,mode,jitter,ssim,psnr,mse,max_abs_diff";
+  csv << header << "\n";
+  std::cout << header << std::endl;
+  for (const apctest::Scene& scene : scenes)
+  {
+    for (int mode : { vtkAPCVolumeMapper::EXACT, vtkAPCVolumeMapper::MBOIT })
+    {
+      const char* modeName = mode == vtkAPCVolumeMapper::EXACT ? "exact" : "mboit";
+      const auto fine = RenderRGB(scene, mode, 0.3, 4, 0, 0.25);
+      WriteRGBPNG(fine, out + "/lattice_" + scene.Name + "_" + modeName + "_fine.png");
+      for (bool jitter : { false, true })
+      {
+        const auto coarse = RenderRGB(scene, mode, 0.3, 4, 0, 1.0, jitter);
+        WriteRGBPNG(coarse,
+          out + "/lattice_" + scene.Name + "_" + modeName + (jitter ? "_jitter" : "_fixed") +
+            ".png");
+        const apc::ImageComparison c =
+          apc::CompareImages(coarse.data(), fine.data(), kSize, kSize, 3, 1.0, 16.0 / 255);
+        std::ostringstream line;
+        line << scene.Name << "," << modeName << "," << (jitter ? 1 : 0) << "," << c.Ssim << ","
+             << c.Psnr << "," << c.Mse << "," << c.MaxAbsDiff;
+        csv << line.str() << "\n";
+        std::cout << line.str() << std::endl;
+      }
+    }
+  }
+  return 0;
+}
+
 } // namespace
 
 int main(int argc, char* argv[])
@@ -158,10 +209,15 @@ int main(int argc, char* argv[])
   std::string out = ".";
   std::string data = APC_SOURCE_DIR "/Data";
   std::string wanted;
+  bool lattice = false;
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
-    if ((arg == "--out" || arg == "--data" || arg == "--scenes") && i + 1 < argc)
+    if (arg == "--lattice")
+    {
+      lattice = true;
+    }
+    else if ((arg == "--out" || arg == "--data" || arg == "--scenes") && i + 1 < argc)
     {
       (arg == "--out" ? out : arg == "--data" ? data : wanted) = argv[++i];
     }
@@ -171,13 +227,17 @@ int main(int argc, char* argv[])
     }
     else
     {
-      std::cerr << "usage: apcQualitySweep [--out DIR] [--data DIR] [--size S >= 16] "
+      std::cerr << "usage: apcQualitySweep [--lattice] [--out DIR] [--data DIR] [--size S >= 16] "
                    "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
       return 1;
     }
   }
   std::filesystem::create_directories(out);
   const auto start = std::chrono::steady_clock::now();
+  if (lattice)
+  {
+    return LatticeStudy(MakeScenes(data, wanted), out);
+  }
 
   std::ofstream csv(out + "/quality.csv");
   const std::string header = "scene,beta,moments,resolve,ssim,psnr,mse,max_abs_diff";
@@ -196,15 +256,7 @@ int main(int argc, char* argv[])
     const auto exact = RenderRGB(scene, vtkAPCVolumeMapper::EXACT, 0.3, 4, 0);
     // PNGs for a look, over black like the comparison.
     auto writePNG = [&](const std::vector<float>& rgb, const std::string& name)
-    {
-      std::vector<float> rgba(4 * kSize * kSize);
-      for (int p = 0; p < kSize * kSize; ++p)
-      {
-        std::copy_n(&rgb[3 * p], 3, &rgba[4 * p]);
-        rgba[4 * p + 3] = 1.0f;
-      }
-      apctest::WritePNG(out + "/" + name + ".png", rgba, kSize, kSize);
-    };
+    { WriteRGBPNG(rgb, out + "/" + name + ".png"); };
     writePNG(exact, scene.Name + "_exact");
     for (double beta : kBetas)
     {

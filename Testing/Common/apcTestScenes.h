@@ -36,6 +36,7 @@ struct Scene
   View Camera;
   double SampleDistance = 0.0;
   int Moments = 4; // the MBOIT order, for tests that vary it
+  bool LatticeJitter = false;
 };
 
 // Points the renderer's camera as view says; the clipping range is left to the caller, who

@@ -44,6 +44,7 @@ void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const apctes
 {
   mapper->SetSampleDistance(scene.SampleDistance);
   mapper->SetNumberOfMoments(scene.Moments);
+  mapper->SetLatticeJitter(scene.LatticeJitter);
   volume->SetMapper(mapper);
   volume->SetProperty(apctest::MakeVolumeProperty(scene.TF));
 }
@@ -379,6 +380,12 @@ int main(int argc, char* argv[])
   const apctest::Scene wind =
     MakeScene(WindPieces(0, 1), apctest::BlueToRedTF(0.0, 20.0, 20.0), 2.0, windView);
   CompareWithWhole(controller, "wind", wind, WindPieces(rank, ranks), 96, false);
+  // The jittered lattice depends only on the pixel: still the one-process image, in both modes.
+  apctest::Scene jittered = wind;
+  jittered.LatticeJitter = true;
+  CompareWithWhole(controller, "wind jittered", jittered, WindPieces(rank, ranks), 96, false);
+  CompareWithWhole(
+    controller, "segments wind jittered", jittered, WindPieces(rank, ranks), 96, false, true);
 
   // The exact sort-last baseline against the one-process EXACT image.
   CompareWithWhole(

@@ -32,6 +32,9 @@ parser.add_argument("--mode", default="APC",
 parser.add_argument("--drop-array-on-rank", type=int, default=-1,
                     help="remove the rendered array on this rank (a broken piece)")
 parser.add_argument("--server", help="host:port of a pvserver to connect to")
+parser.add_argument("--partition", type=int,
+                    help="cut the scene with APC Graph Partition into this many pieces first "
+                         "(0 = one per rank) and render the moved pieces")
 parser.add_argument("--expect-blank", action="store_true",
                     help="the frame must be skipped (no float image written)")
 parser.add_argument("--interactive", help="folder: interactive renders (camera moving) run "
@@ -201,6 +204,18 @@ def main():
         scene_array, lo, hi, unit, spacing = "T", 273.0, 573.0, 0.005, 0.0005
         camera = dict(CameraPosition=[0.07, -0.06, 0.05], CameraFocalPoint=[0, -0.0025, -0.01],
                       CameraViewUp=[0, 0, 1])
+
+    if args.partition is not None:
+        scene_source.UpdatePipeline()
+        cells_in = scene_source.GetDataInformation().GetNumberOfCells()
+        scene_source = APCGraphPartition(Input=scene_source, NumberOfPartitions=args.partition)
+        scene_source.UpdatePipeline()
+        pieces = args.partition or apcparaview.number_of_ranks()
+        info = scene_source.GetDataInformation()
+        check(info.GetNumberOfCells() == cells_in, "partition kept all %d cells" % cells_in)
+        ids = scene_source.CellData["PartitionId"]
+        check(ids is not None and tuple(ids.GetRange()) == (0.0, pieces - 1.0),
+              "PartitionId covers 0..%d" % (pieces - 1))
 
     if args.drop_array_on_rank >= 0:
         broken = ProgrammableFilter(registrationName="BrokenPiece", Input=scene_source)
