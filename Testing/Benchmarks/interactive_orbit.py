@@ -87,7 +87,7 @@ def main():
     reader = XMLPartitionedUnstructuredGridReader(FileName=[args.data])
     reader.UpdatePipeline()
     rows, summaries = [], []
-    print("load average before: %s" % open("/proc/loadavg").read().split()[:3])
+    print("load average before: %s" % open("/proc/loadavg").read().split()[:3], flush=True)
     for case in args.cases.split(","):
         view = CreateView("RenderView")
         view.ViewSize = args.size
@@ -135,6 +135,7 @@ def main():
                               interactive_s="%.3f" % median, still_s="%.3f" % still,
                               still_over_interactive="%.1f" % (still / median),
                               ssim="%.4f" % ssim(stem + "_interactive.png", stem + "_still.png")))
+        print("case done:", summaries[-1], flush=True)
         Delete(display)
         Delete(view)
     print("load average after: %s" % open("/proc/loadavg").read().split()[:3])
