@@ -269,7 +269,7 @@ protected:
   int Verbosity = 0;
   char* ImageFileName = nullptr;
   double InteractiveSampleDistanceFactor = 2.0;
-  int InteractiveImageReduction = 2;
+  int InteractiveImageReduction = 4;
 
 private:
   vtkAPCCompositePass(const vtkAPCCompositePass&) = delete;

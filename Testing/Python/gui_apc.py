@@ -59,6 +59,7 @@ try:
     # Still dragging: the last frame was an interactive one.
     display.UpdatePropertyInformation()
     result["timings_interactive"] = list(display.GetProperty("APCLastTimings").GetData())
+    result["interactive_image_reduction"] = display.APCInteractiveImageReduction
     for k in range(3, -1, -1):
         interactor.SetEventInformation(cx + 5 * k, cy, 0, 0)
         interactor.MouseMoveEvent()
