@@ -40,10 +40,17 @@ struct ProcessGroup
 struct CompositeFrame
 {
   vtkRenderer* Renderer = nullptr;
-  int Width = 0; // the viewport (a tile of a large screenshot)
+  // The image rendered and composited: the viewport (a tile of a large screenshot), or in an
+  // interactive frame with image reduction r, ceil(viewport / r) pixels covering it.
+  int Width = 0;
   int Height = 0;
+  int ViewWidth = 0; // the viewport, where the image is blended
+  int ViewHeight = 0;
   int X0 = 0;
   int Y0 = 0;
+  int Reduction = 1;         // viewport pixels per image pixel (1: still frames)
+  double SampleFactor = 1.0; // on the sample distance (1: still frames)
+  bool Interactive = false;
   double Bounds[6] = { 0, 0, 0, 0, 0, 0 }; // all processes' cells
   ScreenRect Rect;                         // the pixels whose rays can meet Bounds
   TileGrid Tiles;                          // Rect in tiles: what the collectives ship
@@ -51,6 +58,7 @@ struct CompositeFrame
   std::vector<FrameEngine*> Engines;
 
   size_t Pixels() const { return static_cast<size_t>(this->Width) * this->Height; }
+  double Aspect() const { return static_cast<double>(this->ViewWidth) / this->ViewHeight; }
 };
 
 // What the last frame cost, for GetLast*() and the verbose report.

@@ -34,6 +34,9 @@ enum Slot
   MaxHeight,
   MinHeightNegated,
   ReportPending,
+  Interactive,
+  SampleFactor,
+  Reduction,
   SlotCount
 };
 }
@@ -80,6 +83,9 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   mine[slot::MaxHeight] = local.Height;
   mine[slot::MinHeightNegated] = -local.Height;
   mine[slot::ReportPending] = local.ReportPending ? 1 : 0;
+  mine[slot::Interactive] = local.Interactive ? 1 : 0;
+  mine[slot::SampleFactor] = std::max(local.SampleFactor, 1.0);
+  mine[slot::Reduction] = std::max(local.Reduction, 1);
   double all[slot::SlotCount];
   std::copy(mine, mine + slot::SlotCount, all);
   if (group.Parallel)
@@ -101,6 +107,12 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   agreed.SizesDiffer = all[slot::MaxWidth] != -all[slot::MinWidthNegated] ||
     all[slot::MaxHeight] != -all[slot::MinHeightNegated];
   agreed.AnyReportPending = all[slot::ReportPending] > 0;
+  agreed.Interactive = all[slot::Interactive] > 0;
+  if (agreed.Interactive)
+  {
+    agreed.SampleFactor = all[slot::SampleFactor];
+    agreed.Reduction = static_cast<int>(all[slot::Reduction]);
+  }
   agreed.Width = local.Width;
   agreed.Height = local.Height;
   return agreed;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What every process must agree on before a frame's collectives, settled in one small
 // allreduce: the union of the data bounds (depth warp, sample spacing, screen rectangle),
-// failures, the number of visible APC volumes and of moments, and the viewport size. A
+// failures, the number of visible APC volumes and of moments, the viewport size, and
+// whether the frame is interactive and how much cheaper it is then. A
 // process that cannot render, has no volume while others have, or disagrees on a size makes
 // every process skip the frame instead of waiting forever in a later collective.
 #ifndef apcFrameAgreement_h
@@ -24,6 +25,9 @@ struct LocalFrame
   int Width = 0;
   int Height = 0;
   bool ReportPending = false; // an input report to say (apcInputReport.h)
+  bool Interactive = false;   // this process's window asks for a fast frame
+  double SampleFactor = 1.0;  // interactive frames: factor on the sample distance (>= 1)
+  int Reduction = 1;          // interactive frames: image reduction (>= 1)
 
   LocalFrame();
   // One visible APC volume: its number of moments and, if it has cells, their bounds.
@@ -43,6 +47,11 @@ struct FrameAgreement
   int Width = 0;
   int Height = 0;
   bool AnyReportPending = false; // then every process calls ShareInputReports
+  // Interactive if any process's window says so; then the largest factors any process asks
+  // for apply (the same settings everywhere in ParaView, where they come from one proxy).
+  bool Interactive = false;
+  double SampleFactor = 1.0; // 1 for still frames
+  int Reduction = 1;         // 1 for still frames
 
   static FrameAgreement Agree(const ProcessGroup& group, const LocalFrame& local);
 

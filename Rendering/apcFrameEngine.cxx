@@ -23,6 +23,14 @@
 namespace apc
 {
 
+ImageSetup ImageSetup::FullQuality(vtkRenderer* ren)
+{
+  ImageSetup image;
+  ren->GetTiledSizeAndOrigin(&image.Width, &image.Height, &image.X0, &image.Y0);
+  image.Aspect = image.Height > 0 ? static_cast<double>(image.Width) / image.Height : 1.0;
+  return image;
+}
+
 FrameEngine::FrameEngine() = default;
 FrameEngine::~FrameEngine() = default;
 
@@ -112,10 +120,13 @@ void FrameEngine::BeginFrame()
 
 //------------------------------------------------------------------------------
 bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
-  const double* globalBounds, const float* depthBuffer)
+  const double* globalBounds, const float* depthBuffer, const ImageSetup& image)
 {
   this->Ready = false;
-  ren->GetTiledSizeAndOrigin(&this->Width, &this->Height, &this->X0, &this->Y0);
+  this->Width = image.Width;
+  this->Height = image.Height;
+  this->X0 = image.X0;
+  this->Y0 = image.Y0;
   if (this->Width < 1 || this->Height < 1 || !this->MeshValid)
   {
     return false;
@@ -135,13 +146,14 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   const double diagonal = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
     (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
     (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
-  this->Spacing = mapper->GetSampleDistance() > 0 ? mapper->GetSampleDistance() : diagonal / 256.0;
+  this->Spacing = image.SampleFactor *
+    (mapper->GetSampleDistance() > 0 ? mapper->GetSampleDistance() : diagonal / 256.0);
   if (!(this->Spacing > 0))
   {
     return false; // a mesh with no extent
   }
   this->Table = TransferTableFromVTK(vol->GetProperty(), this->Spacing);
-  this->Camera = RayCameraFromVTK(ren, this->Width, this->Height);
+  this->Camera = RayCameraFromVTK(ren, this->Width, this->Height, image.Aspect);
   double clip[2];
   ren->GetActiveCamera()->GetClippingRange(clip);
   double tmin = 0;

@@ -34,6 +34,23 @@ class LogDepthWarp;
 class RayCamera;
 class TransferTable;
 
+// The image a frame renders: W x H pixels covering the viewport at (X0, Y0) of the window,
+// whose aspect (width / height) fixes the frustum, and the factor on the sample distance.
+// Full quality is one ray per viewport pixel at the volume's sample distance; an interactive
+// frame of vtkAPCCompositePass renders fewer, larger pixels and/or a coarser lattice.
+struct APCRENDERING_EXPORT ImageSetup
+{
+  int Width = 0;
+  int Height = 0;
+  int X0 = 0;
+  int Y0 = 0;
+  double Aspect = 1.0;
+  double SampleFactor = 1.0;
+
+  // ren's viewport (the tile of a large screenshot) at full quality.
+  static ImageSetup FullQuality(vtkRenderer* ren);
+};
+
 class APCRENDERING_EXPORT FrameEngine
 {
 public:
@@ -68,10 +85,11 @@ public:
    * viewport. globalBounds (xmin..zmax of all processes' cells) fix the depth warp and the default
    * sample spacing so that every process uses the same ones; null uses this process's cells.
    * depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays;
-   * null reads ren's window. False if there is nothing this process can render.
+   * null reads ren's window. image is what to render (ImageSetup::FullQuality(ren) by the
+   * mapper; the pass's agreed image). False if there is nothing this process can render.
    */
   bool Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
-    const double* globalBounds, const float* depthBuffer);
+    const double* globalBounds, const float* depthBuffer, const ImageSetup& image);
 
   int GetWidth() const { return this->Width; }
   int GetHeight() const { return this->Height; }

@@ -66,24 +66,28 @@ std::unique_ptr<TransferTable> TransferTableFromVTK(vtkVolumeProperty* property,
     range[0], range[1], colours, alphas, spacing, property->GetScalarOpacityUnitDistance(0)));
 }
 
-std::unique_ptr<RayCamera> RayCameraFromVTK(vtkRenderer* ren, int width, int height)
+std::unique_ptr<RayCamera> RayCameraFromVTK(vtkRenderer* ren, int width, int height, double aspect)
 {
   vtkCamera* cam = ren->GetActiveCamera();
+  if (!(aspect > 0))
+  {
+    aspect = static_cast<double>(std::max(width, 1)) / std::max(height, 1);
+  }
   double clip[2];
   cam->GetClippingRange(clip);
   double viewAngle = cam->GetViewAngle();
   if (cam->GetUseHorizontalViewAngle())
   {
     const double pi = 3.14159265358979323846;
-    viewAngle =
-      2.0 * std::atan(std::tan(0.5 * viewAngle * pi / 180.0) * height / width) * 180.0 / pi;
+    viewAngle = 2.0 * std::atan(std::tan(0.5 * viewAngle * pi / 180.0) / aspect) * 180.0 / pi;
   }
   const double* p = cam->GetPosition();
   const double* f = cam->GetFocalPoint();
   const double* u = cam->GetViewUp();
-  return std::unique_ptr<RayCamera>(
-    new RayCamera({ p[0], p[1], p[2] }, { f[0], f[1], f[2] }, { u[0], u[1], u[2] }, viewAngle,
-      cam->GetParallelProjection() != 0, cam->GetParallelScale(), width, height, clip[0], clip[1]));
+  const double* c = cam->GetWindowCenter();
+  return std::unique_ptr<RayCamera>(new RayCamera({ p[0], p[1], p[2] }, { f[0], f[1], f[2] },
+    { u[0], u[1], u[2] }, viewAngle, cam->GetParallelProjection() != 0, cam->GetParallelScale(),
+    width, height, clip[0], clip[1], { c[0], c[1] }, aspect));
 }
 
 } // namespace apc

@@ -14,8 +14,11 @@ namespace apc
 class RayCamera;
 class TransferTable;
 
-// The rays of ren's active camera through the pixels of a width x height viewport.
-std::unique_ptr<RayCamera> RayCameraFromVTK(vtkRenderer* ren, int width, int height);
+// The rays of ren's active camera (with its window centre: a tile of a large screenshot)
+// through the pixels of a width x height image covering a viewport of the given aspect
+// (width / height; 0: the image's own, i.e. one ray per viewport pixel).
+std::unique_ptr<RayCamera> RayCameraFromVTK(
+  vtkRenderer* ren, int width, int height, double aspect = 0.0);
 
 // The first component's colour (or gray) and opacity functions, sampled over the union of
 // their ranges; opacity corrected for samples spacing apart.

@@ -27,23 +27,27 @@
 namespace apc
 {
 
-void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, const float* rgba)
+void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, int imageWidth,
+  int imageHeight, const float* rgba)
 {
   // A float texture on a viewport quad, blended premultiplied-over into whatever framebuffer
   // is bound: the window's in plain VTK, the one IceT composited into in ParaView (its
   // result is captured from there, so drawing anywhere else would be lost). Float keeps
   // the 8-bit quantisation of glDrawPixels out of the volume's colours.
   auto* window = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
-  if (!window || width < 1 || height < 1)
+  if (!window || width < 1 || height < 1 || imageWidth < 1 || imageHeight < 1)
   {
     return;
   }
   vtkNew<vtkTextureObject> texture;
   texture->SetContext(window);
-  texture->Create2DFromRaw(width, height, 4, VTK_FLOAT,
+  texture->Create2DFromRaw(imageWidth, imageHeight, 4, VTK_FLOAT,
     const_cast<float*>(rgba)); // only read, despite the signature
-  texture->SetMinificationFilter(vtkTextureObject::Nearest);
-  texture->SetMagnificationFilter(vtkTextureObject::Nearest);
+  // One texel per pixel stays exact (nearest); a reduced image is interpolated, which is
+  // right for premultiplied colours.
+  const bool stretched = imageWidth != width || imageHeight != height;
+  texture->SetMinificationFilter(stretched ? vtkTextureObject::Linear : vtkTextureObject::Nearest);
+  texture->SetMagnificationFilter(stretched ? vtkTextureObject::Linear : vtkTextureObject::Nearest);
   std::string fragment = vtkOpenGLRenderUtilities::GetFullScreenQuadFragmentShaderTemplate();
   vtkShaderProgram::Substitute(fragment, "//VTK::FSQ::Decl", "uniform sampler2D volumeImage;");
   vtkShaderProgram::Substitute(

@@ -14,10 +14,13 @@ namespace apc
 {
 
 /**
- * Blends premultiplied float RGBA (width x height, row 0 at the bottom) over whatever
- * framebuffer is bound, into the viewport at (x0, y0) of ren's window.
+ * Blends premultiplied float RGBA (imageWidth x imageHeight, row 0 at the bottom) over
+ * whatever framebuffer is bound, into the width x height viewport at (x0, y0) of ren's
+ * window; an image smaller than the viewport (an interactive frame) is stretched over it,
+ * interpolated linearly.
  */
-void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, const float* rgba);
+void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, int imageWidth,
+  int imageHeight, const float* rgba);
 
 // The float images of one frame; null ones are left out.
 struct FloatImages

@@ -11,12 +11,15 @@
 namespace apc
 {
 
-ScreenRect ScreenRectOf(vtkRenderer* ren, const double bounds[6], int width, int height)
+ScreenRect ScreenRectOf(
+  vtkRenderer* ren, const double bounds[6], int width, int height, double aspect)
 {
   ScreenRect full{ 0, 0, width, height };
   vtkCamera* camera = ren->GetActiveCamera();
-  vtkMatrix4x4* m =
-    camera->GetCompositeProjectionTransformMatrix(static_cast<double>(width) / height, -1, 1);
+  // The camera's projection includes its window centre: a tile's rectangle is the part of
+  // the full image's that falls into the tile.
+  vtkMatrix4x4* m = camera->GetCompositeProjectionTransformMatrix(
+    aspect > 0 ? aspect : static_cast<double>(width) / height, -1, 1);
   double x0 = std::numeric_limits<double>::infinity();
   double y0 = x0;
   double x1 = -x0;

@@ -26,10 +26,12 @@ struct ScreenRect
   }
 };
 
-// The pixels of a width x height viewport whose rays can meet the box bounds: its projected
-// corners and one pixel of margin; the whole viewport if a corner lies behind the eye. Every
-// process computes the same rectangle from the same camera and global bounds.
-ScreenRect ScreenRectOf(vtkRenderer* ren, const double bounds[6], int width, int height);
+// The pixels of a width x height image whose rays can meet the box bounds: its projected
+// corners and one pixel of margin; the whole image if a corner lies behind the eye. The image
+// covers a viewport of the given aspect (width / height; 0: the image's own). Every process
+// computes the same rectangle from the same camera and global bounds.
+ScreenRect ScreenRectOf(
+  vtkRenderer* ren, const double bounds[6], int width, int height, double aspect = 0.0);
 
 // Copies the rectangle's pixels (components each) from a full image to a packed buffer.
 template <class Packed, class Full>

@@ -35,6 +35,8 @@ struct vtkAPCCompositePass::Internals
   std::vector<vtkSmartPointer<vtkVolume>> Volumes;
   apc::FrameRecord Record;
   int LastMode = -1;
+  int LastReduction = 0;
+  bool LastInteractive = false;
   apc::AutoMode Auto; // the same on every process: fed only by collectives' results
   vtkNew<vtkImageData> Image;
 };
@@ -140,6 +142,16 @@ vtkIdType vtkAPCCompositePass::GetLastCompositedPixels() const
   return this->Internal->Record.Pixels;
 }
 
+int vtkAPCCompositePass::GetLastImageReduction() const
+{
+  return this->Internal->LastReduction;
+}
+
+bool vtkAPCCompositePass::GetLastFrameInteractive() const
+{
+  return this->Internal->LastInteractive;
+}
+
 int vtkAPCCompositePass::GetLastCompositeMode() const
 {
   return this->Internal->LastMode;
@@ -204,6 +216,13 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   // The screen rectangle and every image buffer derive from the viewport: sizes that differ
   // between processes would make their collectives disagree in length.
   ren->GetTiledSizeAndOrigin(&local.Width, &local.Height, &frame.X0, &frame.Y0);
+  // Whether this frame may be cheap is the window's word (ParaView's and VTK's interactive
+  // renders raise its desired update rate); how cheap is this pass's setting. Both are
+  // agreed, so no process renders a different lattice or image size than the others.
+  vtkRenderWindow* window = ren->GetRenderWindow();
+  local.Interactive = window && window->GetDesiredUpdateRate() >= 1.0;
+  local.SampleFactor = self->GetInteractiveSampleDistanceFactor();
+  local.Reduction = self->GetInteractiveImageReduction();
   const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
   if (agreed.AnyReportPending)
   {
@@ -234,9 +253,14 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
     return false; // nothing to draw anywhere (the same on every process)
   }
   frame.Renderer = ren;
-  frame.Width = agreed.Width;
-  frame.Height = agreed.Height;
-  frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height);
+  frame.ViewWidth = agreed.Width;
+  frame.ViewHeight = agreed.Height;
+  frame.Interactive = agreed.Interactive;
+  frame.Reduction = agreed.Reduction;
+  frame.SampleFactor = agreed.SampleFactor;
+  frame.Width = (agreed.Width + frame.Reduction - 1) / frame.Reduction;
+  frame.Height = (agreed.Height + frame.Reduction - 1) / frame.Reduction;
+  frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height, frame.Aspect());
   const apc::ScreenRect& r = frame.Rect;
   frame.Tiles =
     r.Pixels() > 0 ? apc::TileGrid(frame.Width, r.I0, r.J0, r.I1, r.J1) : apc::TileGrid();
@@ -264,10 +288,25 @@ std::vector<float> ShareDepth(
   }
   if (group.IsDisplay())
   {
-    std::vector<float> packed(rect.Pixels());
-    frame.Renderer->GetRenderWindow()->GetZbufferData(frame.X0 + rect.I0, frame.Y0 + rect.J0,
-      frame.X0 + rect.I1 - 1, frame.Y0 + rect.J1 - 1, packed.data());
-    apc::Unpack(packed.data(), frame.Width, rect, 1, depth.data());
+    // The viewport pixels under the rectangle; an image pixel of a reduced frame takes the
+    // nearest of those it covers (its ray stops at the nearest opaque surface in its
+    // footprint). At full resolution that is the window's depth, unchanged.
+    const int r = frame.Reduction;
+    const int i0 = rect.I0 * r;
+    const int j0 = rect.J0 * r;
+    const int i1 = std::min(frame.ViewWidth, rect.I1 * r);
+    const int j1 = std::min(frame.ViewHeight, rect.J1 * r);
+    std::vector<float> packed(static_cast<size_t>(i1 - i0) * (j1 - j0));
+    frame.Renderer->GetRenderWindow()->GetZbufferData(
+      frame.X0 + i0, frame.Y0 + j0, frame.X0 + i1 - 1, frame.Y0 + j1 - 1, packed.data());
+    for (int j = j0; j < j1; ++j)
+    {
+      for (int i = i0; i < i1; ++i)
+      {
+        float& d = depth[static_cast<size_t>(j / r) * frame.Width + i / r];
+        d = std::min(d, packed[static_cast<size_t>(j - j0) * (i1 - i0) + (i - i0)]);
+      }
+    }
   }
   if (!group.Parallel)
   {
@@ -306,6 +345,8 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   Internals& internal = *this->Internal;
   internal.Record = apc::FrameRecord();
   internal.LastMode = -1;
+  internal.LastReduction = 0;
+  internal.LastInteractive = false;
   internal.Record.Clock.Restart();
   internal.Image->Initialize();
 
@@ -318,12 +359,22 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     return;
   }
   internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels()); // APC: fewer
+  internal.LastReduction = frame.Reduction;
+  internal.LastInteractive = frame.Interactive;
   const std::vector<float> depth = ShareDepth(group, frame, internal.Record);
   internal.Record.Clock.Lap("depth");
+  apc::ImageSetup image;
+  image.Width = frame.Width;
+  image.Height = frame.Height;
+  image.X0 = frame.X0;
+  image.Y0 = frame.Y0;
+  image.Aspect = frame.Aspect();
+  image.SampleFactor = frame.SampleFactor;
   for (size_t v = 0; v < volumes.size(); ++v)
   {
     auto* mapper = static_cast<vtkAPCVolumeMapper*>(volumes[v]->GetMapper());
-    frame.Engines[v]->Prepare(mapper, frame.Renderer, volumes[v], frame.Bounds, depth.data());
+    frame.Engines[v]->Prepare(
+      mapper, frame.Renderer, volumes[v], frame.Bounds, depth.data(), image);
   }
 
   int mode = this->CompositeMode;
@@ -396,8 +447,8 @@ void vtkAPCCompositePass::FinishFrame(
       images.SampleCount += engine->GetSampleCount();
     }
     apc::StoreFloatImages(internal.Image, frame.Width, frame.Height, images);
-    apc::BlendIntoWindow(
-      frame.Renderer, frame.X0, frame.Y0, frame.Width, frame.Height, result.RGBA.data());
+    apc::BlendIntoWindow(frame.Renderer, frame.X0, frame.Y0, frame.ViewWidth, frame.ViewHeight,
+      frame.Width, frame.Height, result.RGBA.data());
     internal.Record.Clock.Lap("blend");
     if (group.IsDisplay())
     {
@@ -411,7 +462,13 @@ void vtkAPCCompositePass::FinishFrame(
   const char* names[] = { "APC frame (", "APC segments frame (", "APC local exact frame (" };
   std::ostringstream line;
   line << (this->CompositeMode == AUTO ? "Auto: " : "") << names[internal.LastMode]
-       << group.Processes << " processes, " << frame.Rect.Pixels() << " pixels composited):";
+       << group.Processes << " processes, " << frame.Rect.Pixels() << " pixels composited";
+  if (frame.Interactive)
+  {
+    line << ", interactive: image reduction " << frame.Reduction << ", sample distance x"
+         << frame.SampleFactor;
+  }
+  line << "):";
   for (const auto& entry : internal.Record.Clock.Stages())
   {
     line << ' ' << entry.first << ' ' << entry.second << " s,";
@@ -463,6 +520,9 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
   os << indent << "CompositeMode: " << modes[this->CompositeMode] << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
+  os << indent << "InteractiveSampleDistanceFactor: " << this->InteractiveSampleDistanceFactor
+     << "\n";
+  os << indent << "InteractiveImageReduction: " << this->InteractiveImageReduction << "\n";
   os << indent << "ImageFileName: " << (this->ImageFileName ? this->ImageFileName : "(none)")
      << "\n";
 }

@@ -147,6 +147,33 @@ public:
   vtkGetMacro(CompositeMode, int);
   ///@}
 
+  ///@{
+  /**
+   * Interactive frames (while the camera moves: the render window's DesiredUpdateRate is at
+   * least 1, as ParaView's interactive renders (5) and VTK's interactor (15) set it; still
+   * renders set it far below 1) are rendered at reduced cost: the sample distance times
+   * InteractiveSampleDistanceFactor, and an image InteractiveImageReduction times smaller in
+   * each direction, stretched over the viewport. 1 switches either off. Every process takes
+   * the same decision: the flag and the factors are part of the frame's agreement (interactive
+   * if any process's window is; the largest factors). Still frames are never reduced.
+   */
+  vtkSetClampMacro(InteractiveSampleDistanceFactor, double, 1.0, 16.0);
+  vtkGetMacro(InteractiveSampleDistanceFactor, double);
+  vtkSetClampMacro(InteractiveImageReduction, int, 1, 16);
+  vtkGetMacro(InteractiveImageReduction, int);
+  ///@}
+
+  /**
+   * The image reduction the last frame ran with: 1 for a still frame (or interactive with
+   * both settings off), InteractiveImageReduction for an interactive one; 0 if skipped.
+   */
+  int GetLastImageReduction() const;
+
+  /**
+   * Whether the last frame was an interactive one (see InteractiveImageReduction).
+   */
+  bool GetLastFrameInteractive() const;
+
   /**
    * The mode the last frame ran: APC, SEGMENTS or LOCAL_EXACT (AUTO's choice); -1 before
    * the first frame or if it was skipped.
@@ -241,6 +268,8 @@ protected:
   int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;
+  double InteractiveSampleDistanceFactor = 2.0;
+  int InteractiveImageReduction = 4;
 
 private:
   vtkAPCCompositePass(const vtkAPCCompositePass&) = delete;

@@ -95,7 +95,8 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     engine.GetInputReport().Emit(this);
   }
-  if (!usable || !engine.Prepare(this, ren, vol, nullptr, nullptr) ||
+  if (!usable ||
+    !engine.Prepare(this, ren, vol, nullptr, nullptr, apc::ImageSetup::FullQuality(ren)) ||
     engine.GetNumberOfCells() == 0)
   {
     this->Internal->Image->Initialize();
@@ -138,8 +139,8 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   images.SegmentCount = segments.empty() ? nullptr : segments.data();
   images.SampleCount = engine.GetSampleCount();
   apc::StoreFloatImages(this->Internal->Image, engine.GetWidth(), engine.GetHeight(), images);
-  apc::BlendIntoWindow(
-    ren, engine.GetX0(), engine.GetY0(), engine.GetWidth(), engine.GetHeight(), rgba.data());
+  apc::BlendIntoWindow(ren, engine.GetX0(), engine.GetY0(), engine.GetWidth(), engine.GetHeight(),
+    engine.GetWidth(), engine.GetHeight(), rgba.data());
   engine.GetClock().Lap("blend");
 }
 

@@ -167,6 +167,8 @@ void vtkAPCVolumeRepresentation::Attach(bool attach)
     pass->SetCompositeMode(this->Mode);
     pass->SetVerbosity(this->Verbosity);
     pass->SetImageFileName(this->ImageFileName.c_str());
+    pass->SetInteractiveSampleDistanceFactor(this->InteractiveSampleDistanceFactor);
+    pass->SetInteractiveImageReduction(this->InteractiveImageReduction);
   }
 }
 
@@ -241,6 +243,19 @@ void vtkAPCVolumeRepresentation::SetImageFileName(const char* name)
   this->MarkModified();
 }
 
+void vtkAPCVolumeRepresentation::SetInteractiveSampleDistanceFactor(double factor)
+{
+  // The pass clamps and agrees on it: this only passes it on.
+  this->InteractiveSampleDistanceFactor = factor;
+  this->MarkModified();
+}
+
+void vtkAPCVolumeRepresentation::SetInteractiveImageReduction(int reduction)
+{
+  this->InteractiveImageReduction = reduction;
+  this->MarkModified();
+}
+
 void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
 {
   this->Verbosity = verbosity;
@@ -250,7 +265,7 @@ void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
 //------------------------------------------------------------------------------
 double* vtkAPCVolumeRepresentation::GetLastTimings()
 {
-  std::fill(this->LastTimings, this->LastTimings + 14, 0.0);
+  std::fill(this->LastTimings, this->LastTimings + 15, 0.0);
   this->LastTimings[11] = -1;
   if (const vtkAPCCompositePass* pass = apc::FindPass(this))
   {
@@ -266,6 +281,7 @@ double* vtkAPCVolumeRepresentation::GetLastTimings()
     this->LastTimings[11] = pass->GetLastCompositeMode();
     this->LastTimings[12] = static_cast<double>(pass->GetLastCoveredPixels());
     this->LastTimings[13] = pass->GetLastStageSeconds("tiles");
+    this->LastTimings[14] = pass->GetLastImageReduction();
   }
   return this->LastTimings;
 }
@@ -293,4 +309,7 @@ void vtkAPCVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "Mode: " << this->Mode << " (vtkAPCCompositePass::CompositeModeType)\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
+  os << indent << "InteractiveSampleDistanceFactor: " << this->InteractiveSampleDistanceFactor
+     << "\n";
+  os << indent << "InteractiveImageReduction: " << this->InteractiveImageReduction << "\n";
 }

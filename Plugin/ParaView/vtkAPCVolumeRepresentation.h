@@ -85,6 +85,24 @@ public:
 
   ///@{
   /**
+   * Interactive frames (while the camera moves), vtkAPCCompositePass's settings: the factor on
+   * the sample distance and the image reduction; 1 switches either off. Defaults 2 and 4
+   * (measured: README, Performance).
+   */
+  void SetInteractiveSampleDistanceFactor(double factor);
+  vtkGetMacro(InteractiveSampleDistanceFactor, double);
+  void SetInteractiveImageReduction(int reduction);
+  vtkGetMacro(InteractiveImageReduction, int);
+  ///@}
+
+  /**
+   * Does nothing: the panel's "Refresh Timings" button calls it, and the panel then pulls the
+   * information properties (GetLastTimings) from the display rank.
+   */
+  void RefreshTimings() {}
+
+  ///@{
+  /**
    * A file (.exr or .vti) the display rank writes each frame's float image to; empty (the
    * default) writes nothing.
    */
@@ -95,9 +113,10 @@ public:
    * The last frame's stage timings on this rank, in seconds: agree, depth, pass1, allreduce,
    * pass2, reduce, resolve, blend, total; then the bytes this rank sent, the composited
    * pixels, the mode that ran (vtkAPCCompositePass::GetLastCompositeMode: what Auto chose),
-   * the covered pixels and the seconds of the "tiles" stage (14 values).
+   * the covered pixels, the seconds of the "tiles" stage and the image reduction the frame
+   * ran with (1 still, InteractiveImageReduction interactive, 0 skipped): 15 values.
    */
-  double* GetLastTimings() VTK_SIZEHINT(14);
+  double* GetLastTimings() VTK_SIZEHINT(15);
   /**
    * The last SEGMENTS frame on this rank: seconds of segments, exchange, blend_segments and
    * gather; messages sent; average and maximum segments per non-empty pixel (all ranks).
@@ -125,7 +144,9 @@ protected:
   int Mode = 0;
   int Verbosity = 0;
   std::string ImageFileName;
-  double LastTimings[14] = {};
+  double InteractiveSampleDistanceFactor = 2.0;
+  int InteractiveImageReduction = 4;
+  double LastTimings[15] = {};
   double LastSegmentStatistics[7] = {};
 
 private:

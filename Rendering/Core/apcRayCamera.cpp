@@ -30,9 +30,10 @@ Vec Normalized(const Vec& a)
 //------------------------------------------------------------------------------
 RayCamera::RayCamera(const Vec& position, const Vec& focalPoint, const Vec& viewUp,
   double viewAngle, bool parallel, double parallelScale, int width, int height, double nearClip,
-  double farClip)
+  double farClip, const std::array<double, 2>& windowCenter, double aspect)
   : Position(position)
   , Parallel(parallel)
+  , Center(windowCenter)
   , Width(std::max(width, 1))
   , Height(std::max(height, 1))
   , Near(nearClip)
@@ -44,14 +45,15 @@ RayCamera::RayCamera(const Vec& position, const Vec& focalPoint, const Vec& view
   this->Up = Cross(this->Right, this->Forward);
   const double pi = 3.14159265358979323846;
   this->HalfHeight = parallel ? parallelScale : std::tan(0.5 * viewAngle * pi / 180.0);
-  this->Aspect = static_cast<double>(this->Width) / this->Height;
+  this->Aspect = aspect > 0 ? aspect : static_cast<double>(this->Width) / this->Height;
 }
 
 //------------------------------------------------------------------------------
 Ray RayCamera::PixelRay(int i, int j) const
 {
-  const double x = (2.0 * (i + 0.5) / this->Width - 1.0) * this->HalfHeight * this->Aspect;
-  const double y = (2.0 * (j + 0.5) / this->Height - 1.0) * this->HalfHeight;
+  const double x =
+    (2.0 * (i + 0.5) / this->Width - 1.0 + this->Center[0]) * this->HalfHeight * this->Aspect;
+  const double y = (2.0 * (j + 0.5) / this->Height - 1.0 + this->Center[1]) * this->HalfHeight;
   Ray ray;
   if (this->Parallel)
   {
@@ -86,8 +88,9 @@ bool RayCamera::Project(const Vec& x, double& px, double& py) const
     }
     scale *= depth;
   }
-  px = (Dot(v, this->Right) / (scale * this->Aspect) + 1.0) * 0.5 * this->Width - 0.5;
-  py = (Dot(v, this->Up) / scale + 1.0) * 0.5 * this->Height - 0.5;
+  px = (Dot(v, this->Right) / (scale * this->Aspect) - this->Center[0] + 1.0) * 0.5 * this->Width -
+    0.5;
+  py = (Dot(v, this->Up) / scale - this->Center[1] + 1.0) * 0.5 * this->Height - 0.5;
   return std::isfinite(px) && std::isfinite(py);
 }
 

@@ -1,6 +1,12 @@
 // Primary rays of a pinhole (perspective) or parallel camera, one through each pixel centre,
-// with the same conventions as VTK's camera (vertical view angle, image row 0 at the bottom),
-// so that images and depth buffers line up with what VTK draws.
+// with the same conventions as VTK's camera (vertical view angle, image row 0 at the bottom,
+// window centre), so that images and depth buffers line up with what VTK draws.
+//
+// The window centre shifts the image plane as vtkCamera's does (in units of half the view
+// height/width): a tile of a large screenshot is rendered by a camera whose view angle is
+// narrowed and whose window centre is moved onto the tile, so the tile's rays are exactly the
+// full image's rays through those pixels. The aspect is the viewport's: an image rendered at
+// reduced resolution covers the same frustum with fewer, larger pixels.
 //
 // t is the world-space distance along a ray from its origin: the eye for a perspective camera,
 // the plane through the eye perpendicular to the view direction for a parallel one. The
@@ -24,9 +30,12 @@ class RayCamera
 public:
   // viewAngle: full vertical angle in degrees (perspective). parallelScale: half the view
   // height in world units (parallel). near/far: the clipping range, for depth conversion.
+  // windowCenter: vtkCamera's WindowCenter. aspect: width / height of the frustum; 0 uses
+  // width / height of the image.
   RayCamera(const std::array<double, 3>& position, const std::array<double, 3>& focalPoint,
     const std::array<double, 3>& viewUp, double viewAngle, bool parallel, double parallelScale,
-    int width, int height, double nearClip, double farClip);
+    int width, int height, double nearClip, double farClip,
+    const std::array<double, 2>& windowCenter = { 0.0, 0.0 }, double aspect = 0.0);
 
   int GetWidth() const { return this->Width; }
   int GetHeight() const { return this->Height; }
@@ -57,6 +66,7 @@ private:
   bool Parallel;
   double HalfHeight; // tan(angle/2) for perspective, parallel scale for parallel
   double Aspect;
+  std::array<double, 2> Center; // vtkCamera's WindowCenter
   int Width;
   int Height;
   double Near;

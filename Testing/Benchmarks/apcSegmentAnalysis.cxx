@@ -140,7 +140,8 @@ public:
       apc::FrameEngine* engine = mapper->GetFrameEngine();
       engine->BeginFrame();
       if (engine->UpdateInput(mapper) &&
-        engine->Prepare(mapper, this->Renderer, volume, bounds, depth.data()))
+        engine->Prepare(mapper, this->Renderer, volume, bounds, depth.data(),
+          apc::ImageSetup::FullQuality(this->Renderer)))
       {
         engine->RenderSegments(images[r]);
       }

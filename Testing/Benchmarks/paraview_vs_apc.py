@@ -79,8 +79,9 @@ RAMP = [LO, 0, 0.5, 0, HI, 1, 0.5, 0]
 CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
               CameraViewUp=[0, 0, 1], CameraViewAngle=30, CameraParallelProjection=0)
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
-# APCLastTimings: STAGES, total, bytes, pixels composited, mode ran, covered pixels, tiles.
-TIMINGS = 14
+# APCLastTimings: STAGES, total, bytes, pixels composited, mode ran, covered pixels, tiles,
+# image reduction.
+TIMINGS = 15
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s"] +

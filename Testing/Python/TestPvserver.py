@@ -55,7 +55,8 @@ try:
     client = subprocess.run(
         ["pvpython", "--force-offscreen-rendering", os.path.join(here, "apc_scene.py"),
          "--scene", "puzzle", "--server", "localhost:%d" % port, "--out", out_vti,
-         "--png", out_png, "--compare", reference_vti],
+         "--png", out_png, "--compare", reference_vti, "--tiled", os.path.join(workdir, "tiled"),
+         "--client-timings", "--interactive", os.path.join(workdir, "interactive")],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=240)
     print(client.stdout)
     ok = client.returncode == 0 and "APC-TEST-PASSED" in client.stdout

@@ -37,7 +37,127 @@ parser.add_argument("--partition", type=int,
                          "(0 = one per rank) and render the moved pieces")
 parser.add_argument("--expect-blank", action="store_true",
                     help="the frame must be skipped (no float image written)")
+parser.add_argument("--interactive", help="folder: interactive renders (camera moving) run "
+                    "reduced, the next still render is bit-identical to the one before, and "
+                    "the interactive picture reads as the still one (SSIM)")
+parser.add_argument("--client-timings", action="store_true",
+                    help="APCLastTimings must reach this client (total > 0): client-server")
+parser.add_argument("--tiled", help="folder: a screenshot at twice the view size (ParaView "
+                    "renders it in tiles) must equal one render of a view of that size")
 args = parser.parse_args()
+
+def check_tiled(view, check):
+    """A screenshot at twice the view size is rendered by ParaView in 2x2 tiles (the window's
+    tile scale and viewport, the camera's window centre); it must equal a single render of a
+    view that size, to one 8-bit step (the float images equal to rounding)."""
+    import numpy
+    from PIL import Image
+
+    os.makedirs(args.tiled, exist_ok=True)
+    size = [2 * args.size[0], 2 * args.size[1]]
+    tiled = os.path.join(args.tiled, "tiled.png")
+    single = os.path.join(args.tiled, "single.png")
+    SaveScreenshot(tiled, view, ImageResolution=size)
+    view.ViewSize = size
+    Render(view)
+    SaveScreenshot(single, view, ImageResolution=size)
+    view.ViewSize = args.size
+    Render(view)
+    a = numpy.asarray(Image.open(tiled).convert("RGB"), dtype=int)
+    b = numpy.asarray(Image.open(single).convert("RGB"), dtype=int)
+    check(a.shape == b.shape, "tiled screenshot size %s vs %s" % (a.shape, b.shape))
+    if a.shape == b.shape:
+        diff = numpy.abs(a - b)
+        print("tiled %dx%d screenshot vs one render at that size: max |diff| = %d/255, "
+              "pixels differing %d" % (size[0], size[1], int(diff.max()),
+                                       int((diff.max(axis=2) > 0).sum())))
+        check(int(diff.max()) <= 1, "the tiled screenshot equals the single render")
+        check(int((b < 250).any(axis=2).sum()) > 100, "the single render shows the volume")
+
+
+def float_rgba(path):
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    reader = vtkXMLImageDataReader()
+    reader.SetFileName(path)
+    reader.Update()
+    image = reader.GetOutput()
+    return image.GetDimensions(), vtk_to_numpy(image.GetPointData().GetArray("RGBA")).copy()
+
+
+def ssim_of(a_png, b_png):
+    """SSIM of two screenshots (RGB in [0, 1]) by APC's metrics tool (held to scikit-image)."""
+    import json
+    import subprocess
+    import tempfile
+
+    import numpy
+    from PIL import Image
+
+    tool = os.environ.get("APC_METRICS_TOOL")
+    if not tool:
+        return None
+    a = numpy.asarray(Image.open(a_png).convert("RGB"), dtype=numpy.float32) / 255.0
+    b = numpy.asarray(Image.open(b_png).convert("RGB"), dtype=numpy.float32) / 255.0
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = [os.path.join(tmp, n) for n in ("a.raw", "b.raw")]
+        for path, image in zip(paths, (a, b)):
+            image.astype("<f4").tofile(path)
+        out = subprocess.run([tool] + paths + [str(a.shape[1]), str(a.shape[0]), "3", "1"],
+                             stdout=subprocess.PIPE, text=True, check=True).stdout
+    return json.loads(out)["ssim"]
+
+
+def check_interactive(view, display, check):
+    """Interactive renders (what ParaView does while the camera moves) render a reduced
+    image; the still render after them is bit-identical to the still render before; the
+    interactive picture reads as the still one."""
+    import numpy
+
+    os.makedirs(args.interactive, exist_ok=True)
+    still, still_after, fast = (os.path.join(args.interactive, n + ".vti")
+                                for n in ("still", "still_after", "interactive"))
+    display.APCImageFile = still
+    Render(view)
+    SaveScreenshot(os.path.join(args.interactive, "still.png"), view, ImageResolution=args.size)
+    display.APCImageFile = ""
+    camera = GetActiveCamera()
+    for step in range(4):
+        camera.Azimuth(10)
+        view.SMProxy.InteractiveRender()
+    for step in range(4):
+        camera.Azimuth(-10)
+        if step == 3:
+            display.APCImageFile = fast
+        view.SMProxy.InteractiveRender()
+    display.UpdatePropertyInformation()
+    t = display.GetProperty("APCLastTimings").GetData()
+    reduction = display.APCInteractiveImageReduction
+    check(t[14] == reduction, "the interactive frame ran with image reduction %d (got %g)"
+          % (reduction, t[14]))
+    dims, _ = float_rgba(fast)
+    expected = [(n + reduction - 1) // reduction for n in args.size]
+    check(list(dims[:2]) == expected, "interactive float image %s, expected %s" % (dims[:2], expected))
+    # The interactive picture, as ParaView would show it while rotating.
+    view.UseInteractiveRenderingForScreenshots = 1
+    SaveScreenshot(os.path.join(args.interactive, "interactive.png"), view,
+                   ImageResolution=args.size)
+    view.UseInteractiveRenderingForScreenshots = 0
+    display.APCImageFile = still_after
+    Render(view)
+    display.APCImageFile = ""
+    display.UpdatePropertyInformation()
+    check(display.GetProperty("APCLastTimings").GetData()[14] == 1, "the still frame is full size")
+    (_, a), (_, b) = float_rgba(still), float_rgba(still_after)
+    check(a.shape == b.shape and bool(numpy.array_equal(a, b)),
+          "the still frame after interaction is bit-identical to the one before")
+    ssim = ssim_of(os.path.join(args.interactive, "interactive.png"),
+                   os.path.join(args.interactive, "still.png"))
+    if ssim is not None:
+        print("interactive vs still picture: SSIM %.4f" % ssim)
+        check(ssim > 0.9, "the interactive picture reads as the still one (SSIM > 0.9)")
+
 
 # Everything lives in main(): pvbatch runs programmable filters in this interpreter, and their
 # helpers rebind module globals (e.g. "source").
@@ -151,6 +271,11 @@ def main():
     if args.png:
         SaveScreenshot(args.png, view, ImageResolution=args.size)
 
+    if args.tiled:
+        check_tiled(view, check)
+    if args.interactive:
+        check_interactive(view, display, check)
+
     display.UpdatePropertyInformation()
     t = display.GetProperty("APCLastTimings").GetData()
     names = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend", "total"]
@@ -158,6 +283,11 @@ def main():
         "%s %.4f s" % (n, v) for n, v in zip(names, t[:9])) +
         ", bytes sent %.0f, pixels composited %.0f, mode ran %d (0 APC, 1 segments)"
         % (t[9], t[10], t[11]))
+    if args.client_timings:
+        # The pass runs on the render server; these values were pulled from its display rank.
+        check(len(t) == 15 and t[8] > 0 and t[2] > 0 and t[14] == 1,
+              "the client sees the display rank's timings (total %.4f s, image reduction %g)"
+              % (t[8], t[14] if len(t) > 14 else -1))
 
     after = apcparaview.rank_summaries(scene_source)
     check([s["cells"] for s in after] == [s["cells"] for s in before],

@@ -1,0 +1,117 @@
+"""The real ParaView GUI against a pvserver on N ranks: runs gui_apc.py in `paraview
+--script=gui_apc.py` (user steps: plugin, APC Puzzle Source, APC Volume, colour by an
+array, rotate with the mouse, release, screenshots) and checks its results:
+
+- while the mouse drags, the client sees an interactive frame (APCLastTimings[14] = the image
+  reduction) and after release a still one (1), with non-zero stage times;
+- the GUI's still screenshot equals pvbatch's screenshot of the same scene;
+- its screenshot at twice the view size (tiles) equals pvbatch's single render at that size
+  and the GUI's own single render at that size.
+
+    TestGUI.py <ranks> <pvbatch view png> <pvbatch 2x single png> <workdir>
+
+Run under an X server; the environment carries APC_PLUGIN, PYTHONPATH and the OMPI_* settings.
+"""
+
+import json
+import os
+import socket
+import subprocess
+import sys
+import time
+
+import numpy
+from PIL import Image
+
+ranks, reference_png, reference_2x_png, workdir = sys.argv[1:5]
+here = os.path.dirname(os.path.abspath(__file__))
+os.makedirs(workdir, exist_ok=True)
+for name in ("gui_result.json", "gui_still.png", "gui_tiled.png", "gui_single.png"):
+    if os.path.exists(os.path.join(workdir, name)):
+        os.remove(os.path.join(workdir, name))
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+failures = []
+
+
+def check(ok, what):
+    print(("ok: " if ok else "check failed: ") + what)
+    if not ok:
+        failures.append(what)
+
+
+def compare(a_path, b_path, what, tolerance=1):
+    a = numpy.asarray(Image.open(a_path).convert("RGB"), dtype=int)
+    b = numpy.asarray(Image.open(b_path).convert("RGB"), dtype=int)
+    if a.shape != b.shape:
+        check(False, "%s: sizes %s vs %s" % (what, a.shape, b.shape))
+        return
+    diff = numpy.abs(a - b)
+    check(int(diff.max()) <= tolerance, "%s: max |diff| %d/255, %d pixels differ"
+          % (what, int(diff.max()), int((diff.max(axis=2) > 0).sum())))
+
+
+port = free_port()
+server_log = open(os.path.join(workdir, "pvserver.log"), "w")
+server = subprocess.Popen(
+    ["mpirun", "--oversubscribe", "-np", ranks, "-x", "APC_PLUGIN", "-x", "PYTHONPATH",
+     "-x", "DISPLAY", "pvserver", "--disable-xdisplay-test", "--server-port=%d" % port],
+    stdout=server_log, stderr=subprocess.STDOUT, start_new_session=True)
+try:
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                break
+        if server.poll() is not None:
+            raise RuntimeError("pvserver exited early (see pvserver.log)")
+        time.sleep(0.5)
+    else:
+        raise RuntimeError("pvserver did not listen within 60 s")
+    time.sleep(1.0)
+    env = dict(os.environ, APC_GUI_OUT=workdir)
+    gui = subprocess.run(
+        ["paraview", "--dr", "--server-url=cs://localhost:%d" % port,
+         "--script=%s" % os.path.join(here, "gui_apc.py")],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=150, env=env)
+    with open(os.path.join(workdir, "paraview.log"), "w") as f:
+        f.write(gui.stdout)
+    print("paraview exited with", gui.returncode)
+    result = json.load(open(os.path.join(workdir, "gui_result.json")))
+    print(json.dumps(result, indent=1))
+    check(not result["errors"], "the GUI script ran without errors")
+    if not result["errors"]:
+        # (The ViewSize property lags behind the preview layout until Qt's event loop runs;
+        # the screenshots below are the judges of size.)
+        print("ViewSize property during the script:", result["view_size"])
+        fast, still = result["timings_interactive"], result["timings_still"]
+        check(fast[14] == result["interactive_image_reduction"] > 1 and fast[8] > 0,
+              "while dragging, the client sees an interactive frame (reduction %g, total %.3f s)"
+              % (fast[14], fast[8]))
+        check(still[14] == 1 and still[8] > 0 and still[2] > 0,
+              "after release, a still frame (reduction %g, total %.3f s)" % (still[14], still[8]))
+        compare(os.path.join(workdir, "gui_still.png"), reference_png,
+                "GUI screenshot vs pvbatch screenshot")
+        compare(os.path.join(workdir, "gui_tiled.png"), reference_2x_png,
+                "GUI screenshot at 2x the view size (tiles) vs pvbatch single render at 2x")
+        compare(os.path.join(workdir, "gui_tiled.png"), os.path.join(workdir, "gui_single.png"),
+                "GUI screenshot at 2x (tiles) vs the GUI's single render at 2x")
+except Exception as e:  # a broken launch is a failure, with the reason
+    check(False, "GUI run: %r" % e)
+finally:
+    try:
+        os.killpg(server.pid, 15)
+    except ProcessLookupError:
+        pass
+    try:
+        server.wait(timeout=20)
+    except subprocess.TimeoutExpired:
+        os.killpg(server.pid, 9)
+print("APC-TEST-FAILED" if failures else "APC-TEST-PASSED")
+sys.exit(1 if failures else 0)
