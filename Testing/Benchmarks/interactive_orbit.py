@@ -82,8 +82,7 @@ def main():
     apcparaview.load_plugin(ns=globals())
     os.makedirs(args.output, exist_ok=True)
     mode = "client-server" if args.server else "pvbatch"
-    ranks = GetActiveSession().GetServerInformation().GetNumberOfProcesses() if args.server \
-        else servermanager.vtkProcessModule.GetProcessModule().GetNumberOfLocalPartitions()
+    ranks = servermanager.ActiveConnection.GetNumberOfDataPartitions()
     reader = XMLPartitionedUnstructuredGridReader(FileName=[args.data])
     reader.UpdatePipeline()
     rows, summaries = [], []
