@@ -26,6 +26,9 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from scaling_model import median, num  # noqa: E402  (one parser for both scripts' CSVs)
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -44,17 +47,6 @@ def read_csv(path):
     with open(path) as fh:
         return list(csv.DictReader(fh))
 
-
-def num(value, default=float("nan")):
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        return default
-
-
-def median(values):
-    values = [v for v in values if v == v]
-    return statistics.median(values) if values else float("nan")
 
 
 def fmt(value, digits=3):
