@@ -21,7 +21,6 @@ import glob
 import os
 import re
 import shutil
-import statistics
 import sys
 
 import numpy as np
