@@ -52,12 +52,18 @@ struct CompositeFrame
   double SampleFactor = 1.0; // on the sample distance (1: still frames)
   bool Interactive = false;
   double Bounds[6] = { 0, 0, 0, 0, 0, 0 }; // all processes' cells
-  ScreenRect Rect;                         // the pixels whose rays can meet Bounds
-  TileGrid Tiles;                          // Rect in tiles: what the collectives ship
+  // The pixels whose rays can meet Bounds: the only ones rendered. Every per-pixel buffer of
+  // the frame (depth, moments, colour sums, the result) holds Rect's pixels alone, row by
+  // row (RectWidth() long), so memory follows the data's footprint, not the view.
+  ScreenRect Rect;
+  TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the collectives ship
   MomentParameters Moments;
   std::vector<FrameEngine*> Engines;
 
   size_t Pixels() const { return static_cast<size_t>(this->Width) * this->Height; }
+  size_t RectPixels() const { return this->Rect.Pixels(); }
+  int RectWidth() const { return this->Rect.Pixels() > 0 ? this->Rect.Width() : 0; }
+  int RectHeight() const { return this->Rect.Pixels() > 0 ? this->Rect.Height() : 0; }
   double Aspect() const { return static_cast<double>(this->ViewWidth) / this->ViewHeight; }
 };
 
@@ -74,8 +80,8 @@ struct FrameRecord
   bool Failed = false;
 };
 
-// The display process's final image of the volumes (W x H premultiplied RGBA) and, in APC
-// mode, the global moments and colour sums it was resolved from.
+// The display process's final image of the volumes (the frame's Rect, premultiplied RGBA)
+// and, in APC mode, the global moments and colour sums it was resolved from.
 struct FrameResult
 {
   std::vector<float> RGBA;

@@ -28,6 +28,7 @@ ImageSetup ImageSetup::FullQuality(vtkRenderer* ren)
   ImageSetup image;
   ren->GetTiledSizeAndOrigin(&image.Width, &image.Height, &image.X0, &image.Y0);
   image.Aspect = image.Height > 0 ? static_cast<double>(image.Width) / image.Height : 1.0;
+  image.Crop = ScreenRect{ 0, 0, image.Width, image.Height };
   return image;
 }
 
@@ -123,8 +124,9 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   const double* globalBounds, const float* depthBuffer, const ImageSetup& image)
 {
   this->Ready = false;
-  this->Width = image.Width;
-  this->Height = image.Height;
+  this->Crop = image.Crop;
+  this->Width = image.Crop.Pixels() > 0 ? image.Crop.Width() : 0;
+  this->Height = image.Crop.Pixels() > 0 ? image.Crop.Height() : 0;
   this->X0 = image.X0;
   this->Y0 = image.Y0;
   if (this->Width < 1 || this->Height < 1 || !this->MeshValid)
@@ -153,7 +155,9 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
     return false; // a mesh with no extent
   }
   this->Table = TransferTableFromVTK(vol->GetProperty(), this->Spacing);
-  this->Camera = RayCameraFromVTK(ren, this->Width, this->Height, image.Aspect);
+  this->Camera.reset(
+    new RayCamera(RayCameraFromVTK(ren, image.Width, image.Height, image.Aspect)
+                    ->Cropped(this->Crop.I0, this->Crop.J0, this->Width, this->Height)));
   double clip[2];
   ren->GetActiveCamera()->GetClippingRange(clip);
   double tmin = 0;
@@ -166,8 +170,10 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   if (!depthBuffer)
   {
     depth.assign(this->GetPixels(), 1.0f);
+    const int x0 = this->X0 + this->Crop.I0;
+    const int y0 = this->Y0 + this->Crop.J0;
     ren->GetRenderWindow()->GetZbufferData(
-      this->X0, this->Y0, this->X0 + this->Width - 1, this->Y0 + this->Height - 1, depth.data());
+      x0, y0, x0 + this->Width - 1, y0 + this->Height - 1, depth.data());
     depthBuffer = depth.data();
   }
   std::vector<float> rayEnds(this->GetPixels());

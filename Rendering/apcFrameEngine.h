@@ -3,11 +3,12 @@
 // in one go, and what vtkAPCCompositePass runs with its collectives between the stages.
 // Internal to APC's rendering module (not installed, not for applications).
 //
-// Buffers are W x H pixels of the prepared viewport (GetWidth/GetHeight), row 0 at the
-// bottom; moments hold MomentParameters::Moments + 1 doubles per pixel, colour sums 4, images
-// 4 floats (premultiplied RGBA). Moment, colour and image buffers are accumulated into (+=),
-// so several volumes sum into one. Stages before a successful Prepare do nothing, so a
-// process with nothing to render still takes part in the sums with zeros.
+// Buffers are W x H pixels of the prepared crop of the image (GetWidth/GetHeight: the
+// data's screen rectangle, so that memory follows the data's footprint on screen, not the
+// view's size), row 0 at the bottom; moments hold MomentParameters::Moments + 1 doubles per pixel,
+// colour sums 4, images 4 floats (premultiplied RGBA). Moment, colour and image buffers are
+// accumulated into (+=), so several volumes sum into one. Stages before a successful Prepare do
+// nothing, so a process with nothing to render still takes part in the sums with zeros.
 #ifndef apcFrameEngine_h
 #define apcFrameEngine_h
 
@@ -15,6 +16,7 @@
 #include "apcCellMesh.h"
 #include "apcInputReport.h"
 #include "apcMomentParameters.h"
+#include "apcScreenRect.h"
 #include "apcStageClock.h"
 #include "apcVolumeRayMarcher.h"
 
@@ -38,6 +40,7 @@ class TransferTable;
 // whose aspect (width / height) fixes the frustum, and the factor on the sample distance.
 // Full quality is one ray per viewport pixel at the volume's sample distance; an interactive
 // frame of vtkAPCCompositePass renders fewer, larger pixels and/or a coarser lattice.
+// Of that image only the pixels of Crop are rendered: every buffer is Crop's size.
 struct APCRENDERING_EXPORT ImageSetup
 {
   int Width = 0;
@@ -46,8 +49,9 @@ struct APCRENDERING_EXPORT ImageSetup
   int Y0 = 0;
   double Aspect = 1.0;
   double SampleFactor = 1.0;
+  ScreenRect Crop;
 
-  // ren's viewport (the tile of a large screenshot) at full quality.
+  // ren's viewport (the tile of a large screenshot) at full quality, all of it.
   static ImageSetup FullQuality(vtkRenderer* ren);
 };
 
@@ -97,6 +101,8 @@ public:
   /// The viewport's origin in the window (tiles of a large screenshot are offset).
   int GetX0() const { return this->X0; }
   int GetY0() const { return this->Y0; }
+  /// The rendered pixels in the image (GetWidth x GetHeight of them).
+  const ScreenRect& GetCrop() const { return this->Crop; }
   double GetSampleDistance() const { return this->Spacing; }
   /// Lattice samples taken by the last marching stage.
   int64_t GetSampleCount() const { return this->Samples; }
@@ -127,6 +133,7 @@ private:
   int Height = 0;
   int X0 = 0;
   int Y0 = 0;
+  ScreenRect Crop;
   double Spacing = 0.0;
   std::unique_ptr<TransferTable> Table;
   std::unique_ptr<RayCamera> Camera;

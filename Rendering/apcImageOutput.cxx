@@ -78,7 +78,8 @@ void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, in
   texture->ReleaseGraphicsResources(window);
 }
 
-void StoreFloatImages(vtkImageData* image, int width, int height, const FloatImages& images)
+void StoreFloatImages(
+  vtkImageData* image, int width, int height, const ScreenRect& rect, const FloatImages& images)
 {
   // The previous frame's arrays are refilled when their size fits, not allocated again: at
   // 1024^2 new arrays cost ~0.1 s a frame in page faults.
@@ -100,7 +101,12 @@ void StoreFloatImages(vtkImageData* image, int width, int height, const FloatIma
     }
     array->SetNumberOfComponents(components);
     array->SetNumberOfTuples(pixels);
-    std::copy(values, values + components * pixels, array->GetPointer(0));
+    auto* full = array->GetPointer(0);
+    std::fill(full, full + components * pixels, 0);
+    if (rect.Pixels() > 0)
+    {
+      Unpack(values, width, rect, components, full);
+    }
     kept.emplace_back(array);
   };
   add(static_cast<vtkFloatArray*>(nullptr), "RGBA", 4, images.RGBA);

@@ -5,6 +5,8 @@
 #ifndef apcImageOutput_h
 #define apcImageOutput_h
 
+#include "apcScreenRect.h"
+
 #include <cstdint>
 
 class vtkImageData;
@@ -36,9 +38,11 @@ struct FloatImages
 /**
  * Replaces image's content by a width x height image whose point arrays are "RGBA",
  * "Moments", "ColourSums" and "SegmentCount" (those given, as float / int) and whose field
- * array "SampleCount" holds the lattice samples taken.
+ * array "SampleCount" holds the lattice samples taken. The given buffers hold the pixels of
+ * rect only; the others are zero.
  */
-void StoreFloatImages(vtkImageData* image, int width, int height, const FloatImages& images);
+void StoreFloatImages(
+  vtkImageData* image, int width, int height, const ScreenRect& rect, const FloatImages& images);
 
 } // namespace apc
 

@@ -121,13 +121,13 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
   const int stride = parameters.Moments + 1;
   const bool exchange = group.Parallel && frame.Tiles.Tiles() > 0;
 
-  std::vector<double> moments(frame.Pixels() * stride, 0.0);
+  std::vector<double> moments(frame.RectPixels() * stride, 0.0);
   for (FrameEngine* engine : frame.Engines)
   {
     engine->RenderMoments(parameters, moments.data());
   }
   record.Clock.Lap("pass1");
-  for (size_t p = 0; p < frame.Pixels(); ++p)
+  for (size_t p = 0; p < frame.RectPixels(); ++p)
   {
     record.OwnCoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
   }
@@ -159,12 +159,12 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
   }
   record.Clock.Lap("allreduce");
   record.Pixels = static_cast<vtkIdType>(frame.Tiles.PixelsIn(covered));
-  for (size_t p = 0; p < frame.Pixels(); ++p)
+  for (size_t p = 0; p < frame.RectPixels(); ++p)
   {
     record.CoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
   }
 
-  std::vector<double> colourSums(frame.Pixels() * 4, 0.0);
+  std::vector<double> colourSums(frame.RectPixels() * 4, 0.0);
   for (FrameEngine* engine : frame.Engines)
   {
     engine->RenderColour(parameters, moments.data(), colourSums.data());
@@ -175,8 +175,8 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
 
   if (group.IsDisplay())
   {
-    result.RGBA.assign(4 * frame.Pixels(), 0.0f);
-    ResolveImage(parameters.Resolve, frame.Pixels(), moments.data(), stride, colourSums.data(),
+    result.RGBA.assign(4 * frame.RectPixels(), 0.0f);
+    ResolveImage(parameters.Resolve, frame.RectPixels(), moments.data(), stride, colourSums.data(),
       result.RGBA.data());
     record.Clock.Lap("resolve");
     result.Moments.swap(moments);

@@ -28,7 +28,7 @@ long long ExchangeCounts(const ProcessGroup& group, const std::vector<SegmentIma
   std::vector<long long>& counts)
 {
   const int processes = group.Processes;
-  const int rectWidth = frame.Rect.Pixels() > 0 ? frame.Rect.Width() : 0;
+  const int rectWidth = frame.RectWidth();
   std::vector<long long> mine(processes + 1, 0);
   long long kMin = std::numeric_limits<long long>::max();
   for (int o = 0; o < processes; ++o)
@@ -37,7 +37,7 @@ long long ExchangeCounts(const ProcessGroup& group, const std::vector<SegmentIma
     {
       for (const SegmentImage& image : images)
       {
-        const int64_t first = static_cast<int64_t>(j) * frame.Width + frame.Rect.I0;
+        const int64_t first = static_cast<int64_t>(j) * rectWidth;
         const int64_t begin = image.Offsets[first];
         const int64_t end = image.Offsets[first + rectWidth];
         mine[o] += end - begin;
@@ -73,7 +73,7 @@ Outgoing PackForOwners(const std::vector<SegmentImage>& images, const CompositeF
   const SegmentStrips& strips, const std::vector<long long>& counts, int rank, long long kBase)
 {
   const int processes = strips.Processes;
-  const int rectWidth = frame.Rect.Pixels() > 0 ? frame.Rect.Width() : 0;
+  const int rectWidth = frame.RectWidth();
   Outgoing outgoing(processes);
   for (int o = 0; o < processes; ++o)
   {
@@ -81,10 +81,10 @@ Outgoing PackForOwners(const std::vector<SegmentImage>& images, const CompositeF
       static_cast<size_t>(counts[static_cast<size_t>(rank) * (processes + 1) + o]));
     for (int j = strips.Begin(o); j < strips.Begin(o + 1); ++j)
     {
-      for (int i = frame.Rect.I0; i < frame.Rect.I0 + rectWidth; ++i)
+      for (int i = 0; i < rectWidth; ++i)
       {
-        const int64_t pixel = static_cast<int64_t>(j) * frame.Width + i;
-        const int32_t local = (j - strips.Begin(o)) * rectWidth + (i - frame.Rect.I0);
+        const int64_t pixel = static_cast<int64_t>(j) * rectWidth + i;
+        const int32_t local = (j - strips.Begin(o)) * rectWidth + i;
         for (const SegmentImage& image : images)
         {
           for (int64_t s = image.Offsets[pixel]; s < image.Offsets[pixel + 1]; ++s)
@@ -215,22 +215,21 @@ SegmentStatistics AllStatistics(const ProcessGroup& group, const SegmentStatisti
 void RunSegmentCompositing(
   const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result)
 {
-  const ScreenRect& rect = frame.Rect;
-  const int rectWidth = rect.Pixels() > 0 ? rect.Width() : 0;
-  const SegmentStrips strips{ rect.J0, rect.Pixels() > 0 ? rect.Height() : 0, group.Processes };
+  const int rectWidth = frame.RectWidth();
+  const SegmentStrips strips{ 0, frame.RectHeight(), group.Processes };
 
   // 1. This process's segments, per volume.
   std::vector<SegmentImage> images(frame.Engines.size());
   for (size_t v = 0; v < images.size(); ++v)
   {
     frame.Engines[v]->RenderSegments(images[v]);
-    if (images[v].Width != frame.Width || images[v].Height != frame.Height)
+    if (images[v].Width != rectWidth || images[v].Height != frame.RectHeight())
     {
-      images[v].Reset(frame.Width, frame.Height); // a process that could not prepare
+      images[v].Reset(rectWidth, frame.RectHeight()); // a process that could not prepare
     }
   }
   record.Clock.Lap("segments");
-  for (size_t p = 0; p < frame.Pixels(); ++p)
+  for (size_t p = 0; p < frame.RectPixels(); ++p)
   {
     bool any = false;
     for (const SegmentImage& image : images)
@@ -266,11 +265,8 @@ void RunSegmentCompositing(
 
   if (group.IsDisplay())
   {
-    result.RGBA.assign(4 * frame.Pixels(), 0.0f);
-    if (rect.Pixels() > 0)
-    {
-      Unpack(packed.data(), frame.Width, rect, 4, result.RGBA.data());
-    }
+    result.RGBA.swap(packed);
+    result.RGBA.resize(4 * frame.RectPixels(), 0.0f);
   }
 }
 

@@ -263,7 +263,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height, frame.Aspect());
   const apc::ScreenRect& r = frame.Rect;
   frame.Tiles =
-    r.Pixels() > 0 ? apc::TileGrid(frame.Width, r.I0, r.J0, r.I1, r.J1) : apc::TileGrid();
+    r.Pixels() > 0 ? apc::TileGrid(r.Width(), 0, 0, r.Width(), r.Height()) : apc::TileGrid();
   // The frame's moment settings: the agreed number, the first volume's beta, bias and resolve.
   frame.Moments = mappers.front()->GetMomentParameters();
   frame.Moments.Moments = agreed.MaxMoments;
@@ -275,12 +275,12 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   return true;
 }
 
-// Step 2: the display process's (composited) depth, where every ray must stop, on every
-// process: only the tiles of the screen rectangle where it has opaque geometry travel.
+// Step 2: the display process's (composited) depth over the screen rectangle, where every
+// ray must stop, on every process: only the tiles where it has opaque geometry travel.
 std::vector<float> ShareDepth(
   const apc::ProcessGroup& group, const apc::CompositeFrame& frame, apc::FrameRecord& record)
 {
-  std::vector<float> depth(frame.Pixels(), 1.0f);
+  std::vector<float> depth(frame.RectPixels(), 1.0f);
   const apc::ScreenRect& rect = frame.Rect;
   if (rect.Pixels() == 0)
   {
@@ -303,7 +303,7 @@ std::vector<float> ShareDepth(
     {
       for (int i = i0; i < i1; ++i)
       {
-        float& d = depth[static_cast<size_t>(j / r) * frame.Width + i / r];
+        float& d = depth[static_cast<size_t>(j / r - rect.J0) * rect.Width() + (i / r - rect.I0)];
         d = std::min(d, packed[static_cast<size_t>(j - j0) * (i1 - i0) + (i - i0)]);
       }
     }
@@ -370,6 +370,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   image.Y0 = frame.Y0;
   image.Aspect = frame.Aspect();
   image.SampleFactor = frame.SampleFactor;
+  image.Crop = frame.Rect;
   for (size_t v = 0; v < volumes.size(); ++v)
   {
     auto* mapper = static_cast<vtkAPCVolumeMapper*>(volumes[v]->GetMapper());
@@ -391,7 +392,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   switch (mode)
   {
     case LOCAL_EXACT:
-      result.RGBA.assign(4 * frame.Pixels(), 0.0f);
+      result.RGBA.assign(4 * frame.RectPixels(), 0.0f);
       for (apc::FrameEngine* engine : frame.Engines)
       {
         engine->RenderExact(result.RGBA.data());
@@ -435,24 +436,45 @@ void vtkAPCCompositePass::FinishFrame(
   const apc::ProcessGroup& group, const apc::CompositeFrame& frame, const apc::FrameResult& result)
 {
   Internals& internal = *this->Internal;
-  if (!result.RGBA.empty())
+  const apc::ScreenRect& rect = frame.Rect;
+  if (!result.RGBA.empty() && rect.Pixels() > 0)
   {
-    apc::FloatImages images;
-    images.RGBA = result.RGBA.data();
-    images.Moments = result.Moments.empty() ? nullptr : result.Moments.data();
-    images.MomentComponents = frame.Moments.Moments + 1;
-    images.ColourSums = result.ColourSums.empty() ? nullptr : result.ColourSums.data();
-    for (const apc::FrameEngine* engine : frame.Engines)
+    const bool writing = group.IsDisplay() && this->ImageFileName && *this->ImageFileName;
+    if (this->KeepLastImage || writing)
     {
-      images.SampleCount += engine->GetSampleCount();
+      apc::FloatImages images;
+      images.RGBA = result.RGBA.data();
+      images.Moments = result.Moments.empty() ? nullptr : result.Moments.data();
+      images.MomentComponents = frame.Moments.Moments + 1;
+      images.ColourSums = result.ColourSums.empty() ? nullptr : result.ColourSums.data();
+      for (const apc::FrameEngine* engine : frame.Engines)
+      {
+        images.SampleCount += engine->GetSampleCount();
+      }
+      apc::StoreFloatImages(internal.Image, frame.Width, frame.Height, rect, images);
     }
-    apc::StoreFloatImages(internal.Image, frame.Width, frame.Height, images);
-    apc::BlendIntoWindow(frame.Renderer, frame.X0, frame.Y0, frame.ViewWidth, frame.ViewHeight,
-      frame.Width, frame.Height, result.RGBA.data());
+    if (frame.Reduction == 1)
+    {
+      apc::BlendIntoWindow(frame.Renderer, frame.X0 + rect.I0, frame.Y0 + rect.J0, rect.Width(),
+        rect.Height(), rect.Width(), rect.Height(), result.RGBA.data());
+    }
+    else
+    {
+      // A reduced image is stretched over the viewport as a whole, so that its interpolation
+      // at the rectangle's edges is the same as with the full image (it is small: 1/r^2).
+      std::vector<float> full(4 * frame.Pixels(), 0.0f);
+      apc::Unpack(result.RGBA.data(), frame.Width, rect, 4, full.data());
+      apc::BlendIntoWindow(frame.Renderer, frame.X0, frame.Y0, frame.ViewWidth, frame.ViewHeight,
+        frame.Width, frame.Height, full.data());
+    }
     internal.Record.Clock.Lap("blend");
-    if (group.IsDisplay())
+    if (writing)
     {
       this->WriteImage();
+    }
+    if (!this->KeepLastImage)
+    {
+      internal.Image->Initialize();
     }
   }
   if (this->Verbosity < 1 || !group.IsDisplay())
@@ -517,6 +539,7 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Volumes: " << this->Internal->Volumes.size() << "\n";
   os << indent << "DisplayProcess: " << this->DisplayProcess << "\n";
   os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
+  os << indent << "KeepLastImage: " << this->KeepLastImage << "\n";
   const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
   os << indent << "CompositeMode: " << modes[this->CompositeMode] << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";

@@ -243,9 +243,22 @@ public:
    */
   bool GetLastFrameFailed() const;
 
+  ///@{
   /**
-   * The last final float image on the display process (premultiplied RGBA of the volumes,
-   * before blending) and the global moments, as point arrays "RGBA" and "Moments".
+   * Keep each frame's final float image for GetLastImage(). Off by default: the image holds
+   * ~72 bytes per view pixel (RGBA, moments, colour sums) on the display process, which a
+   * frame does not otherwise need once blended (an ImageFileName is written either way).
+   */
+  vtkSetMacro(KeepLastImage, bool);
+  vtkGetMacro(KeepLastImage, bool);
+  vtkBooleanMacro(KeepLastImage, bool);
+  ///@}
+
+  /**
+   * With KeepLastImage, the last final float image on the display process (premultiplied
+   * RGBA of the volumes, before blending, zero outside the data's screen rectangle) and the
+   * global moments and colour sums, as point arrays "RGBA", "Moments" and "ColourSums";
+   * empty otherwise.
    */
   vtkImageData* GetLastImage();
 
@@ -265,6 +278,7 @@ protected:
   vtkMultiProcessController* Controller = nullptr;
   int DisplayProcess = 0;
   bool CompositeInDouble = false;
+  bool KeepLastImage = false;
   int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;

@@ -95,8 +95,15 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     engine.GetInputReport().Emit(this);
   }
-  if (!usable ||
-    !engine.Prepare(this, ren, vol, nullptr, nullptr, apc::ImageSetup::FullQuality(ren)) ||
+  // Only the pixels whose rays can meet the cells are rendered: the buffers follow the
+  // data's footprint on screen.
+  apc::ImageSetup image = apc::ImageSetup::FullQuality(ren);
+  double bounds[6];
+  if (usable && engine.GetLocalBounds(bounds))
+  {
+    image.Crop = apc::ScreenRectOf(ren, bounds, image.Width, image.Height);
+  }
+  if (!usable || !engine.Prepare(this, ren, vol, nullptr, nullptr, image) ||
     engine.GetNumberOfCells() == 0)
   {
     this->Internal->Image->Initialize();
@@ -138,9 +145,10 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   images.ColourSums = colourSums.empty() ? nullptr : colourSums.data();
   images.SegmentCount = segments.empty() ? nullptr : segments.data();
   images.SampleCount = engine.GetSampleCount();
-  apc::StoreFloatImages(this->Internal->Image, engine.GetWidth(), engine.GetHeight(), images);
-  apc::BlendIntoWindow(ren, engine.GetX0(), engine.GetY0(), engine.GetWidth(), engine.GetHeight(),
-    engine.GetWidth(), engine.GetHeight(), rgba.data());
+  apc::StoreFloatImages(this->Internal->Image, image.Width, image.Height, image.Crop, images);
+  const apc::ScreenRect& crop = engine.GetCrop();
+  apc::BlendIntoWindow(ren, engine.GetX0() + crop.I0, engine.GetY0() + crop.J0, engine.GetWidth(),
+    engine.GetHeight(), engine.GetWidth(), engine.GetHeight(), rgba.data());
   engine.GetClock().Lap("blend");
 }
 

@@ -36,6 +36,8 @@ RayCamera::RayCamera(const Vec& position, const Vec& focalPoint, const Vec& view
   , Center(windowCenter)
   , Width(std::max(width, 1))
   , Height(std::max(height, 1))
+  , FullWidth(std::max(width, 1))
+  , FullHeight(std::max(height, 1))
   , Near(nearClip)
   , Far(farClip)
 {
@@ -45,15 +47,28 @@ RayCamera::RayCamera(const Vec& position, const Vec& focalPoint, const Vec& view
   this->Up = Cross(this->Right, this->Forward);
   const double pi = 3.14159265358979323846;
   this->HalfHeight = parallel ? parallelScale : std::tan(0.5 * viewAngle * pi / 180.0);
-  this->Aspect = aspect > 0 ? aspect : static_cast<double>(this->Width) / this->Height;
+  this->Aspect = aspect > 0 ? aspect : static_cast<double>(this->FullWidth) / this->FullHeight;
+}
+
+//------------------------------------------------------------------------------
+RayCamera RayCamera::Cropped(int i0, int j0, int width, int height) const
+{
+  RayCamera crop(*this);
+  crop.CropI0 = this->CropI0 + i0;
+  crop.CropJ0 = this->CropJ0 + j0;
+  crop.Width = std::max(width, 1);
+  crop.Height = std::max(height, 1);
+  return crop;
 }
 
 //------------------------------------------------------------------------------
 Ray RayCamera::PixelRay(int i, int j) const
 {
+  const double gi = i + this->CropI0 + 0.5;
+  const double gj = j + this->CropJ0 + 0.5;
   const double x =
-    (2.0 * (i + 0.5) / this->Width - 1.0 + this->Center[0]) * this->HalfHeight * this->Aspect;
-  const double y = (2.0 * (j + 0.5) / this->Height - 1.0 + this->Center[1]) * this->HalfHeight;
+    (2.0 * gi / this->FullWidth - 1.0 + this->Center[0]) * this->HalfHeight * this->Aspect;
+  const double y = (2.0 * gj / this->FullHeight - 1.0 + this->Center[1]) * this->HalfHeight;
   Ray ray;
   if (this->Parallel)
   {
@@ -88,9 +103,11 @@ bool RayCamera::Project(const Vec& x, double& px, double& py) const
     }
     scale *= depth;
   }
-  px = (Dot(v, this->Right) / (scale * this->Aspect) - this->Center[0] + 1.0) * 0.5 * this->Width -
-    0.5;
-  py = (Dot(v, this->Up) / scale - this->Center[1] + 1.0) * 0.5 * this->Height - 0.5;
+  px =
+    (Dot(v, this->Right) / (scale * this->Aspect) - this->Center[0] + 1.0) * 0.5 * this->FullWidth -
+    0.5 - this->CropI0;
+  py = (Dot(v, this->Up) / scale - this->Center[1] + 1.0) * 0.5 * this->FullHeight - 0.5 -
+    this->CropJ0;
   return std::isfinite(px) && std::isfinite(py);
 }
 

@@ -8,6 +8,11 @@
 // full image's rays through those pixels. The aspect is the viewport's: an image rendered at
 // reduced resolution covers the same frustum with fewer, larger pixels.
 //
+// A cropped camera (Cropped) is a rectangle of another's pixels: its pixel (i, j) has the same
+// ray as the full camera's pixel (i + I0, j + J0). Rendering only the pixels whose rays can
+// meet the data keeps every per-pixel buffer the size of the data's footprint on screen, not
+// of the view (issue 14: 8192^2 views on a few ranks).
+//
 // t is the world-space distance along a ray from its origin: the eye for a perspective camera,
 // the plane through the eye perpendicular to the view direction for a parallel one. The
 // ray marcher samples at t_k = k * spacing, the global sample lattice that every rank shares.
@@ -37,8 +42,17 @@ public:
     int width, int height, double nearClip, double farClip,
     const std::array<double, 2>& windowCenter = { 0.0, 0.0 }, double aspect = 0.0);
 
+  // The camera of the pixels [i0, i0 + width) x [j0, j0 + height) of this one (clamped to
+  // at least one pixel): same frustum, same rays, pixel indices relative to (i0, j0).
+  RayCamera Cropped(int i0, int j0, int width, int height) const;
+
+  // The pixels this camera renders (the crop's size; the full image if not cropped).
   int GetWidth() const { return this->Width; }
   int GetHeight() const { return this->Height; }
+  // Where pixel (0, 0) lies in the uncropped image: global pixel (i + I0, j + J0) is what
+  // must not depend on the crop (the lattice jitter's pattern, for one).
+  int GetCropI0() const { return this->CropI0; }
+  int GetCropJ0() const { return this->CropJ0; }
   bool IsParallel() const { return this->Parallel; }
   const std::array<double, 3>& GetPosition() const { return this->Position; }
   const std::array<double, 3>& GetViewDirection() const { return this->Forward; }
@@ -69,6 +83,10 @@ private:
   std::array<double, 2> Center; // vtkCamera's WindowCenter
   int Width;
   int Height;
+  int FullWidth; // the uncropped image: the pixel size in the image plane
+  int FullHeight;
+  int CropI0 = 0;
+  int CropJ0 = 0;
   double Near;
   double Far;
 };

@@ -363,7 +363,8 @@ void VolumeRayMarcher::March(
           std::copy(ray.Direction.begin(), ray.Direction.end(), r.D);
           r.End = this->RayEnds[tile.ImagePixel(p, grid.Width)];
           r.Offset = this->LatticeJitter
-            ? LatticeOffset(tile.I0 + p % tile.Width(), tile.J0 + p / tile.Width())
+            ? LatticeOffset(this->Camera->GetCropI0() + tile.I0 + p % tile.Width(),
+                this->Camera->GetCropJ0() + tile.J0 + p / tile.Width())
             : 0.0;
         }
         samples.local() += walker.Tile(rays, tile, visitor);

@@ -149,6 +149,7 @@ int main(int argc, char* argv[])
   vtkNew<vtkRenderWindow> window;
   vtkNew<vtkRenderer> renderer;
   vtkNew<vtkAPCCompositePass> pass;
+  pass->KeepLastImageOn(); // compared with one process's image
   apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetInputData(piece);

@@ -89,3 +89,43 @@ TEST(RayCamera, ReducedImageCoversTheSameFrustum)
   }
 }
 }
+
+// A cropped camera renders a rectangle of the full image's pixels with the very same rays
+// (bit for bit: the pass renders only the data's screen rectangle and must equal a full
+// render), projects onto crop-relative pixels, and knows where its pixels lie in the full
+// image.
+TEST(RayCamera, CropIsARectangleOfTheSamePixels)
+{
+  for (bool parallel : { false, true })
+  {
+    const apc::RayCamera full({ 1, 2, 9 }, { 0, 0, 0 }, { 0, 1, 0 }, 30.0, parallel, 2.5, 40, 30,
+      0.1, 100.0, { 0.25, -0.5 }, 1.6);
+    const apc::RayCamera crop = full.Cropped(7, 5, 13, 11);
+    EXPECT_EQ(crop.GetWidth(), 13);
+    EXPECT_EQ(crop.GetHeight(), 11);
+    const apc::RayCamera inner = crop.Cropped(2, 3, 4, 4);
+    EXPECT_EQ(inner.GetCropI0(), 9);
+    EXPECT_EQ(inner.GetCropJ0(), 8);
+    for (int j = 0; j < 11; ++j)
+    {
+      for (int i = 0; i < 13; ++i)
+      {
+        const apc::Ray a = crop.PixelRay(i, j);
+        const apc::Ray b = full.PixelRay(i + 7, j + 5);
+        ASSERT_EQ(a.Origin, b.Origin);
+        ASSERT_EQ(a.Direction, b.Direction);
+        ASSERT_EQ(crop.DistanceFromDepth(i, j, 0.5), full.DistanceFromDepth(i + 7, j + 5, 0.5));
+        const std::array<double, 3> p = { a.Origin[0] + 5 * a.Direction[0],
+          a.Origin[1] + 5 * a.Direction[1], a.Origin[2] + 5 * a.Direction[2] };
+        double px = 0;
+        double py = 0;
+        ASSERT_TRUE(crop.Project(p, px, py));
+        EXPECT_NEAR(px, i, 1e-9);
+        EXPECT_NEAR(py, j, 1e-9);
+      }
+    }
+    const apc::Ray a = inner.PixelRay(1, 2);
+    const apc::Ray b = full.PixelRay(10, 10);
+    EXPECT_EQ(a.Direction, b.Direction);
+  }
+}

@@ -67,6 +67,7 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const apctest
   mapper->SetInputData(piece);
   vtkNew<vtkVolume> volume;
   ConfigureVolume(volume, mapper, scene);
+  pass->KeepLastImageOn(); // the image compared below
   pass->RemoveAllVolumes();
   if (withVolume)
   {

@@ -62,6 +62,7 @@ int main(int argc, char* argv[])
   const int ranks = controller->GetNumberOfProcesses();
   {
     vtkNew<vtkAPCCompositePass> pass;
+    pass->KeepLastImageOn();
     vtkNew<vtkRenderWindow> window;
     vtkNew<vtkRenderer> renderer;
     apctest::SetUpCompositeWindow(window, renderer, 48, pass, controller);
