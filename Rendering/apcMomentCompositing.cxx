@@ -21,31 +21,49 @@ namespace apc
 {
 namespace
 {
+// The packed copies of a large image are made and summed this many pixels at a time
+// (~160 MB of temporaries at 4 moments), so that they stay a bounded size at any view size;
+// a 1024^2 or 1448^2 frame still sends each buffer in one message.
+constexpr size_t kChunkPixels = size_t(1) << 21;
+
 // Sums the marked tiles of an image over all processes, in precision T: onto every process
 // (allreduce) or onto the display process (reduce). Returns the bytes this process sent.
 template <class T>
 double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
   const std::vector<unsigned char>& mask, std::vector<double>& image, int components,
-  bool everywhere)
+  bool everywhere, FrameRecord& record)
 {
-  const vtkIdType count = static_cast<vtkIdType>(tiles.PixelsIn(mask) * components);
-  std::vector<T> send(count);
-  std::vector<T> received(count);
-  tiles.Pack(mask, image.data(), components, send.data());
-  if (everywhere)
+  const std::vector<size_t> chunks = tiles.Chunks(mask, kChunkPixels);
+  double bytes = 0;
+  for (size_t c = 0; c + 1 < chunks.size(); ++c)
   {
-    group.Controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
+    const size_t first = chunks[c];
+    const size_t last = chunks[c + 1];
+    const vtkIdType count = static_cast<vtkIdType>(tiles.PixelsIn(mask, first, last) * components);
+    if (count == 0)
+    {
+      continue;
+    }
+    std::vector<T> send(count);
+    std::vector<T> received(count);
+    tiles.Pack(mask, image.data(), components, send.data(), first, last);
+    if (everywhere)
+    {
+      group.Controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
+    }
+    else
+    {
+      group.Controller->Reduce(
+        send.data(), received.data(), count, vtkCommunicator::SUM_OP, group.Display);
+    }
+    if (everywhere || group.IsDisplay())
+    {
+      tiles.Unpack(mask, received.data(), components, image.data(), first, last);
+    }
+    bytes += static_cast<double>(sizeof(T)) * count;
+    ++record.MessagesSent;
   }
-  else
-  {
-    group.Controller->Reduce(
-      send.data(), received.data(), count, vtkCommunicator::SUM_OP, group.Display);
-  }
-  if (everywhere || group.IsDisplay())
-  {
-    tiles.Unpack(mask, received.data(), components, image.data());
-  }
-  return static_cast<double>(sizeof(T)) * count;
+  return bytes;
 }
 
 // The global moments of the marked tiles onto every process, through fixed point: a MAX
@@ -54,45 +72,70 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
   const std::vector<unsigned char>& mask, std::vector<double>& moments, int stride,
   FrameRecord& record)
 {
+  const std::vector<size_t> chunks = tiles.Chunks(mask, kChunkPixels);
   const size_t pixels = tiles.PixelsIn(mask);
-  std::vector<double> packed(pixels * stride);
-  tiles.Pack(mask, moments.data(), stride, packed.data());
   std::vector<unsigned char> exponents(pixels);
-  for (size_t p = 0; p < pixels; ++p)
+  std::vector<double> packed;
+  for (size_t c = 0, offset = 0; c + 1 < chunks.size(); ++c)
   {
-    exponents[p] = fixedpoint::ExponentByte(packed[p * stride]);
+    packed.resize(tiles.PixelsIn(mask, chunks[c], chunks[c + 1]) * stride);
+    tiles.Pack(mask, moments.data(), stride, packed.data(), chunks[c], chunks[c + 1]);
+    for (size_t p = 0; p < packed.size() / stride; ++p)
+    {
+      exponents[offset + p] = fixedpoint::ExponentByte(packed[p * stride]);
+    }
+    offset += packed.size() / stride;
   }
   std::vector<unsigned char> agreed(pixels);
   group.Controller->AllReduce(
     exponents.data(), agreed.data(), static_cast<vtkIdType>(pixels), vtkCommunicator::MAX_OP);
+  exponents = std::vector<unsigned char>();
   ++record.MessagesSent;
 
   const int headroom = fixedpoint::HeadroomBits(group.Processes);
-  std::vector<int32_t> codes(packed.size(), 0);
-  for (size_t p = 0; p < pixels; ++p)
+  double bytes = static_cast<double>(pixels);
+  for (size_t c = 0, offset = 0; c + 1 < chunks.size(); ++c)
   {
-    if (agreed[p])
+    const size_t first = chunks[c];
+    const size_t last = chunks[c + 1];
+    const size_t count = tiles.PixelsIn(mask, first, last);
+    if (count == 0)
     {
-      const double scale = fixedpoint::Scale(agreed[p], headroom);
-      for (int k = 0; k < stride; ++k)
+      continue;
+    }
+    packed.resize(count * stride);
+    tiles.Pack(mask, moments.data(), stride, packed.data(), first, last);
+    std::vector<int32_t> codes(packed.size(), 0);
+    for (size_t p = 0; p < count; ++p)
+    {
+      const unsigned char e = agreed[offset + p];
+      if (e)
       {
-        codes[p * stride + k] = fixedpoint::Encode(packed[p * stride + k], scale, headroom);
+        const double scale = fixedpoint::Scale(e, headroom);
+        for (int k = 0; k < stride; ++k)
+        {
+          codes[p * stride + k] = fixedpoint::Encode(packed[p * stride + k], scale, headroom);
+        }
       }
     }
-  }
-  std::vector<int32_t> sums(codes.size());
-  group.Controller->AllReduce(
-    codes.data(), sums.data(), static_cast<vtkIdType>(codes.size()), vtkCommunicator::SUM_OP);
-  for (size_t p = 0; p < pixels; ++p)
-  {
-    const double scale = agreed[p] ? fixedpoint::Scale(agreed[p], headroom) : 1.0;
-    for (int k = 0; k < stride; ++k)
+    std::vector<int32_t> sums(codes.size());
+    group.Controller->AllReduce(
+      codes.data(), sums.data(), static_cast<vtkIdType>(codes.size()), vtkCommunicator::SUM_OP);
+    ++record.MessagesSent;
+    for (size_t p = 0; p < count; ++p)
     {
-      packed[p * stride + k] = fixedpoint::Decode(sums[p * stride + k], scale);
+      const unsigned char e = agreed[offset + p];
+      const double scale = e ? fixedpoint::Scale(e, headroom) : 1.0;
+      for (int k = 0; k < stride; ++k)
+      {
+        packed[p * stride + k] = fixedpoint::Decode(sums[p * stride + k], scale);
+      }
     }
+    tiles.Unpack(mask, packed.data(), stride, moments.data(), first, last);
+    offset += count;
+    bytes += static_cast<double>(sizeof(int32_t) * codes.size());
   }
-  tiles.Unpack(mask, packed.data(), stride, moments.data());
-  return static_cast<double>(pixels + sizeof(int32_t) * codes.size());
+  return bytes;
 }
 
 // The union of every process's covered tiles, on every process.
@@ -142,16 +185,14 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     if (exchange)
     {
       record.BytesSent += inDouble
-        ? SumTiles<double>(group, frame.Tiles, covered, image, components, everywhere)
-        : SumTiles<float>(group, frame.Tiles, covered, image, components, everywhere);
-      ++record.MessagesSent;
+        ? SumTiles<double>(group, frame.Tiles, covered, image, components, everywhere, record)
+        : SumTiles<float>(group, frame.Tiles, covered, image, components, everywhere, record);
     }
   };
   if (exchange && !inDouble)
   {
     record.BytesSent +=
       SumMomentsInFixedPoint(group, frame.Tiles, covered, moments, stride, record);
-    ++record.MessagesSent;
   }
   else
   {

@@ -361,7 +361,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels()); // APC: fewer
   internal.LastReduction = frame.Reduction;
   internal.LastInteractive = frame.Interactive;
-  const std::vector<float> depth = ShareDepth(group, frame, internal.Record);
+  std::vector<float> depth = ShareDepth(group, frame, internal.Record);
   internal.Record.Clock.Lap("depth");
   apc::ImageSetup image;
   image.Width = frame.Width;
@@ -377,6 +377,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     frame.Engines[v]->Prepare(
       mapper, frame.Renderer, volumes[v], frame.Bounds, depth.data(), image);
   }
+  depth = std::vector<float>(); // the engines hold their rays' ends
 
   int mode = this->CompositeMode;
   if (mode == AUTO)

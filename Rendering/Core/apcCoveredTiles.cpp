@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "apcCoveredTiles.h"
 
+#include <algorithm>
+
 namespace apc
 {
 
@@ -19,10 +21,10 @@ TileGrid::TileGrid(int width, int i0, int j0, int i1, int j1, int tileSize)
   }
 }
 
-size_t TileGrid::PixelsIn(const std::vector<unsigned char>& mask) const
+size_t TileGrid::PixelsIn(const std::vector<unsigned char>& mask, size_t first, size_t last) const
 {
   size_t pixels = 0;
-  for (size_t t = 0; t < mask.size() && t < this->Tiles(); ++t)
+  for (size_t t = first; t < mask.size() && t < this->Tiles() && t < last; ++t)
   {
     if (mask[t])
     {
@@ -30,6 +32,30 @@ size_t TileGrid::PixelsIn(const std::vector<unsigned char>& mask) const
     }
   }
   return pixels;
+}
+
+std::vector<size_t> TileGrid::Chunks(const std::vector<unsigned char>& mask, size_t maxPixels) const
+{
+  std::vector<size_t> bounds{ 0 };
+  size_t pixels = 0;
+  const size_t tiles = std::min(mask.size(), this->Tiles());
+  for (size_t t = 0; t < tiles; ++t)
+  {
+    if (!mask[t])
+    {
+      continue;
+    }
+    size_t inTile = 0;
+    this->ForEachRow(t, [&](size_t, size_t count) { inTile += count; });
+    if (pixels > 0 && pixels + inTile > maxPixels)
+    {
+      bounds.push_back(t);
+      pixels = 0;
+    }
+    pixels += inTile;
+  }
+  bounds.push_back(std::max(tiles, bounds.back()));
+  return bounds;
 }
 
 } // namespace apc

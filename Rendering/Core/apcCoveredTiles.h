@@ -29,17 +29,24 @@ public:
   template <class Predicate>
   std::vector<unsigned char> Mark(Predicate pixelIsCovered) const;
 
-  // The pixels of the marked tiles: the length, in pixels, of a packed buffer.
-  size_t PixelsIn(const std::vector<unsigned char>& mask) const;
+  // The pixels of the marked tiles among tiles [first, last): the length, in pixels, of a
+  // packed buffer.
+  size_t PixelsIn(const std::vector<unsigned char>& mask, size_t first = 0,
+    size_t last = static_cast<size_t>(-1)) const;
 
-  // Copies the marked tiles' pixels (components values each) from the full image to packed,
-  // tile by tile in row-major tile order, and back.
+  // Copies the marked tiles' pixels (components values each) among tiles [first, last) from
+  // the full image to packed, tile by tile in row-major tile order, and back.
   template <class Packed, class Full>
-  void Pack(
-    const std::vector<unsigned char>& mask, const Full* full, int components, Packed* packed) const;
+  void Pack(const std::vector<unsigned char>& mask, const Full* full, int components,
+    Packed* packed, size_t first = 0, size_t last = static_cast<size_t>(-1)) const;
   template <class Packed, class Full>
-  void Unpack(
-    const std::vector<unsigned char>& mask, const Packed* packed, int components, Full* full) const;
+  void Unpack(const std::vector<unsigned char>& mask, const Packed* packed, int components,
+    Full* full, size_t first = 0, size_t last = static_cast<size_t>(-1)) const;
+
+  // The tiles cut into consecutive ranges [bounds[c], bounds[c + 1]) whose marked tiles hold
+  // at most maxPixels pixels (at least one marked tile each): the chunks a large image is
+  // packed and summed in, so that the packed copies stay a bounded size whatever the view.
+  std::vector<size_t> Chunks(const std::vector<unsigned char>& mask, size_t maxPixels) const;
 
 private:
   // Calls visit(row start in the image, pixels in the row) for each row of tile t.
@@ -87,10 +94,10 @@ std::vector<unsigned char> TileGrid::Mark(Predicate pixelIsCovered) const
 }
 
 template <class Packed, class Full>
-void TileGrid::Pack(
-  const std::vector<unsigned char>& mask, const Full* full, int components, Packed* packed) const
+void TileGrid::Pack(const std::vector<unsigned char>& mask, const Full* full, int components,
+  Packed* packed, size_t first, size_t last) const
 {
-  for (size_t t = 0; t < mask.size(); ++t)
+  for (size_t t = first; t < mask.size() && t < last; ++t)
   {
     if (mask[t])
     {
@@ -108,10 +115,10 @@ void TileGrid::Pack(
 }
 
 template <class Packed, class Full>
-void TileGrid::Unpack(
-  const std::vector<unsigned char>& mask, const Packed* packed, int components, Full* full) const
+void TileGrid::Unpack(const std::vector<unsigned char>& mask, const Packed* packed, int components,
+  Full* full, size_t first, size_t last) const
 {
-  for (size_t t = 0; t < mask.size(); ++t)
+  for (size_t t = first; t < mask.size() && t < last; ++t)
   {
     if (mask[t])
     {

@@ -127,3 +127,48 @@ TEST(CoveredTiles, PackedBuffersOfDifferentImagesLineUp)
 }
 
 } // namespace
+
+// Large images are packed and summed chunk by chunk: the chunks cover the marked tiles once,
+// in order, each within the pixel budget (a lone tile may exceed it), and packing them one
+// after the other gives the same buffer as packing everything at once.
+TEST(CoveredTiles, ChunksPartitionTheMarkedTilesInOrder)
+{
+  std::vector<unsigned char> mask(kGrid.Tiles(), 0);
+  mask[0] = mask[1] = mask[3] = mask[5] = mask[6] = mask[11] = 1;
+  std::vector<double> full(static_cast<size_t>(kWidth) * kHeight);
+  for (size_t p = 0; p < full.size(); ++p)
+  {
+    full[p] = static_cast<double>(p);
+  }
+  std::vector<double> whole(kGrid.PixelsIn(mask));
+  kGrid.Pack(mask, full.data(), 1, whole.data());
+  for (size_t budget : { size_t(1), size_t(64), size_t(100), size_t(128), size_t(10000) })
+  {
+    const std::vector<size_t> bounds = kGrid.Chunks(mask, budget);
+    ASSERT_GE(bounds.size(), 2u);
+    EXPECT_EQ(bounds.front(), 0u);
+    EXPECT_EQ(bounds.back(), kGrid.Tiles());
+    std::vector<double> chunked;
+    for (size_t c = 0; c + 1 < bounds.size(); ++c)
+    {
+      ASSERT_LT(bounds[c], bounds[c + 1]);
+      const size_t pixels = kGrid.PixelsIn(mask, bounds[c], bounds[c + 1]);
+      ASSERT_GT(pixels, 0u) << "an empty chunk";
+      ASSERT_TRUE(pixels <= budget || kGrid.PixelsIn(mask, bounds[c], bounds[c] + 1) == pixels)
+        << "chunk " << c << " over the budget " << budget;
+      std::vector<double> part(pixels);
+      kGrid.Pack(mask, full.data(), 1, part.data(), bounds[c], bounds[c + 1]);
+      chunked.insert(chunked.end(), part.begin(), part.end());
+      std::vector<double> back(full.size(), -1.0);
+      kGrid.Unpack(mask, part.data(), 1, back.data(), bounds[c], bounds[c + 1]);
+      for (size_t p = 0; p < back.size(); ++p)
+      {
+        ASSERT_TRUE(back[p] == -1.0 || back[p] == full[p]);
+      }
+    }
+    EXPECT_EQ(chunked, whole) << "budget " << budget;
+  }
+  EXPECT_EQ(kGrid.Chunks(mask, 10000).size(), 2u) << "one chunk when everything fits";
+  const std::vector<unsigned char> none(kGrid.Tiles(), 0);
+  EXPECT_EQ(kGrid.Chunks(none, 64), (std::vector<size_t>{ 0, kGrid.Tiles() }));
+}

@@ -27,6 +27,8 @@ parser.add_argument("--compare", help="reference .vti: the RGBA must match withi
 # ~1e-6 here.
 parser.add_argument("--tolerance", type=float, default=1e-5)
 parser.add_argument("--plane", action="store_true", help="add an opaque slice through the data")
+parser.add_argument("--sample-distance", type=float, default=0.0,
+                    help="APC sample distance (0: the scene's own)")
 parser.add_argument("--mode", default="APC",
                     choices=["APC", "Local exact", "Exact (segments)", "Auto"])
 parser.add_argument("--drop-array-on-rank", type=int, default=-1,
@@ -248,7 +250,7 @@ def main():
     pwf = GetOpacityTransferFunction(scene_array)
     pwf.Points = [lo, 0.05, 0.5, 0.0, hi, 0.6, 0.5, 0.0]
     display.ScalarOpacityUnitDistance = unit
-    display.APCSampleDistance = spacing
+    display.APCSampleDistance = args.sample_distance if args.sample_distance > 0 else spacing
     display.APCMode = args.mode
     display.APCVerbosity = 1
     if args.out:
