@@ -187,6 +187,7 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   }
   this->Marcher.SetNumberOfThreads(mapper->GetNumberOfThreads());
   this->Marcher.SetLatticeJitter(mapper->GetLatticeJitter());
+  this->Marcher.SetMaxSampleCacheBytes(static_cast<size_t>(mapper->GetSampleCacheSize()) << 20);
   this->Marcher.SetMesh(&this->Mesh);
   this->Marcher.SetView(*this->Camera, rayEnds.data());
   this->Samples = 0;

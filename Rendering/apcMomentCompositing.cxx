@@ -220,8 +220,11 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     ResolveImage(parameters.Resolve, frame.RectPixels(), moments.data(), stride, colourSums.data(),
       result.RGBA.data());
     record.Clock.Lap("resolve");
-    result.Moments.swap(moments);
-    result.ColourSums.swap(colourSums);
+    if (frame.KeepFloatImages)
+    {
+      result.Moments.swap(moments);
+      result.ColourSums.swap(colourSums);
+    }
   }
 }
 

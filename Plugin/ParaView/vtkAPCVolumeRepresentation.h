@@ -59,6 +59,7 @@ public:
   void SetSampleDistance(double distance);
   void SetNumberOfMoments(int moments);
   void SetLatticeJitter(bool jitter);
+  void SetSampleCacheSize(int megabytes);
   void SetOverestimation(double beta);
   void SetResolveMode(int mode);
   ///@}

@@ -298,6 +298,13 @@ VolumeRayMarcher::~VolumeRayMarcher() = default;
 
 void VolumeRayMarcher::SetMaxSampleCacheBytes(size_t bytes)
 {
+  if (bytes < this->Cache->MaxBytes)
+  {
+    // The memory kept from frame to frame may exceed the new budget: give it back.
+    this->Cache->Tiles = std::vector<std::vector<CachedSample>>();
+    this->Cache->Kept.clear();
+    this->Cache->Valid = false;
+  }
   this->Cache->MaxBytes = bytes;
 }
 

@@ -57,7 +57,8 @@ public:
 
   // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
   // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
-  // the tiles beyond the budget are marched again. 0 disables. Default 1 GiB.
+  // the tiles beyond the budget are marched again. 0 disables. Default 1 GiB. Lowering it
+  // frees the memory the cache holds.
   void SetMaxSampleCacheBytes(size_t bytes);
   // The share of the last AccumulateColour's samples replayed from the cache (0 to 1).
   double GetLastColourCacheShare() const { return this->LastColourCacheShare; }

@@ -20,6 +20,8 @@ parser.add_argument("--case", choices=["apc", "outline"], default="apc")
 parser.add_argument("--sample-distance", type=float, default=0.0,
                     help="APC sample distance (0: the scene's default for this benchmark)")
 parser.add_argument("--frames", type=int, default=1)
+parser.add_argument("--sample-cache", type=int, default=1024,
+                    help="APC Sample Cache (MB) per rank")
 args = parser.parse_args()
 
 
@@ -52,6 +54,8 @@ def main():
         GetOpacityTransferFunction(array).Points = [lo, 0.05, 0.5, 0.0, hi, 0.6, 0.5, 0.0]
         display.ScalarOpacityUnitDistance = unit
         display.APCSampleDistance = spacing
+        if args.sample_cache != 1024:  # the property exists since issue 14
+            display.APCSampleCacheSize = args.sample_cache
     else:
         display.Representation = "Outline"
     # paraview.simple resets the camera on a view's first render: that render shows nothing,

@@ -3,6 +3,7 @@
 #ifndef apcTestRender_h
 #define apcTestRender_h
 
+#include "apcFrameEngine.h"
 #include "apcTestScenes.h"
 #include "vtkAPCVolumeMapper.h"
 
@@ -35,6 +36,7 @@ struct Frame
   std::vector<int> SegmentCount;
   std::vector<unsigned char> Window; // what the window shows, RGB 8-bit
   double SampleDistance = 0;
+  int RenderedPixels = 0; // the mapper's buffers: the pixels whose rays can meet the data
   // Ray (origin, unit direction) of pixel (i, j), computed by VTK's own camera transforms.
   std::vector<std::array<double, 6>> Rays;
 };
@@ -56,6 +58,7 @@ inline Frame ReadFrame(vtkRenderWindow* window, vtkAPCVolumeMapper* mapper, cons
   frame.Width = view.Width;
   frame.Height = view.Height;
   frame.SampleDistance = mapper->GetLastSampleDistance();
+  frame.RenderedPixels = static_cast<int>(mapper->GetFrameEngine()->GetPixels());
   vtkImageData* image = mapper->GetLastImage();
   auto copy = [image](const char* name, auto& out)
   {

@@ -596,6 +596,19 @@ TEST(VolumeMapperInvariance, CachedAndRemarchedPassTwoAgree)
     }
     colours.push_back(colour);
   }
+  {
+    // Lowering the budget between frames frees the cache: the next frame marches again.
+    apc::VolumeRayMarcher marcher;
+    marcher.SetMesh(&mesh);
+    marcher.SetView(camera, nullptr);
+    std::vector<double> moments(pixels * 5, 0.0);
+    std::vector<double> colour(pixels * 4, 0.0);
+    marcher.AccumulateMoments<4>(table, warp, moments.data());
+    marcher.SetMaxSampleCacheBytes(0);
+    marcher.AccumulateColour<4>(table, warp, moments.data(), {}, colour.data());
+    EXPECT_EQ(marcher.GetLastColourCacheShare(), 0.0) << "the freed cache was replayed";
+    EXPECT_EQ(colour, colours[1]) << "remarched after the budget fell: as without a cache";
+  }
   double maxRelative = 0;
   double total = 0;
   for (size_t v = 0; v < colours[0].size(); ++v)
@@ -612,4 +625,64 @@ TEST(VolumeMapperInvariance, CachedAndRemarchedPassTwoAgree)
   // The cache keeps the warped depth in float (relative 6e-8); T(z) amplifies that a little.
   EXPECT_LE(maxRelative, 1e-5);
 }
+}
+
+// Memory follows the data's footprint on screen (issue 14): a block seen small in a large
+// view is rendered into buffers of its screen rectangle only, and the picture is the one the
+// full view would show (nothing drawn outside the rectangle, the same pixels inside as a
+// view that the block fills, shifted).
+TEST(VolumeMapperInvariance, BuffersFollowTheDataFootprint)
+{
+  auto grid =
+    apctest::MixedBlock(6, [](double x, double y, double z) { return 0.5 + 0.2 * x * y; });
+  apctest::View wide;
+  wide.Width = wide.Height = 256;
+  wide.ParallelScale = 6.0; // the [-1, 1]^3 block covers ~1/36 of the view
+  const apctest::Frame small = apctest::Render(
+    grid, [](vtkAPCVolumeMapper*) {}, {}, wide);
+  ASSERT_GT(small.RenderedPixels, 0);
+  EXPECT_LT(small.RenderedPixels, 256 * 256 / 20) << "buffers the size of the view";
+  int drawn = 0;
+  for (size_t p = 0; p < small.RGBA.size() / 4; ++p)
+  {
+    drawn += small.RGBA[4 * p + 3] > 0 ? 1 : 0;
+  }
+  EXPECT_GT(drawn, 256 * 256 / 50);
+  EXPECT_LE(drawn, small.RenderedPixels);
+  for (int mode : { vtkAPCVolumeMapper::EXACT, vtkAPCVolumeMapper::MBOIT })
+  {
+    // A 64^2 view with the same pixel size and centre has exactly the wide view's pixels
+    // [96, 160)^2 (pixel centres coincide): it must show the same picture there, and the
+    // wide view nothing elsewhere.
+    apctest::View tight = wide;
+    tight.Width = tight.Height = 64;
+    tight.ParallelScale = 1.5;
+    const auto configure = [mode](vtkAPCVolumeMapper* m) { m->SetMode(mode); };
+    const apctest::Frame a = apctest::Render(grid, configure, {}, wide);
+    const apctest::Frame b = apctest::Render(grid, configure, {}, tight);
+    double maxDiff = 0;
+    double outside = 0;
+    for (int j = 0; j < 256; ++j)
+    {
+      for (int i = 0; i < 256; ++i)
+      {
+        const bool in = i >= 96 && i < 160 && j >= 96 && j < 160;
+        for (int c = 0; c < 4; ++c)
+        {
+          const float v = a.RGBA[4 * (static_cast<size_t>(j) * 256 + i) + c];
+          if (in)
+          {
+            const float w = b.RGBA[4 * (static_cast<size_t>(j - 96) * 64 + (i - 96)) + c];
+            maxDiff = std::max(maxDiff, static_cast<double>(std::abs(v - w)));
+          }
+          else
+          {
+            outside = std::max(outside, static_cast<double>(std::abs(v)));
+          }
+        }
+      }
+    }
+    EXPECT_LT(maxDiff, 1e-5) << "mode " << mode;
+    EXPECT_EQ(outside, 0.0) << "mode " << mode;
+  }
 }
