@@ -37,6 +37,8 @@ enum Slot
   Interactive,
   SampleFactor,
   Reduction,
+  MaxMode,
+  MinModeNegated,
   SlotCount
 };
 }
@@ -86,6 +88,10 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   mine[slot::Interactive] = local.Interactive ? 1 : 0;
   mine[slot::SampleFactor] = std::max(local.SampleFactor, 1.0);
   mine[slot::Reduction] = std::max(local.Reduction, 1);
+  // Mode and precision in one number, so that both minimum and maximum must agree.
+  const double mode = 2.0 * local.Mode + (local.InDouble ? 1 : 0);
+  mine[slot::MaxMode] = mode;
+  mine[slot::MinModeNegated] = -mode;
   double all[slot::SlotCount];
   std::copy(mine, mine + slot::SlotCount, all);
   if (group.Parallel)
@@ -106,6 +112,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   agreed.MinVolumes = static_cast<int>(-all[slot::MinVolumesNegated]);
   agreed.SizesDiffer = all[slot::MaxWidth] != -all[slot::MinWidthNegated] ||
     all[slot::MaxHeight] != -all[slot::MinHeightNegated];
+  agreed.ModesDiffer = all[slot::MaxMode] != -all[slot::MinModeNegated];
   agreed.AnyReportPending = all[slot::ReportPending] > 0;
   agreed.Interactive = all[slot::Interactive] > 0;
   if (agreed.Interactive)
@@ -137,6 +144,10 @@ std::string FrameAgreement::Problem() const
   if (this->SizesDiffer)
   {
     return "the processes' viewports differ in size";
+  }
+  if (this->ModesDiffer)
+  {
+    return "the processes' compositing modes (CompositeMode, CompositeInDouble) differ";
   }
   if (this->MinMoments != this->MaxMoments)
   {

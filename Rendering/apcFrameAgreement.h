@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What every process must agree on before a frame's collectives, settled in one small
 // allreduce: the union of the data bounds (depth warp, sample spacing, screen rectangle),
-// failures, the number of visible APC volumes and of moments, the viewport size, and
+// failures, the number of visible APC volumes and of moments, the viewport size, the
+// compositing mode, and
 // whether the frame is interactive and how much cheaper it is then. A
 // process that cannot render, has no volume while others have, or disagrees on a size makes
 // every process skip the frame instead of waiting forever in a later collective.
@@ -28,6 +29,8 @@ struct LocalFrame
   bool Interactive = false;   // this process's window asks for a fast frame
   double SampleFactor = 1.0;  // interactive frames: factor on the sample distance (>= 1)
   int Reduction = 1;          // interactive frames: image reduction (>= 1)
+  int Mode = 0;               // the pass's CompositeMode and wire precision: each mode runs
+  bool InDouble = false;      // different collectives, so one process's odd setting would hang
 
   LocalFrame();
   // One visible APC volume: its number of moments and, if it has cells, their bounds.
@@ -44,6 +47,7 @@ struct FrameAgreement
   int MinMoments = 0;
   int MaxMoments = 0;
   bool SizesDiffer = false;
+  bool ModesDiffer = false; // CompositeMode or CompositeInDouble
   int Width = 0;
   int Height = 0;
   bool AnyReportPending = false; // then every process calls ShareInputReports

@@ -223,6 +223,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   local.Interactive = window && window->GetDesiredUpdateRate() >= 1.0;
   local.SampleFactor = self->GetInteractiveSampleDistanceFactor();
   local.Reduction = self->GetInteractiveImageReduction();
+  local.Mode = self->GetCompositeMode();
+  local.InDouble = self->GetCompositeInDouble();
   const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
   if (agreed.AnyReportPending)
   {

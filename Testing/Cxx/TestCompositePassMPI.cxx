@@ -473,6 +473,34 @@ int main(int argc, char* argv[])
     }
   }
 
+  // Processes set to different compositing modes or wire precisions (a misconfigured in-situ
+  // code) would run different collectives: every process must skip the frame.
+  if (ranks > 1)
+  {
+    for (int odd : { 0, 1 })
+    {
+      auto piece = PuzzlePiece(rank, ranks, ranks);
+      double bounds[6];
+      GlobalBounds(controller, piece, bounds);
+      vtkNew<vtkAPCCompositePass> pass;
+      if (rank == ranks - 1)
+      {
+        if (odd == 0)
+        {
+          pass->SetCompositeMode(vtkAPCCompositePass::SEGMENTS);
+        }
+        else
+        {
+          pass->SetCompositeInDouble(true);
+        }
+      }
+      RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+      Check(pass->GetLastFrameFailed(), rank,
+        odd == 0 ? "modes differ: frame skipped everywhere"
+                 : "wire precisions differ: frame skipped everywhere");
+    }
+  }
+
   // A 1x1 window, in both modes.
   for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
   {
