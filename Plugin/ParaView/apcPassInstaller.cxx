@@ -9,6 +9,8 @@
 #include "vtkLogger.h"
 #include "vtkMultiProcessController.h"
 #include "vtkOpenGLFXAAPass.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLState.h"
 #include "vtkPVRenderView.h"
 #include "vtkPVSession.h"
 #include "vtkPVSynchronizedRenderer.h"
@@ -16,6 +18,7 @@
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkWeakPointer.h"
+#include "vtk_glew.h"
 
 #include <map>
 #include <set>
@@ -94,8 +97,16 @@ void BeforeRender(vtkObject*, unsigned long, void* clientData, void*)
   // ... does not match captured depth image (0)" every frame). The pass then composites the
   // processes' own depth buffers itself.
   const bool ordered = view->GetUseOrderedCompositing();
-  ViewAccess::SynchronizedRenderer(view)->SetUseDepthBuffer(!ordered);
+  vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
+  sync->SetUseDepthBuffer(!ordered);
   pass->SetDisplayDepthComposited(!ordered);
+  // IceT pastes its image with vtkRawImage::PushToViewport, which clears the viewport's depth
+  // too: the display process's own opaque geometry would be gone before the pass reads it.
+  // Under ordered compositing AfterIceT pastes the same image without clearing instead.
+  if (auto* icet = vtkIceTSynchronizedRenderers::SafeDownCast(sync->GetParallelSynchronizer()))
+  {
+    icet->GetIceTCompositePass()->SetDisplayRGBAResults(!ordered);
+  }
 }
 
 // Runs when the pass's delegate (IceT) has rendered. On the display process IceT keeps the
@@ -110,8 +121,27 @@ void AfterIceT(vtkObject* caller, unsigned long, void* clientData, void* callDat
   auto* renderer = static_cast<vtkRenderer*>(callData);
   auto* icet = vtkIceTSynchronizedRenderers::SafeDownCast(
     ViewAccess::SynchronizedRenderer(view)->GetParallelSynchronizer());
-  if (!icet || !renderer || !pass->GetDisplayDepthComposited())
+  if (!icet || !renderer)
   {
+    return;
+  }
+  if (!pass->GetDisplayDepthComposited())
+  {
+    // Ordered compositing: IceT's image replaces the colours (premultiplied, over black, as
+    // IceT's own paste leaves them) and the depth buffer keeps this process's geometry.
+    vtkSynchronizedRenderers::vtkRawImage tile;
+    icet->GetIceTCompositePass()->GetLastRenderedTile(tile);
+    auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
+    if (tile.IsValid() && window)
+    {
+      // DrawPixels turns the depth and scissor tests off and leaves them so.
+      vtkOpenGLState* state = window->GetState();
+      vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
+      vtkOpenGLState::ScopedglEnableDisable scissorTest(state, GL_SCISSOR_TEST);
+      vtkOpenGLState::ScopedglDepthMask depthMask(state);
+      state->vtkglDepthMask(GL_FALSE);
+      tile.PushToFrameBuffer(renderer, /*blend=*/false);
+    }
     return;
   }
   vtkIceTCompositePass* composite = icet->GetIceTCompositePass();
