@@ -111,10 +111,11 @@ public:
 
   /**
    * Invoked on every process right after the delegate pass has rendered (call data: the
-   * vtkRenderer), before the pass reads the depth buffer: where a caller can repair what
-   * the delegate left in the framebuffer (apcPassInstaller re-pastes IceT's result).
+   * vtkRenderer), before the pass reads any depth: where a caller can hand over the
+   * delegate's own depth (SetDelegateDepth) or finish what the delegate left in the
+   * framebuffer (apcPassInstaller does both for IceT). The offset spells "APC", clear of the
+   * small offsets other code adds to UserEvent.
    */
-  // (The offset spells "APC": clear of the small offsets other code adds to UserEvent.)
   static constexpr unsigned long DelegateRenderedEvent = vtkCommand::UserEvent + 0x41504300;
 
   /**
