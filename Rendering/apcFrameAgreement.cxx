@@ -88,8 +88,8 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   mine[slot::Interactive] = local.Interactive ? 1 : 0;
   mine[slot::SampleFactor] = std::max(local.SampleFactor, 1.0);
   mine[slot::Reduction] = std::max(local.Reduction, 1);
-  // Mode and precision in one number, so that both minimum and maximum must agree.
-  const double mode = 2.0 * local.Mode + (local.InDouble ? 1 : 0);
+  // Mode, precision and depth sharing in one number: minimum and maximum must agree.
+  const double mode = 4.0 * local.Mode + (local.InDouble ? 2 : 0) + (local.DepthComposited ? 1 : 0);
   mine[slot::MaxMode] = mode;
   mine[slot::MinModeNegated] = -mode;
   double all[slot::SlotCount];
@@ -147,7 +147,8 @@ std::string FrameAgreement::Problem() const
   }
   if (this->ModesDiffer)
   {
-    return "the processes' compositing modes (CompositeMode, CompositeInDouble) differ";
+    return "the processes' compositing settings (CompositeMode, CompositeInDouble, "
+           "DisplayDepthComposited) differ";
   }
   if (this->MinMoments != this->MaxMoments)
   {

@@ -25,12 +25,13 @@ struct LocalFrame
   int MaxMoments = 0;
   int Width = 0;
   int Height = 0;
-  bool ReportPending = false; // an input report to say (apcInputReport.h)
-  bool Interactive = false;   // this process's window asks for a fast frame
-  double SampleFactor = 1.0;  // interactive frames: factor on the sample distance (>= 1)
-  int Reduction = 1;          // interactive frames: image reduction (>= 1)
-  int Mode = 0;               // the pass's CompositeMode and wire precision: each mode runs
-  bool InDouble = false;      // different collectives, so one process's odd setting would hang
+  bool ReportPending = false;  // an input report to say (apcInputReport.h)
+  bool Interactive = false;    // this process's window asks for a fast frame
+  double SampleFactor = 1.0;   // interactive frames: factor on the sample distance (>= 1)
+  int Reduction = 1;           // interactive frames: image reduction (>= 1)
+  int Mode = 0;                // the pass's CompositeMode and wire precision: each mode runs
+  bool InDouble = false;       // different collectives, so one process's odd setting would hang
+  bool DepthComposited = true; // the pass's DisplayDepthComposited (depth broadcast or MIN)
 
   LocalFrame();
   // One visible APC volume: its number of moments and, if it has cells, their bounds.
@@ -47,7 +48,7 @@ struct FrameAgreement
   int MinMoments = 0;
   int MaxMoments = 0;
   bool SizesDiffer = false;
-  bool ModesDiffer = false; // CompositeMode or CompositeInDouble
+  bool ModesDiffer = false; // CompositeMode, CompositeInDouble or DisplayDepthComposited
   int Width = 0;
   int Height = 0;
   bool AnyReportPending = false; // then every process calls ShareInputReports

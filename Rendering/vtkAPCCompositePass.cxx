@@ -4,6 +4,7 @@
 #include "vtkAPCEXRWriter.h"
 #include "vtkAPCVolumeMapper.h"
 #include "vtkCommunicator.h"
+#include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkLogger.h"
 #include "vtkMultiProcessController.h"
@@ -39,6 +40,7 @@ struct vtkAPCCompositePass::Internals
   bool LastInteractive = false;
   apc::AutoMode Auto; // the same on every process: fed only by collectives' results
   vtkNew<vtkImageData> Image;
+  vtkSmartPointer<vtkFloatArray> DelegateDepth; // this frame's, if its delegate gave one
 };
 
 //------------------------------------------------------------------------------
@@ -85,6 +87,11 @@ void vtkAPCCompositePass::RemoveAllVolumes()
 {
   this->Internal->Volumes.clear();
   this->Modified();
+}
+
+void vtkAPCCompositePass::SetDelegateDepth(vtkFloatArray* depth)
+{
+  this->Internal->DelegateDepth = depth;
 }
 
 int vtkAPCCompositePass::GetNumberOfVolumes() const
@@ -225,6 +232,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   local.Reduction = self->GetInteractiveImageReduction();
   local.Mode = self->GetCompositeMode();
   local.InDouble = self->GetCompositeInDouble();
+  local.DepthComposited = self->GetDisplayDepthComposited();
   const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
   if (agreed.AnyReportPending)
   {
@@ -278,9 +286,10 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
 }
 
 // Step 2: the display process's (composited) depth over the screen rectangle, where every
-// ray must stop, on every process: only the tiles where it has opaque geometry travel.
-std::vector<float> ShareDepth(
-  const apc::ProcessGroup& group, const apc::CompositeFrame& frame, apc::FrameRecord& record)
+// ray must stop, on every process: only the tiles where it has opaque geometry travel. If no
+// delegate composited depth (composited false), the nearest of every process's own depth.
+std::vector<float> ShareDepth(const apc::ProcessGroup& group, const apc::CompositeFrame& frame,
+  bool composited, vtkFloatArray* delegateDepth, apc::FrameRecord& record)
 {
   std::vector<float> depth(frame.RectPixels(), 1.0f);
   const apc::ScreenRect& rect = frame.Rect;
@@ -288,7 +297,7 @@ std::vector<float> ShareDepth(
   {
     return depth;
   }
-  if (group.IsDisplay())
+  if (group.IsDisplay() || !composited)
   {
     // The viewport pixels under the rectangle; an image pixel of a reduced frame takes the
     // nearest of those it covers (its ray stops at the nearest opaque surface in its
@@ -299,8 +308,22 @@ std::vector<float> ShareDepth(
     const int i1 = std::min(frame.ViewWidth, rect.I1 * r);
     const int j1 = std::min(frame.ViewHeight, rect.J1 * r);
     std::vector<float> packed(static_cast<size_t>(i1 - i0) * (j1 - j0));
-    frame.Renderer->GetRenderWindow()->GetZbufferData(
-      frame.X0 + i0, frame.Y0 + j0, frame.X0 + i1 - 1, frame.Y0 + j1 - 1, packed.data());
+    if (delegateDepth && group.IsDisplay() && composited &&
+      delegateDepth->GetNumberOfTuples() ==
+        static_cast<vtkIdType>(frame.ViewWidth) * frame.ViewHeight)
+    {
+      const float* z = delegateDepth->GetPointer(0);
+      for (int j = j0; j < j1; ++j)
+      {
+        std::copy_n(z + static_cast<size_t>(j) * frame.ViewWidth + i0, i1 - i0,
+          &packed[static_cast<size_t>(j - j0) * (i1 - i0)]);
+      }
+    }
+    else
+    {
+      frame.Renderer->GetRenderWindow()->GetZbufferData(
+        frame.X0 + i0, frame.Y0 + j0, frame.X0 + i1 - 1, frame.Y0 + j1 - 1, packed.data());
+    }
     for (int j = j0; j < j1; ++j)
     {
       for (int i = i0; i < i1; ++i)
@@ -313,6 +336,17 @@ std::vector<float> ShareDepth(
   if (!group.Parallel)
   {
     return depth;
+  }
+  if (!composited)
+  {
+    // Each process's framebuffer holds its own opaque geometry only: the composited depth
+    // is the nearest over processes, on every process at once.
+    std::vector<float> nearest(depth.size());
+    group.Controller->AllReduce(
+      depth.data(), nearest.data(), static_cast<vtkIdType>(depth.size()), vtkCommunicator::MIN_OP);
+    record.BytesSent += 4.0 * static_cast<double>(depth.size());
+    record.MessagesSent += 1;
+    return nearest;
   }
   std::vector<unsigned char> opaque = group.IsDisplay()
     ? frame.Tiles.Mark([&](size_t pixel) { return depth[pixel] < 1.0f; })
@@ -339,11 +373,13 @@ std::vector<float> ShareDepth(
 void vtkAPCCompositePass::Render(const vtkRenderState* s)
 {
   this->NumberOfRenderedProps = 0;
+  this->Internal->DelegateDepth = nullptr; // only an observer of this frame's event sets it
   if (this->DelegatePass)
   {
     this->DelegatePass->Render(s);
     this->NumberOfRenderedProps += this->DelegatePass->GetNumberOfRenderedProps();
   }
+  this->InvokeEvent(DelegateRenderedEvent, s->GetRenderer());
   Internals& internal = *this->Internal;
   internal.Record = apc::FrameRecord();
   internal.LastMode = -1;
@@ -364,7 +400,9 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   frame.KeepFloatImages = this->KeepLastImage || (this->ImageFileName && *this->ImageFileName);
   internal.LastReduction = frame.Reduction;
   internal.LastInteractive = frame.Interactive;
-  std::vector<float> depth = ShareDepth(group, frame, internal.Record);
+  std::vector<float> depth =
+    ShareDepth(group, frame, this->DisplayDepthComposited, internal.DelegateDepth, internal.Record);
+  internal.DelegateDepth = nullptr;
   internal.Record.Clock.Lap("depth");
   apc::ImageSetup image;
   image.Width = frame.Width;
@@ -542,6 +580,7 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Controller: " << this->Controller << "\n";
   os << indent << "Volumes: " << this->Internal->Volumes.size() << "\n";
   os << indent << "DisplayProcess: " << this->DisplayProcess << "\n";
+  os << indent << "DisplayDepthComposited: " << this->DisplayDepthComposited << "\n";
   os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
   os << indent << "KeepLastImage: " << this->KeepLastImage << "\n";
   const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };

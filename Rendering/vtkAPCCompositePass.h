@@ -13,7 +13,8 @@
  *    spacing, screen rectangle) and a failure flag, so that a process whose input is
  *    unusable makes every process skip the frame instead of waiting in a collective;
  * 3. a broadcast of the display process's depth where it has opaque geometry, so that
- *    every process stops its rays at the composited opaque geometry;
+ *    every process stops its rays at the composited opaque geometry (or, when no delegate
+ *    composited depth, see DisplayDepthComposited, a MIN allreduce of all processes' own);
  * 4. pass 1 on the local cells: the moment image; a small allreduce (bytewise max) of which
  *    8x8 tiles each process covers, then the covered tiles' moments are summed onto every
  *    process (allreduce);
@@ -56,6 +57,7 @@
 #define vtkAPCCompositePass_h
 
 #include "APCRenderingModule.h" // for export macro
+#include "vtkCommand.h"         // for vtkCommand::UserEvent
 #include "vtkImageProcessingPass.h"
 
 #include <memory> // for std::unique_ptr
@@ -66,6 +68,7 @@ struct CompositeFrame;
 struct FrameResult;
 struct ProcessGroup;
 }
+class vtkFloatArray;
 class vtkImageData;
 class vtkMultiProcessController;
 class vtkRenderer;
@@ -104,6 +107,37 @@ public:
    */
   vtkSetClampMacro(DisplayProcess, int, 0, VTK_INT_MAX);
   vtkGetMacro(DisplayProcess, int);
+  ///@}
+
+  /**
+   * Invoked on every process right after the delegate pass has rendered (call data: the
+   * vtkRenderer), before the pass reads any depth: where a caller can hand over the
+   * delegate's own depth (SetDelegateDepth) or finish what the delegate left in the
+   * framebuffer (apcPassInstaller does both for IceT). The offset spells "APC", clear of the
+   * small offsets other code adds to UserEvent.
+   */
+  static constexpr unsigned long DelegateRenderedEvent = vtkCommand::UserEvent + 0x41504300;
+
+  /**
+   * For the current frame only (call it from a DelegateRenderedEvent observer): the depth the
+   * delegate composited, one float per pixel of the renderer's viewport, row by row from the
+   * bottom, read on the display process instead of its framebuffer's depth (which may have
+   * gone through a conversion on its way back). Ignored elsewhere; forgotten after the frame.
+   */
+  void SetDelegateDepth(vtkFloatArray* depth);
+
+  ///@{
+  /**
+   * Whether the display process's depth buffer holds every process's opaque geometry when
+   * the delegate pass is done (IceT's z-composite, pasted back; default on). Off when each
+   * process's depth buffer holds only its own (IceT's ordered compositing blends colours
+   * alone, a delegate without compositing): the pass then takes the nearest of all
+   * processes' depths itself (one MIN allreduce of the screen rectangle). Must be the same
+   * on every process; apcPassInstaller sets it before every ParaView render.
+   */
+  vtkSetMacro(DisplayDepthComposited, bool);
+  vtkGetMacro(DisplayDepthComposited, bool);
+  vtkBooleanMacro(DisplayDepthComposited, bool);
   ///@}
 
   ///@{
@@ -277,6 +311,7 @@ protected:
 
   vtkMultiProcessController* Controller = nullptr;
   int DisplayProcess = 0;
+  bool DisplayDepthComposited = true;
   bool CompositeInDouble = false;
   bool KeepLastImage = false;
   int CompositeMode = APC;

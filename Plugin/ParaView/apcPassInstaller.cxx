@@ -2,13 +2,23 @@
 #include "apcPassInstaller.h"
 
 #include "vtkAPCCompositePass.h"
+#include "vtkCallbackCommand.h"
+#include "vtkCommand.h"
+#include "vtkFloatArray.h"
+#include "vtkIceTSynchronizedRenderers.h"
 #include "vtkLogger.h"
 #include "vtkMultiProcessController.h"
+#include "vtkOpenGLFXAAPass.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkOpenGLState.h"
 #include "vtkPVRenderView.h"
 #include "vtkPVSession.h"
 #include "vtkPVSynchronizedRenderer.h"
 #include "vtkProcessModule.h"
+#include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
+#include "vtkWeakPointer.h"
+#include "vtk_glew.h"
 
 #include <map>
 #include <set>
@@ -31,9 +41,15 @@ struct ViewAccess : public vtkPVRenderView
 
 struct Installation
 {
+  // A representation can outlive its view (pvbatch deletes the view first at exit): what
+  // is left of a dead view is only forgotten.
+  vtkWeakPointer<vtkPVRenderView> View;
   vtkSmartPointer<vtkAPCCompositePass> Pass;
   vtkSmartPointer<vtkImageProcessingPass> Previous;
   std::set<const void*> Users;
+  vtkSmartPointer<vtkCallbackCommand> BeforeRender;
+  unsigned long BeforeRenderTag = 0;
+  vtkSmartPointer<vtkCallbackCommand> AfterIceT;
 };
 
 std::map<vtkPVRenderView*, Installation>& Installations()
@@ -51,6 +67,94 @@ bool RendersHere()
   auto* session = pm ? vtkPVSession::SafeDownCast(pm->GetActiveSession()) : nullptr;
   return !session || session->HasProcessRole(vtkPVSession::RENDER_SERVER);
 }
+
+// Runs at the start of every render of the view's renderer, after vtkPVRenderView has set
+// up the frame (ordered compositing, FXAA) and before any pass runs.
+void BeforeRender(vtkObject*, unsigned long, void* clientData, void*)
+{
+  auto* view = static_cast<vtkPVRenderView*>(clientData);
+  const auto found = Installations().find(view);
+  if (found == Installations().end())
+  {
+    return;
+  }
+  vtkAPCCompositePass* pass = found->second.Pass;
+  // Without IceT (one process), vtkPVSynchronizedRenderer wraps an image processing pass in
+  // an FXAA pass (anti-aliasing the final picture, the APC volume included), but vtkPVRenderView
+  // also leaves the renderer's own FXAA on, which smooths the geometry once before the pass.
+  // IceT runs get the final FXAA only (their composited image has sharp outlines), so one
+  // process differed from N on a one-pixel rim along every silhouette of opaque geometry.
+  // The renderer's FXAA goes off for the frame; vtkPVRenderView sets it again every render.
+  vtkRenderer* renderer = view->GetRenderer();
+  auto* fxaa = vtkOpenGLFXAAPass::SafeDownCast(renderer->GetPass());
+  if (fxaa && fxaa->GetDelegatePass() == pass)
+  {
+    renderer->SetUseFXAA(false);
+  }
+  // IceT composites depth only when no representation needs ordered compositing (ParaView's
+  // Volume, translucent surfaces); then it blends colours alone and has no depth to paste
+  // back into the display process's framebuffer (asking for it prints "Tile viewport size
+  // ... does not match captured depth image (0)" every frame). The pass then composites the
+  // processes' own depth buffers itself.
+  const bool ordered = view->GetUseOrderedCompositing();
+  vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
+  sync->SetUseDepthBuffer(!ordered);
+  pass->SetDisplayDepthComposited(!ordered);
+  // IceT pastes its image with vtkRawImage::PushToViewport, which clears the viewport's depth
+  // too: the display process's own opaque geometry would be gone before the pass reads it.
+  // Under ordered compositing AfterIceT pastes the same image without clearing instead.
+  if (auto* icet = vtkIceTSynchronizedRenderers::SafeDownCast(sync->GetParallelSynchronizer()))
+  {
+    icet->GetIceTCompositePass()->SetDisplayRGBAResults(!ordered);
+  }
+}
+
+// Runs when the pass's delegate (IceT) has rendered. On the display process IceT keeps the
+// composited depth it read back as floats: the very values a one-process render reads from
+// its depth buffer. The copy IceT pasted into the framebuffer went through a depth texture
+// and back, which moves a few values by one step of the 24-bit buffer; rays stopping at
+// opaque geometry that coincides with a sample then differ from one process at a few pixels.
+void AfterIceT(vtkObject* caller, unsigned long, void* clientData, void* callData)
+{
+  auto* pass = static_cast<vtkAPCCompositePass*>(caller);
+  auto* view = static_cast<vtkPVRenderView*>(clientData);
+  auto* renderer = static_cast<vtkRenderer*>(callData);
+  auto* icet = vtkIceTSynchronizedRenderers::SafeDownCast(
+    ViewAccess::SynchronizedRenderer(view)->GetParallelSynchronizer());
+  if (!icet || !renderer)
+  {
+    return;
+  }
+  if (!pass->GetDisplayDepthComposited())
+  {
+    // Ordered compositing: IceT's image replaces the colours (premultiplied, over black, as
+    // IceT's own paste leaves them) and the depth buffer keeps this process's geometry.
+    vtkSynchronizedRenderers::vtkRawImage tile;
+    icet->GetIceTCompositePass()->GetLastRenderedTile(tile);
+    auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
+    if (tile.IsValid() && window)
+    {
+      // DrawPixels turns the depth and scissor tests off and leaves them so.
+      vtkOpenGLState* state = window->GetState();
+      vtkOpenGLState::ScopedglEnableDisable depthTest(state, GL_DEPTH_TEST);
+      vtkOpenGLState::ScopedglEnableDisable scissorTest(state, GL_SCISSOR_TEST);
+      vtkOpenGLState::ScopedglDepthMask depthMask(state);
+      state->vtkglDepthMask(GL_FALSE);
+      tile.PushToFrameBuffer(renderer, /*blend=*/false);
+    }
+    return;
+  }
+  vtkIceTCompositePass* composite = icet->GetIceTCompositePass();
+  int width = 0;
+  int height = 0;
+  renderer->GetTiledSize(&width, &height);
+  vtkFloatArray* depth = composite->GetLastRenderedDepths();
+  if (depth && composite->GetImageReductionFactor() == 1 &&
+    depth->GetNumberOfTuples() == static_cast<vtkIdType>(width) * height)
+  {
+    pass->SetDelegateDepth(depth);
+  }
+}
 }
 
 vtkAPCCompositePass* AttachVolume(vtkPVRenderView* view, const void* user, vtkVolume* volume)
@@ -65,15 +169,31 @@ vtkAPCCompositePass* AttachVolume(vtkPVRenderView* view, const void* user, vtkVo
     return nullptr;
   }
   Installation& installation = Installations()[view];
+  if (installation.Pass && !installation.View)
+  {
+    installation = Installation(); // a dead view's, at the same address
+  }
   if (!installation.Pass)
   {
     vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
+    installation.View = view;
     installation.Previous = sync->GetImageProcessingPass();
     installation.Pass = vtkSmartPointer<vtkAPCCompositePass>::New();
     installation.Pass->SetController(vtkMultiProcessController::GetGlobalController());
     sync->SetImageProcessingPass(installation.Pass);
-    // IceT then leaves the composited depth in the display rank's framebuffer.
+    // IceT then leaves the composited depth in the display rank's framebuffer (renewed
+    // before every render by BeforeRender, which knows whether IceT composites depth).
     sync->SetUseDepthBuffer(true);
+    installation.BeforeRender = vtkSmartPointer<vtkCallbackCommand>::New();
+    installation.BeforeRender->SetCallback(BeforeRender);
+    installation.BeforeRender->SetClientData(view);
+    installation.BeforeRenderTag =
+      view->GetRenderer()->AddObserver(vtkCommand::StartEvent, installation.BeforeRender);
+    installation.AfterIceT = vtkSmartPointer<vtkCallbackCommand>::New();
+    installation.AfterIceT->SetCallback(AfterIceT);
+    installation.AfterIceT->SetClientData(view);
+    installation.Pass->AddObserver(
+      vtkAPCCompositePass::DelegateRenderedEvent, installation.AfterIceT);
   }
   installation.Users.insert(user);
   installation.Pass->AddVolume(volume);
@@ -91,9 +211,13 @@ void DetachVolume(const void* user, vtkVolume* volume)
       installation.Pass->RemoveVolume(volume);
       if (installation.Users.empty())
       {
-        vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(it->first);
-        sync->SetImageProcessingPass(installation.Previous);
-        sync->SetUseDepthBuffer(installation.Previous != nullptr);
+        if (vtkPVRenderView* view = installation.View)
+        {
+          view->GetRenderer()->RemoveObserver(installation.BeforeRenderTag);
+          vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
+          sync->SetImageProcessingPass(installation.Previous);
+          sync->SetUseDepthBuffer(installation.Previous != nullptr);
+        }
         it = installations.erase(it);
         continue;
       }

@@ -26,9 +26,19 @@ parser.add_argument("--compare", help="reference .vti: the RGBA must match withi
 # The moments travel in 32-bit fixed point and the colour sums in float: N ranks match one to
 # ~1e-6 here.
 parser.add_argument("--tolerance", type=float, default=1e-5)
+parser.add_argument("--outliers", type=int, default=0,
+                    help="pixels allowed beyond --tolerance, by at most 0.05: where a lattice "
+                         "sample lies within one depth-buffer step of opaque geometry that "
+                         "ParaView cut differently on N ranks (ordered compositing moves it)")
 parser.add_argument("--plane", action="store_true", help="add an opaque slice through the data")
 parser.add_argument("--sample-distance", type=float, default=0.0,
                     help="APC sample distance (0: the scene's own)")
+parser.add_argument("--paraview-volume", action="store_true",
+                    help="add ParaView's own Volume of a resampled corner of the data (IceT then "
+                         "composites in visibility order, without depth)")
+parser.add_argument("--compare-png", help="reference screenshot: --png must match it to "
+                    "--png-tolerance 8-bit steps")
+parser.add_argument("--png-tolerance", type=int, default=1)
 parser.add_argument("--mode", default="APC",
                     choices=["APC", "Local exact", "Exact (segments)", "Auto"])
 parser.add_argument("--drop-array-on-rank", type=int, default=-1,
@@ -264,6 +274,21 @@ def main():
         sd.Representation = "Surface"
         ColorBy(sd, None)
         sd.AmbientColor = sd.DiffuseColor = [0.1, 0.8, 0.2]
+    if args.paraview_volume:
+        # Image data: ParaView's Volume needs ordered compositing on several ranks.
+        corner = ResampleToImage(Input=scene_source, UseInputBounds=0,
+                                 SamplingBounds=[0.1, 1.0, 0.1, 1.0, 0.1, 1.0],
+                                 SamplingDimensions=[24, 24, 24])
+        pvd = Show(corner, view)
+        pvd.Representation = "Volume"
+        ColorBy(pvd, ("POINTS", scene_array))
+        pvlut = GetColorTransferFunction(scene_array + "_pv")
+        pvd.LookupTable = pvlut
+        pvlut.RGBPoints = [lo, 1.0, 0.8, 0.0, hi, 0.0, 0.6, 0.2]
+        pvpwf = GetOpacityTransferFunction(scene_array + "_pv")
+        pvpwf.Points = [lo, 0.0, 0.5, 0.0, hi, 1.0, 0.5, 0.0]
+        pvd.ScalarOpacityFunction = pvpwf
+        pvd.ScalarOpacityUnitDistance = 0.05
     Render(view)  # paraview.simple resets the camera on a view's first render: set ours after
     for key, value in camera.items():
         setattr(view, key, value)
@@ -299,6 +324,19 @@ def main():
         written = os.path.exists(args.out)
         check(written != args.expect_blank,
               "float image %s" % ("skipped" if args.expect_blank else "written"))
+    if args.compare_png and args.png:
+        import numpy
+        from PIL import Image
+
+        a = numpy.asarray(Image.open(args.png).convert("RGB"), dtype=int)
+        b = numpy.asarray(Image.open(args.compare_png).convert("RGB"), dtype=int)
+        check(a.shape == b.shape, "screenshot sizes %s vs %s" % (a.shape, b.shape))
+        if a.shape == b.shape:
+            diff = numpy.abs(a - b).max(axis=2)
+            print("screenshot vs reference screenshot: max |diff| = %d/255, pixels differing %d"
+                  % (int(diff.max()), int((diff > 0).sum())))
+            check(int(diff.max()) <= args.png_tolerance,
+                  "the screenshot matches the reference to %d/255" % args.png_tolerance)
     if args.compare and args.out and os.path.exists(args.out):
         from vtkmodules.vtkIOXML import vtkXMLImageDataReader
         from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -313,10 +351,18 @@ def main():
         a, b = rgba(args.out), rgba(args.compare)
         check(a.shape == b.shape, "image sizes %s vs %s" % (a.shape, b.shape))
         if a.shape == b.shape:
-            diff = float(numpy.abs(a - b).max())
-            print("max |distributed - reference| = %.3g over %d pixels (max alpha %.3f)"
-                  % (diff, a.shape[0], float(b[:, 3].max())))
-            check(diff <= args.tolerance, "within %g of the reference" % args.tolerance)
+            per_pixel = numpy.abs(a - b).max(axis=1)
+            diff = float(per_pixel.max())
+            beyond = int((per_pixel > args.tolerance).sum())
+            print("max |distributed - reference| = %.3g over %d pixels (max alpha %.3f), "
+                  "%d pixels beyond %g" % (diff, a.shape[0], float(b[:, 3].max()), beyond,
+                                           args.tolerance))
+            if args.outliers:
+                check(beyond <= args.outliers and diff <= 0.05,
+                      "within %g of the reference but for %d pixels within 0.05"
+                      % (args.tolerance, args.outliers))
+            else:
+                check(diff <= args.tolerance, "within %g of the reference" % args.tolerance)
             check(float(b[:, 3].max()) > 0.2, "the reference shows something")
     return failures
 
