@@ -26,6 +26,7 @@
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkVolume.h"
 #include "vtkXMLUnstructuredGridReader.h"
@@ -58,7 +59,7 @@ void SetCamera(vtkRenderer* renderer, const apctest::Scene& scene, const double 
 // The display rank's float RGBA of the distributed render of each rank's piece.
 std::vector<float> RenderDistributed(vtkMPIController* controller, const apctest::Scene& scene,
   vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
-  vtkAPCCompositePass* pass, bool withVolume = true)
+  vtkAPCCompositePass* pass, bool withVolume = true, std::vector<unsigned char>* shown = nullptr)
 {
   vtkNew<vtkRenderWindow> window;
   vtkNew<vtkRenderer> renderer;
@@ -67,7 +68,10 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const apctest
   mapper->SetInputData(piece);
   vtkNew<vtkVolume> volume;
   ConfigureVolume(volume, mapper, scene);
-  pass->KeepLastImageOn(); // the image compared below
+  if (!shown)
+  {
+    pass->KeepLastImageOn(); // the image compared below
+  }
   pass->RemoveAllVolumes();
   if (withVolume)
   {
@@ -90,6 +94,12 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const apctest
   }
   SetCamera(renderer, scene, globalBounds);
   window->Render();
+  if (shown)
+  {
+    vtkNew<vtkUnsignedCharArray> pixels;
+    window->GetPixelData(0, 0, size - 1, size - 1, 0, pixels);
+    shown->assign(pixels->GetPointer(0), pixels->GetPointer(0) + 3 * size * size);
+  }
   std::vector<float> rgba;
   vtkDataArray* array = pass->GetLastImage()->GetPointData()->GetArray("RGBA");
   if (array)
@@ -498,6 +508,33 @@ int main(int argc, char* argv[])
       Check(pass->GetLastFrameFailed(), rank,
         odd == 0 ? "modes differ: frame skipped everywhere"
                  : "wire precisions differ: frame skipped everywhere");
+    }
+  }
+
+  // Without KeepLastImage the display process resolves into the colour sums' memory (and
+  // keeps no float image): the window must show exactly what it shows with the image kept.
+  {
+    auto piece = PuzzlePiece(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    std::vector<unsigned char> kept;
+    std::vector<unsigned char> lean;
+    vtkNew<vtkAPCCompositePass> keeping;
+    keeping->KeepLastImageOn();
+    RenderDistributed(controller, puzzle, piece, bounds, 48, true, keeping, true, &kept);
+    vtkNew<vtkAPCCompositePass> pass;
+    const std::vector<float> none =
+      RenderDistributed(controller, puzzle, piece, bounds, 48, true, pass, true, &lean);
+    Check(none.empty(), rank, "no float image kept without KeepLastImage");
+    if (rank == 0)
+    {
+      size_t shownPixels = 0;
+      for (size_t v = 0; v < kept.size(); ++v)
+      {
+        shownPixels += kept[v] > 0 ? 1 : 0;
+      }
+      Check(shownPixels > 100, rank, "the kept frame shows the volume");
+      Check(kept == lean, rank, "the lean frame shows the same window as the kept one");
     }
   }
 
