@@ -196,8 +196,11 @@ void FrameEngine::RenderMoments(const MomentParameters& parameters, double* mome
   {
     return;
   }
+  // Hybrid's pass 2 needs this volume's own moments next to the global ones.
+  const bool hybrid = parameters.Resolve == ResolveMode::Hybrid;
   DispatchMoments(parameters.Moments,
-    [&](auto n) { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments); });
+    [&](auto n)
+    { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments, hybrid); });
   this->Samples = this->Marcher.GetLastSampleCount();
   this->Clock.Lap("moments");
 }
@@ -213,8 +216,8 @@ void FrameEngine::RenderColour(
   DispatchMoments(parameters.Moments,
     [&](auto n)
     {
-      this->Marcher.AccumulateColour<n()>(
-        *this->Table, *this->Warp, moments, parameters.Settings<n()>(), colourSums);
+      this->Marcher.AccumulateColour<n()>(*this->Table, *this->Warp, moments,
+        parameters.Settings<n()>(), colourSums, parameters.Resolve == ResolveMode::Hybrid);
     });
   this->Clock.Lap("colour");
 }

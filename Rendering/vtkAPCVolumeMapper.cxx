@@ -59,8 +59,9 @@ apc::MomentParameters vtkAPCVolumeMapper::GetMomentParameters() const
   parameters.Moments = this->NumberOfMoments;
   parameters.Overestimation = this->Overestimation;
   parameters.Bias = this->MomentBias;
-  parameters.Resolve =
-    this->ResolveMode == PAPER_SUM ? apc::ResolveMode::PaperSum : apc::ResolveMode::Renormalised;
+  parameters.Resolve = this->ResolveMode == PAPER_SUM ? apc::ResolveMode::PaperSum
+    : this->ResolveMode == HYBRID                     ? apc::ResolveMode::Hybrid
+                                                      : apc::ResolveMode::Renormalised;
   return parameters;
 }
 
@@ -152,7 +153,10 @@ void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfMoments: " << this->NumberOfMoments << "\n";
   os << indent << "Overestimation: " << this->Overestimation << "\n";
   os << indent << "MomentBias: " << this->MomentBias << "\n";
-  os << indent << "ResolveMode: " << (this->ResolveMode == PAPER_SUM ? "PAPER_SUM" : "RENORMALISED")
+  os << indent << "ResolveMode: "
+     << (this->ResolveMode == PAPER_SUM   ? "PAPER_SUM"
+            : this->ResolveMode == HYBRID ? "HYBRID"
+                                          : "RENORMALISED")
      << "\n";
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
   os << indent << "LatticeJitter: " << this->LatticeJitter << "\n";
