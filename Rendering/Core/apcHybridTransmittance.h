@@ -12,6 +12,8 @@
 // the result is the exact render to float rounding; on N processes only what crosses a
 // process boundary is approximated. The price: the image depends on how the data is split
 // (APC's N-process image equals its 1-process image), and pass 2 sorts each pixel's samples.
+// "Own" is one volume's samples on one process (one ray marcher): with several volumes in a
+// view, the other volumes count among the others, whichever process holds them.
 #ifndef apcHybridTransmittance_h
 #define apcHybridTransmittance_h
 

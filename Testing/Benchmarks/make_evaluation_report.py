@@ -671,6 +671,13 @@ class Report:
                     db("gearteeth", 4, 4), g2,
                     "/".join("%+.1f" % db("wind", k, 4) for k in split)
                     if "wind" in scenes else "–"))
+        resolve0 = mapper_defaults()[2]
+        self.add(
+            "The mapper's default resolve is %s%s. Hybrid gives up APC's \"N ranks = 1 rank\" "
+            "image for one that depends on the partition, gains nothing on the interleaved "
+            "pieces APC was designed for, and costs pass 2 %.2f× (median, split rows) and one "
+            "more moment image per rank; README, *When to use the Hybrid resolve*.\n" % (
+                resolve0, "" if resolve0 == "HYBRID" else " (not Hybrid)", median(costs_split)))
         slab = [s for s in ("gearteeth", "sandwich") if s in scenes]
         if slab:
             self.headline.append(
