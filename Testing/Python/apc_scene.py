@@ -29,6 +29,9 @@ parser.add_argument("--tolerance", type=float, default=1e-5)
 parser.add_argument("--plane", action="store_true", help="add an opaque slice through the data")
 parser.add_argument("--mode", default="APC",
                     choices=["APC", "Local exact", "Exact (segments)", "Auto"])
+parser.add_argument("--resolve", default="Renormalised (MBOIT)",
+                    choices=["Renormalised (MBOIT)", "Plain sum (paper)",
+                             "Hybrid (own exact, others by moments)"])
 parser.add_argument("--drop-array-on-rank", type=int, default=-1,
                     help="remove the rendered array on this rank (a broken piece)")
 parser.add_argument("--server", help="host:port of a pvserver to connect to")
@@ -250,6 +253,7 @@ def main():
     display.ScalarOpacityUnitDistance = unit
     display.APCSampleDistance = spacing
     display.APCMode = args.mode
+    display.APCResolveMode = args.resolve
     display.APCVerbosity = 1
     if args.out:
         display.APCImageFile = os.path.abspath(args.out)
