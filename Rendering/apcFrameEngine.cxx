@@ -28,7 +28,6 @@ ImageSetup ImageSetup::FullQuality(vtkRenderer* ren)
   ImageSetup image;
   ren->GetTiledSizeAndOrigin(&image.Width, &image.Height, &image.X0, &image.Y0);
   image.Aspect = image.Height > 0 ? static_cast<double>(image.Width) / image.Height : 1.0;
-  image.Crop = ScreenRect{ 0, 0, image.Width, image.Height };
   return image;
 }
 
@@ -124,9 +123,9 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   const double* globalBounds, const float* depthBuffer, const ImageSetup& image)
 {
   this->Ready = false;
-  this->Crop = image.Crop;
-  this->Width = image.Crop.Pixels() > 0 ? image.Crop.Width() : 0;
-  this->Height = image.Crop.Pixels() > 0 ? image.Crop.Height() : 0;
+  this->Crop = image.Crop.value_or(ScreenRect{ 0, 0, image.Width, image.Height });
+  this->Width = this->Crop.Pixels() > 0 ? this->Crop.Width() : 0;
+  this->Height = this->Crop.Pixels() > 0 ? this->Crop.Height() : 0;
   this->X0 = image.X0;
   this->Y0 = image.Y0;
   if (this->Width < 1 || this->Height < 1 || !this->MeshValid)
@@ -203,8 +202,11 @@ void FrameEngine::RenderMoments(const MomentParameters& parameters, double* mome
   {
     return;
   }
+  // Hybrid's pass 2 needs this volume's own moments next to the global ones.
+  const bool hybrid = parameters.Resolve == ResolveMode::Hybrid;
   DispatchMoments(parameters.Moments,
-    [&](auto n) { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments); });
+    [&](auto n)
+    { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments, hybrid); });
   this->Samples = this->Marcher.GetLastSampleCount();
   this->Clock.Lap("moments");
 }
@@ -220,8 +222,8 @@ void FrameEngine::RenderColour(
   DispatchMoments(parameters.Moments,
     [&](auto n)
     {
-      this->Marcher.AccumulateColour<n()>(
-        *this->Table, *this->Warp, moments, parameters.Settings<n()>(), colourSums);
+      this->Marcher.AccumulateColour<n()>(*this->Table, *this->Warp, moments,
+        parameters.Settings<n()>(), colourSums, parameters.Resolve == ResolveMode::Hybrid);
     });
   this->Clock.Lap("colour");
 }

@@ -24,6 +24,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 class vtkAPCVolumeMapper;
@@ -40,7 +41,7 @@ class TransferTable;
 // whose aspect (width / height) fixes the frustum, and the factor on the sample distance.
 // Full quality is one ray per viewport pixel at the volume's sample distance; an interactive
 // frame of vtkAPCCompositePass renders fewer, larger pixels and/or a coarser lattice.
-// Of that image only the pixels of Crop are rendered: every buffer is Crop's size.
+// Of that image only the pixels of Crop are rendered (all if unset): every buffer is its size.
 struct APCRENDERING_EXPORT ImageSetup
 {
   int Width = 0;
@@ -49,7 +50,7 @@ struct APCRENDERING_EXPORT ImageSetup
   int Y0 = 0;
   double Aspect = 1.0;
   double SampleFactor = 1.0;
-  ScreenRect Crop;
+  std::optional<ScreenRect> Crop;
 
   // ren's viewport (the tile of a large screenshot) at full quality, all of it.
   static ImageSetup FullQuality(vtkRenderer* ren);

@@ -59,8 +59,9 @@ apc::MomentParameters vtkAPCVolumeMapper::GetMomentParameters() const
   parameters.Moments = this->NumberOfMoments;
   parameters.Overestimation = this->Overestimation;
   parameters.Bias = this->MomentBias;
-  parameters.Resolve =
-    this->ResolveMode == PAPER_SUM ? apc::ResolveMode::PaperSum : apc::ResolveMode::Renormalised;
+  parameters.Resolve = this->ResolveMode == PAPER_SUM ? apc::ResolveMode::PaperSum
+    : this->ResolveMode == HYBRID                     ? apc::ResolveMode::Hybrid
+                                                      : apc::ResolveMode::Renormalised;
   return parameters;
 }
 
@@ -145,8 +146,8 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   images.ColourSums = colourSums.empty() ? nullptr : colourSums.data();
   images.SegmentCount = segments.empty() ? nullptr : segments.data();
   images.SampleCount = engine.GetSampleCount();
-  apc::StoreFloatImages(this->Internal->Image, image.Width, image.Height, image.Crop, images);
   const apc::ScreenRect& crop = engine.GetCrop();
+  apc::StoreFloatImages(this->Internal->Image, image.Width, image.Height, crop, images);
   apc::BlendIntoWindow(ren, engine.GetX0() + crop.I0, engine.GetY0() + crop.J0, engine.GetWidth(),
     engine.GetHeight(), engine.GetWidth(), engine.GetHeight(), rgba.data());
   engine.GetClock().Lap("blend");
@@ -160,7 +161,10 @@ void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "NumberOfMoments: " << this->NumberOfMoments << "\n";
   os << indent << "Overestimation: " << this->Overestimation << "\n";
   os << indent << "MomentBias: " << this->MomentBias << "\n";
-  os << indent << "ResolveMode: " << (this->ResolveMode == PAPER_SUM ? "PAPER_SUM" : "RENORMALISED")
+  os << indent << "ResolveMode: "
+     << (this->ResolveMode == PAPER_SUM   ? "PAPER_SUM"
+            : this->ResolveMode == HYBRID ? "HYBRID"
+                                          : "RENORMALISED")
      << "\n";
   os << indent << "SampleDistance: " << this->SampleDistance << "\n";
   os << indent << "LatticeJitter: " << this->LatticeJitter << "\n";

@@ -77,7 +77,16 @@ public:
     /// MBOIT's resolve: total alpha 1 - exp(-b0) (exact), colour sum / weight sum.
     RENORMALISED = 0,
     /// The APC paper's plain sum of alpha_i T(z_i) c_i.
-    PAPER_SUM = 1
+    PAPER_SUM = 1,
+    /**
+     * RENORMALISED with each process's own samples composited exactly (sorted per pixel)
+     * and only the other processes' absorbance reconstructed from moments (global - own):
+     * T(z) = T_own(z) T_others(z). One process renders the exact image (to float rounding);
+     * on N processes only what crosses a piece boundary is approximated, so the image
+     * depends on the partition. Costs pass 2 a per-pixel sort and, on each process, one more
+     * moment image. apcHybridTransmittance.h, README.
+     */
+    HYBRID = 2
   };
 
   ///@{
@@ -119,9 +128,10 @@ public:
 
   ///@{
   /**
-   * How MBOIT turns the colour sums into a pixel: RENORMALISED (default) or PAPER_SUM.
+   * How MBOIT weights and turns the colour sums into a pixel: RENORMALISED (default),
+   * PAPER_SUM or HYBRID (own samples exact, other processes' by moments).
    */
-  vtkSetClampMacro(ResolveMode, int, RENORMALISED, PAPER_SUM);
+  vtkSetClampMacro(ResolveMode, int, RENORMALISED, HYBRID);
   vtkGetMacro(ResolveMode, int);
   ///@}
 

@@ -7,6 +7,7 @@
 #define apcRayVisitors_h
 
 #include "apcDepthWarp.h"
+#include "apcHybridTransmittance.h"
 #include "apcMomentTransmittance.h"
 #include "apcPowerMoments.h"
 #include "apcRaySegments.h"
@@ -17,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -122,11 +124,13 @@ struct Exact : PixelSampleLists
   }
 };
 
-// MBOIT pass 1: power moments of the warped depth, and the samples kept for pass 2.
+// MBOIT pass 1: power moments of the warped depth, and the samples kept for pass 2. Own, if
+// set, gets the same sums (the Hybrid resolve's own moments).
 template <int N>
 struct Moments : NoSegments
 {
   double* Output;
+  double* Own = nullptr;
   int Width;
   const LogDepthWarp* Warp;
   SampleCache* Cache;
@@ -150,14 +154,14 @@ struct Moments : NoSegments
     this->Recorded.clear();
     this->Recording = this->Cache && this->Cache->Record;
   }
-  void Sample(int pixel, int64_t, double t, double scalar, const TransferSample& s)
+  void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
     const double z = (*this->Warp)(t);
     AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
     if (this->Recording)
     {
-      this->Recorded.push_back(
-        { static_cast<float>(z), static_cast<float>(scalar), static_cast<uint16_t>(pixel) });
+      this->Recorded.push_back({ static_cast<float>(z), static_cast<float>(scalar),
+        static_cast<uint16_t>(pixel), static_cast<uint16_t>(k) });
     }
   }
   void EndTile(const TileRect& tile)
@@ -170,8 +174,12 @@ struct Moments : NoSegments
     }
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      AddPowerMoments<N>(
-        this->Output + (N + 1) * tile.ImagePixel(p, this->Width), this->Sums.data() + p * (N + 1));
+      const size_t at = (N + 1) * tile.ImagePixel(p, this->Width);
+      AddPowerMoments<N>(this->Output + at, this->Sums.data() + p * (N + 1));
+      if (this->Own)
+      {
+        AddPowerMoments<N>(this->Own + at, this->Sums.data() + p * (N + 1));
+      }
     }
   }
 };
@@ -219,6 +227,10 @@ struct Colour : NoSegments
       { static_cast<double>(s.Colour[0]), static_cast<double>(s.Colour[1]),
         static_cast<double>(s.Colour[2]) });
   }
+  void Replay(const CachedSample& sample, const TransferSample& s)
+  {
+    this->Add(sample.Pixel, sample.Z, s);
+  }
   void EndTile(const TileRect& tile)
   {
     for (int p = 0; p < tile.Pixels(); ++p)
@@ -227,6 +239,98 @@ struct Colour : NoSegments
       for (int c = 0; c < 4; ++c)
       {
         out[c] += this->Sums[p].Sums[c];
+      }
+    }
+  }
+};
+
+// A pass-1 sample's place along its ray when only the cache holds it: its float depth (as an
+// integer that orders like the float), then the low bits of its lattice index for depths that
+// rounded to the same float. Consecutive samples differ in k by 1, so ties never span a wrap
+// of the 16 bits unless 65536 samples share one float depth.
+inline int64_t ReplayOrder(const CachedSample& sample)
+{
+  uint32_t bits = 0;
+  std::memcpy(&bits, &sample.Z, sizeof(bits));
+  bits = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+  return (static_cast<int64_t>(bits) << 16) | sample.K16;
+}
+
+// Hybrid pass 2 (apcHybridTransmittance.h): each pixel's own samples collected, sorted by
+// their place along the ray and weighted by alpha T_own T_others, T_own the exact ordered
+// product of the own samples in front, T_others reconstructed from global - own moments.
+template <int N>
+struct HybridColour : NoSegments
+{
+  struct OwnSample
+  {
+    int64_t Order; // lattice index k, or ReplayOrder for cached samples
+    double Z;
+    float Absorbance;
+    std::array<float, 3> Colour;
+  };
+
+  double* Output;
+  int Width;
+  const LogDepthWarp* Warp;
+  const double* GlobalMoments;
+  const double* OwnMoments;
+  MomentSettings<N> Settings;
+  std::vector<std::vector<OwnSample>> Pixels;
+
+  HybridColour(double* output, int width, const LogDepthWarp* warp, const double* global,
+    const double* own, const MomentSettings<N>& settings)
+    : Output(output)
+    , Width(width)
+    , Warp(warp)
+    , GlobalMoments(global)
+    , OwnMoments(own)
+    , Settings(settings)
+  {
+  }
+  void BeginTile(const TileRect& tile)
+  {
+    this->Pixels.resize(tile.Pixels());
+    for (auto& p : this->Pixels)
+    {
+      p.clear();
+    }
+  }
+  void Sample(int pixel, int64_t k, double t, double, const TransferSample& s)
+  {
+    this->Pixels[pixel].push_back({ k, (*this->Warp)(t), s.Absorbance, s.Colour });
+  }
+  void Replay(const CachedSample& sample, const TransferSample& s)
+  {
+    this->Pixels[sample.Pixel].push_back({ ReplayOrder(sample), sample.Z, s.Absorbance, s.Colour });
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      auto& samples = this->Pixels[p];
+      if (samples.empty())
+      {
+        continue;
+      }
+      std::sort(samples.begin(), samples.end(),
+        [](const OwnSample& a, const OwnSample& b) { return a.Order < b.Order; });
+      const size_t at = static_cast<size_t>(tile.ImagePixel(p, this->Width));
+      const OthersTransmittance<N> others(
+        this->GlobalMoments + (N + 1) * at, this->OwnMoments + (N + 1) * at, this->Settings);
+      OwnTransmittance own;
+      ColourSums sums;
+      for (const OwnSample& s : samples)
+      {
+        const double weight = own.Weight(static_cast<double>(s.Absorbance));
+        sums.Add(others.IsEmpty() ? weight : weight * others(s.Z),
+          { static_cast<double>(s.Colour[0]), static_cast<double>(s.Colour[1]),
+            static_cast<double>(s.Colour[2]) });
+      }
+      double* out = this->Output + 4 * at;
+      for (int c = 0; c < 4; ++c)
+      {
+        out[c] += sums.Sums[c];
       }
     }
   }

@@ -48,14 +48,18 @@ enum class ResolveMode
   // MBOIT's resolve: alpha = 1 - exp(-b0) exactly, rgb = alpha C / W. The errors of the
   // reconstructed T then only redistribute colour between samples, never change opacity.
   // W <= 0 (or non-finite, or below kMinResolveWeight) gives rgb = 0 with that alpha.
-  Renormalised
+  Renormalised,
+  // Renormalised, on sums whose weights pass 2 took from each process's own samples exactly
+  // and only from the other processes' moments (apcHybridTransmittance.h). The resolve itself
+  // is Renormalised's; the mode tells the passes how to weight.
+  Hybrid
 };
 
 // Below this W the ratio C/W is not trusted (it would be the quotient of two underflowed
 // quantities).
 constexpr double kMinResolveWeight = 1e-300;
 
-// b0 is the pixel's total (global) absorbance; only Renormalised uses it.
+// b0 is the pixel's total (global) absorbance; Renormalised and Hybrid use it.
 RGBA Resolve(ResolveMode mode, const ColourSums& sums, double b0);
 
 // Resolve for a whole image: pixel p's b0 is moments[p * momentStride], its colour sums

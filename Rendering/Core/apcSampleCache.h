@@ -15,13 +15,17 @@ namespace apc
 
 class TransferTable;
 
-// One pass-1 sample: its warped depth, its scalar, its pixel in the tile.
+// One pass-1 sample: its warped depth, its scalar, its pixel in the tile, and the low 16 bits
+// of its lattice index (in what was padding), which order the samples of a pixel whose float
+// depths tie, for the Hybrid resolve's exact own transmittance.
 struct CachedSample
 {
   float Z;
   float Scalar;
   uint16_t Pixel;
+  uint16_t K16;
 };
+static_assert(sizeof(CachedSample) == 12, "the lattice bits must not make the cache bigger");
 
 struct SampleCache
 {

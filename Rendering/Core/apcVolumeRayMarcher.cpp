@@ -313,12 +313,14 @@ void VolumeRayMarcher::SetMesh(const CellMesh* mesh)
 {
   this->Mesh = mesh;
   this->Cache->Clear();
+  this->OwnMomentsOrder = 0;
 }
 
 //------------------------------------------------------------------------------
 void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
 {
   this->Cache->Clear();
+  this->OwnMomentsOrder = 0;
   this->Camera.reset(new RayCamera(camera));
   const size_t pixels = static_cast<size_t>(camera.GetWidth()) * camera.GetHeight();
   this->RayEnds.assign(pixels, std::numeric_limits<float>::infinity());
@@ -390,12 +392,24 @@ void VolumeRayMarcher::RenderExact(const TransferTable& table, float* rgba)
 //------------------------------------------------------------------------------
 template <int N>
 void VolumeRayMarcher::AccumulateMoments(
-  const TransferTable& table, const LogDepthWarp& warp, double* moments)
+  const TransferTable& table, const LogDepthWarp& warp, double* moments, bool keepOwn)
 {
   SampleCache& cache = *this->Cache;
   cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()));
   visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);
+  this->OwnMomentsOrder = 0;
+  if (keepOwn && this->Camera)
+  {
+    const size_t pixels = static_cast<size_t>(this->Camera->GetWidth()) * this->Camera->GetHeight();
+    this->OwnMoments.assign(pixels * (N + 1), 0.0);
+    visitor.Own = this->OwnMoments.data();
+  }
+  else
+  {
+    std::vector<double>().swap(this->OwnMoments); // no memory unless Hybrid asks for it
+  }
   this->March(visitor, table);
+  this->OwnMomentsOrder = visitor.Own ? N : 0;
   cache.Valid = cache.MaxBytes > 0;
   cache.Table = &table;
   cache.WarpNear = warp.Near();
@@ -406,40 +420,49 @@ void VolumeRayMarcher::AccumulateMoments(
 //------------------------------------------------------------------------------
 template <int N>
 void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDepthWarp& warp,
-  const double* moments, const MomentSettings<N>& settings, double* colourSums)
+  const double* moments, const MomentSettings<N>& settings, double* colourSums, bool hybrid)
 {
   const SampleCache& cache = *this->Cache;
   const bool usable = cache.Valid && cache.Table == &table && cache.Moments == N &&
     cache.WarpNear == warp.Near() && cache.WarpFar == warp.Far();
-  int64_t replayed = 0;
-  if (usable)
-  {
-    replayed = this->ReplayColour<N>(table, warp, moments, settings, colourSums);
-  }
   // The tiles the cache does not hold (all of them without a cache) are marched again.
-  visitors::Colour<N> visitor(colourSums, this->Width(), &warp, moments, settings);
-  this->March(visitor, table, usable ? &cache.Kept : nullptr);
+  auto run = [&](auto& visitor)
+  {
+    const int64_t replayed = usable ? this->ReplayColour(table, visitor) : 0;
+    this->March(visitor, table, usable ? &cache.Kept : nullptr);
+    return replayed;
+  };
+  int64_t replayed = 0;
+  if (hybrid && this->OwnMomentsOrder == N)
+  {
+    visitors::HybridColour<N> visitor(
+      colourSums, this->Width(), &warp, moments, this->OwnMoments.data(), settings);
+    replayed = run(visitor);
+  }
+  else
+  {
+    visitors::Colour<N> visitor(colourSums, this->Width(), &warp, moments, settings);
+    replayed = run(visitor);
+  }
   this->LastSamples += replayed;
   this->LastColourCacheShare =
     this->LastSamples > 0 ? static_cast<double>(replayed) / this->LastSamples : (usable ? 1 : 0);
 }
 
 //------------------------------------------------------------------------------
-template <int N>
-int64_t VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDepthWarp& warp,
-  const double* moments, const MomentSettings<N>& settings, double* colourSums)
+template <class Visitor>
+int64_t VolumeRayMarcher::ReplayColour(const TransferTable& table, const Visitor& prototype)
 {
   // Pass 2 from pass 1's samples: the same samples with the same values, re-weighted by the
   // transmittance reconstructed from the global moments; no clipping, no interpolation.
   const TileGrid& grid = this->Bins->Grid;
-  const visitors::Colour<N> prototype(colourSums, grid.Width, &warp, moments, settings);
-  tbb::combinable<visitors::Colour<N>> perThread([&prototype] { return prototype; });
+  tbb::combinable<Visitor> perThread([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   const SampleCache& cache = *this->Cache;
   ParallelFor(this->Threads, static_cast<int64_t>(cache.Tiles.size()), 1,
     [&](int64_t begin, int64_t end)
     {
-      visitors::Colour<N>& visitor = perThread.local();
+      Visitor& visitor = perThread.local();
       for (int64_t t = begin; t < end; ++t)
       {
         const std::vector<CachedSample>& recorded = cache.Tiles[t];
@@ -451,7 +474,7 @@ int64_t VolumeRayMarcher::ReplayColour(const TransferTable& table, const LogDept
         visitor.BeginTile(tile);
         for (const CachedSample& sample : recorded)
         {
-          visitor.Add(sample.Pixel, sample.Z, table.Lookup(sample.Scalar));
+          visitor.Replay(sample, table.Lookup(sample.Scalar));
         }
         visitor.EndTile(tile);
         samples.local() += static_cast<int64_t>(recorded.size());
@@ -518,16 +541,16 @@ void VolumeRayMarcher::CountSegments(int32_t* counts)
 }
 
 template void VolumeRayMarcher::AccumulateMoments<4>(
-  const TransferTable&, const LogDepthWarp&, double*);
+  const TransferTable&, const LogDepthWarp&, double*, bool);
 template void VolumeRayMarcher::AccumulateMoments<6>(
-  const TransferTable&, const LogDepthWarp&, double*);
+  const TransferTable&, const LogDepthWarp&, double*, bool);
 template void VolumeRayMarcher::AccumulateMoments<8>(
-  const TransferTable&, const LogDepthWarp&, double*);
-template void VolumeRayMarcher::AccumulateColour<4>(
-  const TransferTable&, const LogDepthWarp&, const double*, const MomentSettings<4>&, double*);
-template void VolumeRayMarcher::AccumulateColour<6>(
-  const TransferTable&, const LogDepthWarp&, const double*, const MomentSettings<6>&, double*);
-template void VolumeRayMarcher::AccumulateColour<8>(
-  const TransferTable&, const LogDepthWarp&, const double*, const MomentSettings<8>&, double*);
+  const TransferTable&, const LogDepthWarp&, double*, bool);
+template void VolumeRayMarcher::AccumulateColour<4>(const TransferTable&, const LogDepthWarp&,
+  const double*, const MomentSettings<4>&, double*, bool);
+template void VolumeRayMarcher::AccumulateColour<6>(const TransferTable&, const LogDepthWarp&,
+  const double*, const MomentSettings<6>&, double*, bool);
+template void VolumeRayMarcher::AccumulateColour<8>(const TransferTable&, const LogDepthWarp&,
+  const double*, const MomentSettings<8>&, double*, bool);
 
 } // namespace apc

@@ -66,15 +66,21 @@ public:
   // Exact ordered blending: premultiplied RGBA, W*H*4.
   void RenderExact(const TransferTable& table, float* rgba);
 
-  // MBOIT pass 1: unnormalised power moments b0..bN per pixel, W*H*(N+1).
+  // MBOIT pass 1: unnormalised power moments b0..bN per pixel, W*H*(N+1). keepOwn: the
+  // marcher also keeps this mesh's moments (W*H*(N+1) doubles, held only while asked for) for
+  // a Hybrid pass 2.
   template <int N>
-  void AccumulateMoments(const TransferTable& table, const LogDepthWarp& warp, double* moments);
+  void AccumulateMoments(
+    const TransferTable& table, const LogDepthWarp& warp, double* moments, bool keepOwn = false);
 
   // MBOIT pass 2: (sum w r, sum w g, sum w b, sum w) per pixel, W*H*4, w = alpha * T(z) with
-  // T reconstructed from the (global) moments.
+  // T reconstructed from the (global) moments. hybrid (apcHybridTransmittance.h): T is the
+  // exact ordered transmittance of this mesh's own samples times the one reconstructed from
+  // the moments of everything else (global - own); it needs the own moments of a pass 1 with
+  // keepOwn on the same view, N, table and warp, and without them weights as without hybrid.
   template <int N>
   void AccumulateColour(const TransferTable& table, const LogDepthWarp& warp, const double* moments,
-    const MomentSettings<N>& settings, double* colourSums);
+    const MomentSettings<N>& settings, double* colourSums, bool hybrid = false);
 
   // This mesh's segments of every pixel (see RaySegment), replacing segments' content.
   void RenderSegments(const TransferTable& table, SegmentImage& segments);
@@ -91,10 +97,9 @@ private:
   template <class Visitor>
   void March(Visitor& prototype, const TransferTable& table,
     const std::vector<uint8_t>* skipTiles = nullptr);
-  // Returns the samples replayed.
-  template <int N>
-  int64_t ReplayColour(const TransferTable& table, const LogDepthWarp& warp, const double* moments,
-    const MomentSettings<N>& settings, double* colourSums);
+  // Replays the cached tiles into copies of prototype; returns the samples replayed.
+  template <class Visitor>
+  int64_t ReplayColour(const TransferTable& table, const Visitor& prototype);
   int Width() const { return this->Camera ? this->Camera->GetWidth() : 0; }
 
   // Square tiles of this many pixels a side: small enough to balance the TBB tasks and keep a
@@ -106,6 +111,10 @@ private:
   std::vector<float> RayEnds;
   std::unique_ptr<TileBins> Bins;
   std::unique_ptr<SampleCache> Cache;
+  // This mesh's own moments from the last pass 1 that kept them (Hybrid), and their order
+  // (0: none kept).
+  std::vector<double> OwnMoments;
+  int OwnMomentsOrder = 0;
   double LastColourCacheShare = 0;
   int Threads = 0;
   bool LatticeJitter = false;

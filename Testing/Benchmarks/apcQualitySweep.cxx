@@ -15,16 +15,37 @@
 // instead measures the sample lattice: EXACT and default MBOIT at the scene's spacing with and
 // without the per-pixel lattice jitter, against the same mode at a 4x finer spacing (where
 // banding is 4x finer and fainter): DIR/lattice.csv and DIR/lattice_<scene>_<case>.png.
+//
+//   apcQualitySweep --ranks [--out DIR] [--data DIR] [--size S] [--scenes ...]
+//
+// instead measures the Hybrid resolve against APC on split data: each scene's cells are cut
+// into k = 1, 2, 4, 8 pieces of contiguous cell ids (for the puzzle scenes these follow the
+// puzzle pieces, which interleave in depth; for the wind data its 8 Scotch pieces), each piece
+// rendered by its own frame engine in this one process, as one rank would: pass 1 per piece,
+// the pieces' moments summed (the allreduce, in double), pass 2 per piece, colour sums added
+// (the reduce), resolved. APC (RENORMALISED) and HYBRID at 4 and 6 moments, beta 0.3, against
+// the one-process EXACT image, with the wall and CPU time of pass 2 over all pieces (best of
+// 5):
+// DIR/ranks.csv and DIR/ranks_<scene>_k<k>_m<moments>_<resolve>.png.
 
 #include "apcTestImages.h"
 #include "apcTestPuzzles.h"
 #include "apcTestRender.h"
 
+#include "apcFrameEngine.h"
 #include "apcImageMetrics.h"
+#include "apcMomentParameters.h"
+#include "apcResolve.h"
 #include "vtkAPCPuzzleSource.h"
 #include "vtkAPCVolumeMapper.h"
+#include "vtkExtractCells.h"
+#include "vtkIdList.h"
 #include "vtkImageData.h"
 #include "vtkPointData.h"
+#include "vtkRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkUnstructuredGrid.h"
+#include "vtkVolume.h"
 #include "vtkXMLPUnstructuredGridReader.h"
 
 #include <algorithm>
@@ -38,6 +59,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
 
 #ifndef APC_SOURCE_DIR
 #define APC_SOURCE_DIR "."
@@ -202,6 +225,176 @@ int LatticeStudy(const std::vector<apctest::Scene>& scenes, const std::string& o
   return 0;
 }
 
+// k pieces of contiguous cell ids (c * k / cells).
+std::vector<vtkSmartPointer<vtkUnstructuredGrid>> SplitIds(vtkUnstructuredGrid* grid, int k)
+{
+  const vtkIdType cells = grid->GetNumberOfCells();
+  std::vector<vtkSmartPointer<vtkUnstructuredGrid>> pieces;
+  for (int p = 0; p < k; ++p)
+  {
+    vtkNew<vtkIdList> ids;
+    for (vtkIdType c = p * cells / k; c < (p + 1) * cells / k; ++c)
+    {
+      ids->InsertNextId(c);
+    }
+    vtkNew<vtkExtractCells> extract;
+    extract->SetInputData(grid);
+    extract->SetCellList(ids);
+    extract->Update();
+    pieces.push_back(extract->GetOutput());
+  }
+  return pieces;
+}
+
+// One frame of the scene split into pieces, each rendered by its own mapper's frame engine
+// as one rank would render it (see --ranks at the top).
+struct SplitFrame
+{
+  std::vector<float> RGB;
+  double Pass1Seconds = 0;
+  double Pass2Seconds = 0;
+  double Pass2CPUSeconds = 0; // user + system time of all threads: steadier on a busy machine
+};
+
+double ProcessCPUSeconds()
+{
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_utime.tv_sec + 1e-6 * usage.ru_utime.tv_usec + usage.ru_stime.tv_sec +
+    1e-6 * usage.ru_stime.tv_usec;
+}
+
+SplitFrame RenderSplit(const apctest::Scene& scene,
+  const std::vector<vtkSmartPointer<vtkUnstructuredGrid>>& pieces, int moments, int resolve)
+{
+  vtkNew<vtkRenderWindow> window;
+  vtkNew<vtkRenderer> renderer;
+  apctest::SetUpWindow(window, renderer, scene.Camera);
+  apctest::ApplyView(renderer, scene.Camera);
+  double bounds[6];
+  scene.Grid->GetBounds(bounds);
+  renderer->ResetCameraClippingRange(bounds);
+  window->Render(); // the window and its (empty) depth buffer exist
+  auto property = apctest::MakeVolumeProperty(scene.TF);
+
+  apc::ImageSetup image;
+  image.Width = kSize;
+  image.Height = kSize;
+  image.Aspect = 1.0;
+  const std::vector<float> farDepth(static_cast<size_t>(kSize) * kSize, 1.0f);
+  std::vector<vtkSmartPointer<vtkAPCVolumeMapper>> mappers;
+  std::vector<vtkSmartPointer<vtkVolume>> volumes;
+  for (const auto& piece : pieces)
+  {
+    auto mapper = vtkSmartPointer<vtkAPCVolumeMapper>::New();
+    mapper->SetInputData(piece);
+    mapper->SetSampleDistance(scene.SampleDistance);
+    mapper->SetOverestimation(apc::kDefaultOverestimation);
+    mapper->SetNumberOfMoments(moments);
+    mapper->SetResolveMode(resolve);
+    auto volume = vtkSmartPointer<vtkVolume>::New();
+    volume->SetMapper(mapper);
+    volume->SetProperty(property);
+    apc::FrameEngine* engine = mapper->GetFrameEngine();
+    engine->BeginFrame();
+    if (!engine->UpdateInput(mapper) ||
+      !engine->Prepare(mapper, renderer, volume, bounds, farDepth.data(), image))
+    {
+      std::cerr << "error: a piece of " << scene.Name << " cannot be rendered\n";
+      std::exit(3);
+    }
+    mappers.push_back(mapper);
+    volumes.push_back(volume);
+  }
+  const apc::MomentParameters parameters = mappers.front()->GetMomentParameters();
+  const size_t pixels = static_cast<size_t>(kSize) * kSize;
+  const int stride = parameters.Moments + 1;
+  using Clock = std::chrono::steady_clock;
+  SplitFrame frame;
+  std::vector<double> global(pixels * stride, 0.0);
+  auto start = Clock::now();
+  for (auto& mapper : mappers)
+  {
+    mapper->GetFrameEngine()->RenderMoments(parameters, global.data());
+  }
+  frame.Pass1Seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  std::vector<double> colour;
+  frame.Pass2Seconds = 1e300;
+  frame.Pass2CPUSeconds = 1e300;
+  for (int repeat = 0; repeat < 5; ++repeat)
+  {
+    colour.assign(pixels * 4, 0.0);
+    start = Clock::now();
+    const double cpu = ProcessCPUSeconds();
+    for (auto& mapper : mappers)
+    {
+      mapper->GetFrameEngine()->RenderColour(parameters, global.data(), colour.data());
+    }
+    frame.Pass2CPUSeconds = std::min(frame.Pass2CPUSeconds, ProcessCPUSeconds() - cpu);
+    frame.Pass2Seconds =
+      std::min(frame.Pass2Seconds, std::chrono::duration<double>(Clock::now() - start).count());
+  }
+  std::vector<float> rgba(4 * pixels, 0.0f);
+  apc::ResolveImage(parameters.Resolve, pixels, global.data(), stride, colour.data(), rgba.data());
+  frame.RGB = apc::CompositeOverBackground(rgba.data(), kSize, kSize, { 0, 0, 0 });
+  return frame;
+}
+
+// The --ranks study (see the top of the file).
+int RanksStudy(const std::vector<apctest::Scene>& scenes, const std::string& out)
+{
+  std::ofstream csv(out + "/ranks.csv");
+  const std::string header =
+    "scene,ranks,moments,resolve,ssim,psnr,mse,max_abs_diff,pass1_s,pass2_s,pass2_cpu_s";
+  csv << header << "\n";
+  std::cout << header << std::endl;
+  for (const apctest::Scene& scene : scenes)
+  {
+    vtkUnstructuredGrid* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
+    if (!grid)
+    {
+      std::cerr << "error: " << scene.Name << " is not an unstructured grid\n";
+      return 3;
+    }
+    const auto exact = RenderRGB(scene, vtkAPCVolumeMapper::EXACT, 0.3, 4, 0);
+    WriteRGBPNG(exact, out + "/ranks_" + scene.Name + "_exact.png");
+    for (int k : { 1, 2, 4, 8 })
+    {
+      const auto pieces = SplitIds(grid, k);
+      for (int moments : { 4, 6 })
+      {
+        for (int resolve : { vtkAPCVolumeMapper::RENORMALISED, vtkAPCVolumeMapper::HYBRID })
+        {
+          const SplitFrame frame = RenderSplit(scene, pieces, moments, resolve);
+          const apc::ImageComparison c =
+            apc::CompareImages(frame.RGB.data(), exact.data(), kSize, kSize, 3, 1.0, 16.0 / 255);
+          const char* name = resolve == vtkAPCVolumeMapper::HYBRID ? "HYBRID" : "APC";
+          std::ostringstream line;
+          line.precision(6);
+          line << scene.Name << "," << k << "," << moments << "," << name << "," << c.Ssim << ",";
+          if (std::isinf(c.Psnr))
+          {
+            line << "inf";
+          }
+          else
+          {
+            line << c.Psnr;
+          }
+          line << "," << c.Mse << "," << c.MaxAbsDiff << "," << frame.Pass1Seconds << ","
+               << frame.Pass2Seconds << "," << frame.Pass2CPUSeconds;
+          csv << line.str() << "\n";
+          std::cout << line.str() << std::endl;
+          std::ostringstream png;
+          png << out << "/ranks_" << scene.Name << "_k" << k << "_m" << moments << "_" << name
+              << ".png";
+          WriteRGBPNG(frame.RGB, png.str());
+        }
+      }
+    }
+  }
+  return 0;
+}
+
 } // namespace
 
 int main(int argc, char* argv[])
@@ -210,12 +403,17 @@ int main(int argc, char* argv[])
   std::string data = APC_SOURCE_DIR "/Data";
   std::string wanted;
   bool lattice = false;
+  bool ranks = false;
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
     if (arg == "--lattice")
     {
       lattice = true;
+    }
+    else if (arg == "--ranks")
+    {
+      ranks = true;
     }
     else if ((arg == "--out" || arg == "--data" || arg == "--scenes") && i + 1 < argc)
     {
@@ -227,8 +425,9 @@ int main(int argc, char* argv[])
     }
     else
     {
-      std::cerr << "usage: apcQualitySweep [--lattice] [--out DIR] [--data DIR] [--size S >= 16] "
-                   "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
+      std::cerr
+        << "usage: apcQualitySweep [--lattice | --ranks] [--out DIR] [--data DIR] [--size S >= 16] "
+           "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
       return 1;
     }
   }
@@ -237,6 +436,10 @@ int main(int argc, char* argv[])
   if (lattice)
   {
     return LatticeStudy(MakeScenes(data, wanted), out);
+  }
+  if (ranks)
+  {
+    return RanksStudy(MakeScenes(data, wanted), out);
   }
 
   std::ofstream csv(out + "/quality.csv");

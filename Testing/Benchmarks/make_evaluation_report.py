@@ -569,6 +569,141 @@ class Report:
             self.add(table(["scene", "exact", "default β %g, %d moments" % (beta0, moments0),
                             "best mean: β %g, %d moments" % (best[0], best[1])], cells))
 
+    # ---------------------------------------------------------------- Hybrid resolve
+    def hybrid(self):
+        """Section 4's Hybrid subsection, from apcQualitySweep --ranks (quality/ranks.csv),
+        which is copied to docs/evaluation/hybrid_ranks.csv."""
+        path = os.path.join(self.results, "quality", "ranks.csv")
+        kept = os.path.join(self.figures, "hybrid_ranks.csv")
+        rows = read_csv(path)
+        if rows:
+            shutil.copyfile(path, kept)
+        else:
+            # Results from before the study (a --model-only run over an older full run's
+            # folder): the committed CSV, said so.
+            rows = read_csv(kept)
+            if not rows:
+                self.add("### 4.1 Hybrid resolve on split data\n\nNo results "
+                         "(quality/ranks.csv missing).\n")
+                return
+        committed = not os.path.exists(path)
+        scenes = list(dict.fromkeys(r["scene"] for r in rows))
+        ranks = sorted({int(r["ranks"]) for r in rows})
+        moments = sorted({int(r["moments"]) for r in rows})
+        get = {(r["scene"], int(r["ranks"]), int(r["moments"]), r["resolve"]): r for r in rows}
+
+        def val(s, k, m, res, key):
+            r = get.get((s, k, m, res))
+            return num(r[key]) if r else float("nan")
+
+        def db(s, k, m):
+            return val(s, k, m, "HYBRID", "psnr") - val(s, k, m, "APC", "psnr")
+
+        # CPU time (all threads) when the sweep measured it: wall time on this shared 2-core
+        # machine moved by 2x between identical runs.
+        timing = "pass2_cpu_s" if "pass2_cpu_s" in rows[0] else "pass2_s"
+
+        def cost(s, k, m):
+            return val(s, k, m, "HYBRID", timing) / val(s, k, m, "APC", timing)
+
+        self.add("### 4.1 Hybrid resolve on split data (own samples exact, other ranks' by "
+                 "moments)\n")
+        if committed:
+            self.add("*From the committed evaluation/hybrid_ranks.csv: this run's results have "
+                     "no quality/ranks.csv.*\n")
+        self.add(
+            "`apcQualitySweep --ranks`: T(z) = T_own(z) · T_others(z); each rank weights its "
+            "own samples by their exact ordered transmittance and only the other ranks' "
+            "absorbance by the moments (global − own), `apcHybridTransmittance.h`. Its image "
+            "depends on the partition, so each scene is cut into k = %s pieces of contiguous "
+            "cell ids (the puzzle scenes' cells come piece by piece, so these follow the puzzle "
+            "pieces, which interleave in depth: on the gear teeth, 4 pieces of 4 slabs, k = 4 is "
+            "the paper's one puzzle piece per rank, k = 2 gives each rank two adjacent slabs of "
+            "every four, k = 8 half a piece; the sandwich has 3 pieces of 2 slabs, so k = 2 "
+            "cuts its middle piece; the wind data's cells come in its 8 Scotch pieces, "
+            "compact blocks of space). Each piece "
+            "is rendered by its own frame engine in one process as one rank would: pass 1 per "
+            "piece, the moments summed (in double, not the wire's fixed point), pass 2 per "
+            "piece, the colour sums added and resolved; β %s; compared with the one-process "
+            "EXACT render as in section 4 (%s² pixels). APC's image does not depend on k (its "
+            "rows repeat). Pass 2's cost is its %s over all pieces, best of 5, both modes "
+            "in the same run (TBB threads on 2 shared cores). CSV: "
+            "[evaluation/hybrid_ranks.csv](evaluation/hybrid_ranks.csv).\n" % (
+                ", ".join(str(k) for k in ranks), mapper_defaults()[0], self.quality_size(),
+                "CPU time (user + system, all threads)" if timing == "pass2_cpu_s"
+                else "wall time"))
+        header = ["scene", "ranks"]
+        for m in moments:
+            header += ["APC %d SSIM / PSNR" % m, "Hybrid %d SSIM / PSNR" % m, "Δ dB (%d)" % m,
+                       "pass 2 Hybrid/APC (%d)" % m]
+        body = []
+        for s in scenes:
+            for k in ranks:
+                line = [s, k]
+                for m in moments:
+                    line += ["%.5f / %s" % (val(s, k, m, "APC", "ssim"),
+                                            fmt(val(s, k, m, "APC", "psnr"), 3)),
+                             "%.5f / %s" % (val(s, k, m, "HYBRID", "ssim"),
+                                            fmt(val(s, k, m, "HYBRID", "psnr"), 3)),
+                             "exact" if k == 1 else "%+.2f" % db(s, k, m),
+                             "%.2f" % cost(s, k, m)]
+                body.append(line)
+        self.add(table(header, body))
+
+        split = [k for k in ranks if k > 1]
+        means = []
+        for m in moments:
+            for k in split:
+                gains = [db(s, k, m) for s in scenes]
+                ssim = [val(s, k, m, "HYBRID", "ssim") - val(s, k, m, "APC", "ssim")
+                        for s in scenes]
+                means.append("%d moments, %d ranks: Δ PSNR from %+.2f to %+.2f dB (median "
+                             "%+.2f), Δ SSIM median %+.5f, Hybrid better in PSNR on %d of %d "
+                             "scenes" % (m, k, min(gains), max(gains), median(gains),
+                                         median(ssim), sum(g > 0 for g in gains), len(gains)))
+        self.add("Over the scenes:\n\n" + "".join("- %s;\n" % t for t in means))
+        costs = [cost(s, k, m) for s in scenes for k in ranks for m in moments]
+        costs_split = [cost(s, k, m) for s in scenes for k in split for m in moments]
+        self.add("Pass 2 of Hybrid against APC's: median %.2f× over all rows (%.2f× to %.2f×), "
+                 "%.2f× over the split rows (k > 1). On one rank Hybrid queries no moments at "
+                 "all (the others are empty) and only sorts.\n" % (
+                     median(costs), min(costs), max(costs), median(costs_split)))
+        if "gearteeth" in scenes and 4 in ranks and 4 in moments:
+            g2 = db("gearteeth", 2, 4) if 2 in ranks else float("nan")
+            self.add(
+                "What decides the gain is how often a ray crosses from one piece to another, "
+                "not the number of ranks: on the paper's partition (gear teeth, one interleaved "
+                "puzzle piece per rank, k = 4) every slab borders other ranks' slabs and Hybrid "
+                "gains %+.2f dB at 4 moments, where two adjacent slabs per rank (k = 2) gain "
+                "%+.2f dB and the wind data's compact Scotch pieces %s dB at k = 2, 4, 8. Hybrid's "
+                "N-rank image differs from its 1-rank image (the exact one) by design, and from "
+                "one partition to another.\n" % (
+                    db("gearteeth", 4, 4), g2,
+                    "/".join("%+.1f" % db("wind", k, 4) for k in split)
+                    if "wind" in scenes else "–"))
+        resolve0 = mapper_defaults()[2]
+        self.add(
+            "The mapper's default resolve is %s%s. Hybrid gives up APC's \"N ranks = 1 rank\" "
+            "image for one that depends on the partition, gains nothing on the interleaved "
+            "pieces APC was designed for, and costs pass 2 %.2f× (median, split rows) and one "
+            "more moment image per rank; README, *When to use the Hybrid resolve*.\n" % (
+                resolve0, "" if resolve0 == "HYBRID" else " (not Hybrid)", median(costs_split)))
+        slab = [s for s in ("gearteeth", "sandwich") if s in scenes]
+        if slab:
+            self.headline.append(
+                "Hybrid resolve (own samples exact, other ranks' by moments): on 1 rank the "
+                "exact image; dB gained over APC at 2/4/8 ranks, 4 moments: %s; pass 2 %.2f× "
+                "APC's (median of the split rows)." % (
+                    "; ".join("%s %s" % (s, "/".join("%+.1f" % db(s, k, 4) for k in split))
+                              for s in slab), median(costs_split)))
+
+    def quality_size(self):
+        png = glob.glob(os.path.join(self.results, "quality", "*_exact.png"))
+        if not png:
+            return "?"
+        from PIL import Image
+        return Image.open(png[0]).size[0]
+
     # ---------------------------------------------------------------- scaling model
     def model(self):
         """Section 5, from the CSVs of scaling_model.py (results/model), which are copied with
@@ -959,6 +1094,7 @@ def main():
     report.transfers()
     report.realdata()
     report.quality()
+    report.hybrid()
     report.model()
     report.write(args.machine, args.seconds)
     return 0

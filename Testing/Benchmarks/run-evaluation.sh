@@ -4,7 +4,8 @@
 #   bash Testing/Benchmarks/run-evaluation.sh [--quick | --model-only]
 #
 # 1. image quality: apcQualitySweep (MBOIT vs EXACT for beta x moments x resolve on the spheres,
-#    sandwich, gear-teeth and wind scenes);
+#    sandwich, gear-teeth and wind scenes; and --ranks: the Hybrid resolve against APC on the
+#    scenes cut into 1, 2, 4, 8 pieces);
 # 2. weak scaling: apcScalingBenchmark on 1, 2, 4, 8 ranks (gear teeth, one piece per rank,
 #    4 orbit cameras, APC vs the exact segment baseline; also N ranks vs one process);
 # 3. MPI constants: apcCommBenchmark on the same rank counts (ping-pong, allreduce, reduce,
@@ -92,6 +93,9 @@ step() { echo "== $* ($(($(date +%s) - start)) s; load average $(cut -d' ' -f1-3
 if [ "$model_only" = 0 ]; then
   step "1/7 image quality"
   bash "$top/.ci/with-xvfb" "$bin/apcQualitySweep" --out "$out/quality" "${quality[@]}" >>"$log" 2>&1
+  # The Hybrid resolve against APC on the same scenes cut into 1, 2, 4, 8 pieces.
+  bash "$top/.ci/with-xvfb" "$bin/apcQualitySweep" --ranks --out "$out/quality" "${quality[@]}" \
+    >>"$log" 2>&1
 fi
 
 step "2/7 weak scaling on ranks: $scaling_ranks"

@@ -41,6 +41,9 @@ parser.add_argument("--compare-png", help="reference screenshot: --png must matc
 parser.add_argument("--png-tolerance", type=int, default=1)
 parser.add_argument("--mode", default="APC",
                     choices=["APC", "Local exact", "Exact (segments)", "Auto"])
+parser.add_argument("--resolve", default="Renormalised (MBOIT)",
+                    choices=["Renormalised (MBOIT)", "Plain sum (paper)",
+                             "Hybrid (own exact, others by moments)"])
 parser.add_argument("--drop-array-on-rank", type=int, default=-1,
                     help="remove the rendered array on this rank (a broken piece)")
 parser.add_argument("--server", help="host:port of a pvserver to connect to")
@@ -262,6 +265,7 @@ def main():
     display.ScalarOpacityUnitDistance = unit
     display.APCSampleDistance = args.sample_distance if args.sample_distance > 0 else spacing
     display.APCMode = args.mode
+    display.APCResolveMode = args.resolve
     display.APCVerbosity = 1
     if args.out:
         display.APCImageFile = os.path.abspath(args.out)
