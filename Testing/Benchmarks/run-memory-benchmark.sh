@@ -3,7 +3,8 @@
 # one pvbatch run showing APC Volume and one showing an outline of the same data at the same
 # size (the floor: ParaView, the data, the window). Each rank's peak resident set comes from
 # /usr/bin/time. Writes $APC_MEMORY_OUT/memory.csv (default out/memory) and prints a summary:
-# the busiest rank's peak, APC's share above the floor, and that share per covered pixel.
+# the busiest rank's peak, APC's share above the floor, and that share per covered pixel
+# ("process" numbers the ranks in the order they exit, as /usr/bin/time reports them).
 #   APC_MEMORY_SIZES="1024 4096 8192" APC_MEMORY_RANKS="1 2 4" APC_MEMORY_SCENES="wind puzzle"
 # Arguments go to memory_footprint.py (e.g. --sample-distance 8).
 set -euo pipefail
@@ -16,7 +17,7 @@ export APC_PLUGIN=${APC_PLUGIN:-$top/build/lib/paraview-5.11/plugins/APC/APC.so}
 export PYTHONPATH="$top/Plugin/Python" LD_LIBRARY_PATH=${LD_LIBRARY_PATH:-}
 script="$top/Testing/Benchmarks/memory_footprint.py"
 csv="$out/memory.csv"
-echo "scene,size,ranks,case,rank,peak_mb,covered_pixels,seconds" >"$csv"
+echo "scene,size,ranks,case,process,peak_mb,covered_pixels,seconds" >"$csv"
 for scene in ${APC_MEMORY_SCENES:-wind puzzle}; do
   for size in ${APC_MEMORY_SIZES:-1024 4096 8192}; do
     for n in ${APC_MEMORY_RANKS:-1 2 4}; do
