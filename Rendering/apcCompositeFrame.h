@@ -59,8 +59,9 @@ struct CompositeFrame
   TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the collectives ship
   MomentParameters Moments;
   std::vector<FrameEngine*> Engines;
-  // The display process keeps the moments and colour sums in the result (for the float
-  // image: KeepLastImage or an image file); otherwise they go as soon as the image is resolved.
+  // The frame's float image is kept (KeepLastImage, or the display process's image file): the
+  // display process then keeps the moments and colour sums in the result; otherwise they go
+  // as soon as the image is resolved.
   bool KeepFloatImages = false;
 
   size_t Pixels() const { return static_cast<size_t>(this->Width) * this->Height; }

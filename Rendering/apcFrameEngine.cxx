@@ -124,11 +124,11 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
 {
   this->Ready = false;
   this->Crop = image.Crop.value_or(ScreenRect{ 0, 0, image.Width, image.Height });
-  this->Width = this->Crop.Pixels() > 0 ? this->Crop.Width() : 0;
-  this->Height = this->Crop.Pixels() > 0 ? this->Crop.Height() : 0;
+  const int width = this->GetWidth();
+  const int height = this->GetHeight();
   this->X0 = image.X0;
   this->Y0 = image.Y0;
-  if (this->Width < 1 || this->Height < 1 || !this->MeshValid)
+  if (width < 1 || height < 1 || !this->MeshValid)
   {
     return false;
   }
@@ -154,9 +154,8 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
     return false; // a mesh with no extent
   }
   this->Table = TransferTableFromVTK(vol->GetProperty(), this->Spacing);
-  this->Camera.reset(
-    new RayCamera(RayCameraFromVTK(ren, image.Width, image.Height, image.Aspect)
-                    ->Cropped(this->Crop.I0, this->Crop.J0, this->Width, this->Height)));
+  this->Camera.reset(new RayCamera(RayCameraFromVTK(ren, image.Width, image.Height, image.Aspect)
+                                     ->Cropped(this->Crop.I0, this->Crop.J0, width, height)));
   double clip[2];
   ren->GetActiveCamera()->GetClippingRange(clip);
   double tmin = 0;
@@ -171,16 +170,15 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
     depth.assign(this->GetPixels(), 1.0f);
     const int x0 = this->X0 + this->Crop.I0;
     const int y0 = this->Y0 + this->Crop.J0;
-    ren->GetRenderWindow()->GetZbufferData(
-      x0, y0, x0 + this->Width - 1, y0 + this->Height - 1, depth.data());
+    ren->GetRenderWindow()->GetZbufferData(x0, y0, x0 + width - 1, y0 + height - 1, depth.data());
     depthBuffer = depth.data();
   }
   std::vector<float> rayEnds(this->GetPixels());
-  for (int j = 0; j < this->Height; ++j)
+  for (int j = 0; j < height; ++j)
   {
-    for (int i = 0; i < this->Width; ++i)
+    for (int i = 0; i < width; ++i)
     {
-      const size_t p = static_cast<size_t>(j) * this->Width + i;
+      const size_t p = static_cast<size_t>(j) * width + i;
       rayEnds[p] = static_cast<float>(this->Camera->DistanceFromDepth(i, j, depthBuffer[p]));
     }
   }
@@ -256,7 +254,7 @@ void FrameEngine::RenderSegments(SegmentImage& segments)
 {
   if (!this->Ready)
   {
-    segments.Reset(this->Width, this->Height);
+    segments.Reset(this->GetWidth(), this->GetHeight());
     return;
   }
   this->Marcher.RenderSegments(*this->Table, segments);

@@ -96,9 +96,9 @@ public:
   bool Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
     const double* globalBounds, const float* depthBuffer, const ImageSetup& image);
 
-  int GetWidth() const { return this->Width; }
-  int GetHeight() const { return this->Height; }
-  size_t GetPixels() const { return static_cast<size_t>(this->Width) * this->Height; }
+  int GetWidth() const { return this->Crop.Pixels() > 0 ? this->Crop.Width() : 0; }
+  int GetHeight() const { return this->Crop.Pixels() > 0 ? this->Crop.Height() : 0; }
+  size_t GetPixels() const { return this->Crop.Pixels(); }
   /// The viewport's origin in the window (tiles of a large screenshot are offset).
   int GetX0() const { return this->X0; }
   int GetY0() const { return this->Y0; }
@@ -130,8 +130,6 @@ private:
   VolumeRayMarcher Marcher;
 
   bool Ready = false;
-  int Width = 0;
-  int Height = 0;
   int X0 = 0;
   int Y0 = 0;
   ScreenRect Crop;

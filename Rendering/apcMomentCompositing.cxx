@@ -139,24 +139,6 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
   return bytes;
 }
 
-// ResolveImage into the colour sums' memory: pixel p's four floats go to bytes [16p, 16p + 16),
-// which hold nothing pixel p or a later one still needs (pixel p's sums are bytes [32p, 32p +
-// 32), read first). Bytes, not float objects, are written: the doubles there are dead.
-void ResolveInPlace(
-  ResolveMode mode, size_t pixels, const double* moments, int stride, double* colourSums)
-{
-  auto* out = reinterpret_cast<unsigned char*>(colourSums);
-  for (size_t p = 0; p < pixels; ++p)
-  {
-    ColourSums sums;
-    std::copy(colourSums + 4 * p, colourSums + 4 * p + 4, sums.Data());
-    const RGBA resolved = Resolve(mode, sums, moments[p * stride]);
-    const float rgba[4] = { static_cast<float>(resolved[0]), static_cast<float>(resolved[1]),
-      static_cast<float>(resolved[2]), static_cast<float>(resolved[3]) };
-    std::memcpy(out + sizeof(rgba) * p, rgba, sizeof(rgba));
-  }
-}
-
 // The union of every process's covered tiles, on every process.
 std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGrid& tiles,
   const std::vector<double>& moments, int stride, FrameRecord& record)
@@ -250,7 +232,7 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
   }
   // The image is resolved into the colour sums' own memory, and the moments go before it is
   // copied out: the display process then peaks no higher than the others (in pass 2).
-  ResolveInPlace(parameters.Resolve, pixels, moments.data(), stride, colourSums.data());
+  ResolveImageInPlace(parameters.Resolve, pixels, moments.data(), stride, colourSums.data());
   moments = std::vector<double>();
   const auto* rgba = reinterpret_cast<const unsigned char*>(colourSums.data());
   result.RGBA.resize(4 * pixels);

@@ -397,7 +397,8 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     return;
   }
   internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels()); // APC: fewer
-  frame.KeepFloatImages = this->KeepLastImage || (this->ImageFileName && *this->ImageFileName);
+  frame.KeepFloatImages =
+    this->KeepLastImage || (group.IsDisplay() && this->ImageFileName && *this->ImageFileName);
   internal.LastReduction = frame.Reduction;
   internal.LastInteractive = frame.Interactive;
   std::vector<float> depth =
@@ -481,8 +482,7 @@ void vtkAPCCompositePass::FinishFrame(
   const apc::ScreenRect& rect = frame.Rect;
   if (!result.RGBA.empty() && rect.Pixels() > 0)
   {
-    const bool writing = group.IsDisplay() && this->ImageFileName && *this->ImageFileName;
-    if (this->KeepLastImage || writing)
+    if (frame.KeepFloatImages)
     {
       apc::FloatImages images;
       images.RGBA = result.RGBA.data();
@@ -510,9 +510,9 @@ void vtkAPCCompositePass::FinishFrame(
         frame.Width, frame.Height, full.data());
     }
     internal.Record.Clock.Lap("blend");
-    if (writing)
+    if (group.IsDisplay())
     {
-      this->WriteImage();
+      this->WriteImage(); // if there is a file name
     }
     if (!this->KeepLastImage)
     {

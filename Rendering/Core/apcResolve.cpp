@@ -1,5 +1,7 @@
 #include "apcResolve.h"
 
+#include <cstring>
+
 #include <algorithm>
 #include <cmath>
 
@@ -49,18 +51,43 @@ RGBA Resolve(ResolveMode mode, const ColourSums& sums, double b0)
   return out;
 }
 
+namespace
+{
+// Pixel p of an image: its four float RGBA values from its colour sums and b0.
+void ResolvePixel(ResolveMode mode, size_t p, const double* moments, int momentStride,
+  const double* colourSums, float rgba[4])
+{
+  ColourSums sums;
+  std::copy(colourSums + 4 * p, colourSums + 4 * p + 4, sums.Data());
+  const RGBA out = Resolve(mode, sums, moments[p * momentStride]);
+  for (int c = 0; c < 4; ++c)
+  {
+    rgba[c] = static_cast<float>(out[c]);
+  }
+}
+}
+
 void ResolveImage(ResolveMode mode, size_t pixels, const double* moments, int momentStride,
   const double* colourSums, float* rgba)
 {
   for (size_t p = 0; p < pixels; ++p)
   {
-    ColourSums sums;
-    std::copy(colourSums + 4 * p, colourSums + 4 * p + 4, sums.Data());
-    const RGBA out = Resolve(mode, sums, moments[p * momentStride]);
-    for (int c = 0; c < 4; ++c)
-    {
-      rgba[4 * p + c] = static_cast<float>(out[c]);
-    }
+    ResolvePixel(mode, p, moments, momentStride, colourSums, rgba + 4 * p);
+  }
+}
+
+void ResolveImageInPlace(
+  ResolveMode mode, size_t pixels, const double* moments, int momentStride, double* colourSums)
+{
+  // Pixel p's floats go to bytes [16p, 16p + 16), which hold nothing pixel p or a later one
+  // still needs (pixel p's sums, bytes [32p, 32p + 32), are read first). Bytes are written,
+  // not float objects: the doubles there are dead.
+  auto* out = reinterpret_cast<unsigned char*>(colourSums);
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    float rgba[4];
+    ResolvePixel(mode, p, moments, momentStride, colourSums, rgba);
+    std::memcpy(out + sizeof(rgba) * p, rgba, sizeof(rgba));
   }
 }
 

@@ -66,6 +66,10 @@ RGBA Resolve(ResolveMode mode, const ColourSums& sums, double b0);
 // colourSums[4p .. 4p + 3]; writes premultiplied RGBA floats to rgba[4p .. 4p + 3].
 void ResolveImage(ResolveMode mode, size_t pixels, const double* moments, int momentStride,
   const double* colourSums, float* rgba);
+// The same image written over the colour sums' own memory: afterwards its first 16 * pixels
+// bytes hold the float RGBA (what a caller short of memory copies out), the rest is garbage.
+void ResolveImageInPlace(
+  ResolveMode mode, size_t pixels, const double* moments, int momentStride, double* colourSums);
 
 // Premultiplied colour over an opaque background: rgb + (1 - alpha) background.
 RGB BlendOverBackground(const RGBA& premultiplied, const RGB& background);
