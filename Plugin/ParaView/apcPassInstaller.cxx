@@ -50,6 +50,7 @@ struct Installation
   vtkSmartPointer<vtkCallbackCommand> BeforeRender;
   unsigned long BeforeRenderTag = 0;
   vtkSmartPointer<vtkCallbackCommand> AfterIceT;
+  bool IceTPasted = true; // IceT's DisplayRGBAResults before the pass was installed
 };
 
 std::map<vtkPVRenderView*, Installation>& Installations()
@@ -178,6 +179,10 @@ vtkAPCCompositePass* AttachVolume(vtkPVRenderView* view, const void* user, vtkVo
     vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
     installation.View = view;
     installation.Previous = sync->GetImageProcessingPass();
+    if (auto* icet = vtkIceTSynchronizedRenderers::SafeDownCast(sync->GetParallelSynchronizer()))
+    {
+      installation.IceTPasted = icet->GetIceTCompositePass()->GetDisplayRGBAResults();
+    }
     installation.Pass = vtkSmartPointer<vtkAPCCompositePass>::New();
     installation.Pass->SetController(vtkMultiProcessController::GetGlobalController());
     sync->SetImageProcessingPass(installation.Pass);
@@ -217,6 +222,13 @@ void DetachVolume(const void* user, vtkVolume* volume)
           vtkPVSynchronizedRenderer* sync = ViewAccess::SynchronizedRenderer(view);
           sync->SetImageProcessingPass(installation.Previous);
           sync->SetUseDepthBuffer(installation.Previous != nullptr);
+          // BeforeRender may have left IceT's own paste off (ordered compositing); without
+          // the pass nothing else would put IceT's image on the screen.
+          if (auto* icet =
+                vtkIceTSynchronizedRenderers::SafeDownCast(sync->GetParallelSynchronizer()))
+          {
+            icet->GetIceTCompositePass()->SetDisplayRGBAResults(installation.IceTPasted);
+          }
         }
         it = installations.erase(it);
         continue;
