@@ -11,6 +11,7 @@
 #include "apcRaySegments.h"
 #include "apcScreenRect.h"
 #include "apcStageClock.h"
+#include "apcVolumeRayMarcher.h"
 
 #include "vtkType.h"
 
@@ -56,7 +57,10 @@ struct CompositeFrame
   // the frame (depth, moments, colour sums, the result) holds Rect's pixels alone, row by
   // row (RectWidth() long), so memory follows the data's footprint, not the view.
   ScreenRect Rect;
-  TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the collectives ship
+  TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the depth share ships
+  // APC mode renders and composites a frame larger than this many pixels band by band (see
+  // MomentBands), so that its buffers are a band's size, not the rectangle's.
+  size_t BandPixels = size_t(1) << 22;
   MomentParameters Moments;
   std::vector<FrameEngine*> Engines;
   // The frame's float image is kept (KeepLastImage, or the display process's image file): the
@@ -85,13 +89,18 @@ struct FrameRecord
 };
 
 // The display process's final image of the volumes (the frame's Rect, premultiplied RGBA)
-// and, in APC mode, the global moments and colour sums it was resolved from.
+// and, in APC mode with KeepFloatImages, the global moments and colour sums it was resolved
+// from.
 struct FrameResult
 {
   std::vector<float> RGBA;
   std::vector<double> Moments;
   std::vector<double> ColourSums;
 };
+
+// Rect's rows cut into bands of at most maxPixels pixels (at least one marcher tile row each),
+// bottom to top: the same on every process for the same rectangle.
+std::vector<RowBand> MomentBands(int width, int height, size_t maxPixels);
 
 // The modes: each runs the frame's stages and collectives on every process and fills
 // result on the display process.

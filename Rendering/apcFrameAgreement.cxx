@@ -39,6 +39,7 @@ enum Slot
   Reduction,
   MaxMode,
   MinModeNegated,
+  MinBandPixelsNegated,
   SlotCount
 };
 }
@@ -92,6 +93,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   const double mode = 4.0 * local.Mode + (local.InDouble ? 2 : 0) + (local.DepthComposited ? 1 : 0);
   mine[slot::MaxMode] = mode;
   mine[slot::MinModeNegated] = -mode;
+  mine[slot::MinBandPixelsNegated] = -std::max(local.BandPixels, 1.0);
   double all[slot::SlotCount];
   std::copy(mine, mine + slot::SlotCount, all);
   if (group.Parallel)
@@ -120,6 +122,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
     agreed.SampleFactor = all[slot::SampleFactor];
     agreed.Reduction = static_cast<int>(all[slot::Reduction]);
   }
+  agreed.BandPixels = -all[slot::MinBandPixelsNegated];
   agreed.Width = local.Width;
   agreed.Height = local.Height;
   return agreed;

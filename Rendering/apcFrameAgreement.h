@@ -2,8 +2,8 @@
 // What every process must agree on before a frame's collectives, settled in one small
 // allreduce: the union of the data bounds (depth warp, sample spacing, screen rectangle),
 // failures, the number of visible APC volumes and of moments, the viewport size, the
-// compositing mode, and
-// whether the frame is interactive and how much cheaper it is then. A
+// compositing mode, the band size, and whether the frame is interactive and how much cheaper
+// it is then. A
 // process that cannot render, has no volume while others have, or disagrees on a size makes
 // every process skip the frame instead of waiting forever in a later collective.
 #ifndef apcFrameAgreement_h
@@ -32,6 +32,7 @@ struct LocalFrame
   int Mode = 0;                // the pass's CompositeMode and wire precision: each mode runs
   bool InDouble = false;       // different collectives, so one process's odd setting would hang
   bool DepthComposited = true; // the pass's DisplayDepthComposited (depth broadcast or MIN)
+  double BandPixels = 1;       // the pass's MaxBandPixels
 
   LocalFrame();
   // One visible APC volume: its number of moments and, if it has cells, their bounds.
@@ -57,6 +58,7 @@ struct FrameAgreement
   bool Interactive = false;
   double SampleFactor = 1.0; // 1 for still frames
   int Reduction = 1;         // 1 for still frames
+  double BandPixels = 1;     // the smallest MaxBandPixels of any process: the bands of a frame
 
   static FrameAgreement Agree(const ProcessGroup& group, const LocalFrame& local);
 

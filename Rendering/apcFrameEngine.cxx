@@ -194,7 +194,8 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
 }
 
 //------------------------------------------------------------------------------
-void FrameEngine::RenderMoments(const MomentParameters& parameters, double* moments)
+void FrameEngine::RenderMoments(
+  const MomentParameters& parameters, double* moments, const RowBand& band)
 {
   if (!this->Ready)
   {
@@ -204,14 +205,14 @@ void FrameEngine::RenderMoments(const MomentParameters& parameters, double* mome
   const bool hybrid = parameters.Resolve == ResolveMode::Hybrid;
   DispatchMoments(parameters.Moments,
     [&](auto n)
-    { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments, hybrid); });
-  this->Samples = this->Marcher.GetLastSampleCount();
+    { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments, hybrid, band); });
+  this->Samples += this->Marcher.GetLastSampleCount(); // summed over the frame's bands
   this->Clock.Lap("moments");
 }
 
 //------------------------------------------------------------------------------
-void FrameEngine::RenderColour(
-  const MomentParameters& parameters, const double* moments, double* colourSums)
+void FrameEngine::RenderColour(const MomentParameters& parameters, const double* moments,
+  double* colourSums, const RowBand& band)
 {
   if (!this->Ready)
   {
@@ -221,7 +222,7 @@ void FrameEngine::RenderColour(
     [&](auto n)
     {
       this->Marcher.AccumulateColour<n()>(*this->Table, *this->Warp, moments,
-        parameters.Settings<n()>(), colourSums, parameters.Resolve == ResolveMode::Hybrid);
+        parameters.Settings<n()>(), colourSums, parameters.Resolve == ResolveMode::Hybrid, band);
     });
   this->Clock.Lap("colour");
 }

@@ -105,13 +105,17 @@ public:
   /// The rendered pixels in the image (GetWidth x GetHeight of them).
   const ScreenRect& GetCrop() const { return this->Crop; }
   double GetSampleDistance() const { return this->Spacing; }
-  /// Lattice samples taken by the last marching stage.
+  /// Lattice samples taken since Prepare by pass 1 (all its bands), or by the exact or
+  /// segment stage.
   int64_t GetSampleCount() const { return this->Samples; }
   StageClock& GetClock() { return this->Clock; }
   const StageClock& GetClock() const { return this->Clock; }
 
-  void RenderMoments(const MomentParameters& parameters, double* moments);
-  void RenderColour(const MomentParameters& parameters, const double* moments, double* colourSums);
+  /// MBOIT's passes over the rows of band (all by default; see RowBand): the buffers hold
+  /// those rows alone.
+  void RenderMoments(const MomentParameters& parameters, double* moments, const RowBand& band = {});
+  void RenderColour(const MomentParameters& parameters, const double* moments, double* colourSums,
+    const RowBand& band = {});
   void RenderExact(float* rgba);
   void CountSegments(int* counts);
   /// This process's sort-last segments of every pixel, replacing segments' content.

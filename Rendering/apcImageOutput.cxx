@@ -27,18 +27,12 @@
 namespace apc
 {
 
-void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, int imageWidth,
-  int imageHeight, const float* rgba)
+namespace
 {
-  // A float texture on a viewport quad, blended premultiplied-over into whatever framebuffer
-  // is bound: the window's in plain VTK, the one IceT composited into in ParaView (its
-  // result is captured from there, so drawing anywhere else would be lost). Float keeps
-  // the 8-bit quantisation of glDrawPixels out of the volume's colours.
-  auto* window = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
-  if (!window || width < 1 || height < 1 || imageWidth < 1 || imageHeight < 1)
-  {
-    return;
-  }
+// Blends one float texture over the viewport at (x0, y0).
+void BlendTexture(vtkOpenGLRenderWindow* window, int x0, int y0, int width, int height,
+  int imageWidth, int imageHeight, const float* rgba)
+{
   vtkNew<vtkTextureObject> texture;
   texture->SetContext(window);
   texture->Create2DFromRaw(imageWidth, imageHeight, 4, VTK_FLOAT,
@@ -76,6 +70,38 @@ void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, in
     quad.ReleaseGraphicsResources(window);
   }
   texture->ReleaseGraphicsResources(window);
+}
+
+// An image at one texel per pixel is blended in bands of rows of at most this many pixels:
+// a software OpenGL keeps a texture's copy in memory, 16 bytes per pixel of the whole
+// image otherwise (1 GB at 8192^2).
+constexpr int kBlendBandPixels = 1 << 20;
+}
+
+void BlendIntoWindow(vtkRenderer* ren, int x0, int y0, int width, int height, int imageWidth,
+  int imageHeight, const float* rgba)
+{
+  // A float texture on a viewport quad, blended premultiplied-over into whatever framebuffer
+  // is bound: the window's in plain VTK, the one IceT composited into in ParaView (its
+  // result is captured from there, so drawing anywhere else would be lost). Float keeps
+  // the 8-bit quantisation of glDrawPixels out of the volume's colours.
+  auto* window = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
+  if (!window || width < 1 || height < 1 || imageWidth < 1 || imageHeight < 1)
+  {
+    return;
+  }
+  if (imageWidth != width || imageHeight != height)
+  {
+    // A reduced image is interpolated as a whole (it is small: 1/r^2 of the viewport).
+    BlendTexture(window, x0, y0, width, height, imageWidth, imageHeight, rgba);
+    return;
+  }
+  const int rows = std::max(1, kBlendBandPixels / width);
+  for (int j = 0; j < height; j += rows)
+  {
+    const int n = std::min(rows, height - j);
+    BlendTexture(window, x0, y0 + j, width, n, width, n, rgba + 4 * static_cast<size_t>(width) * j);
+  }
 }
 
 void StoreFloatImages(

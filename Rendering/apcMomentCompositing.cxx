@@ -6,6 +6,9 @@
 // moments as 32-bit fixed point with a per-pixel scale agreed first (exact, order-independent
 // sums; see apcFixedPointMoments.h for why not float), the colour sums in float (the paper's
 // format; their rounding is not amplified). 4 moments: 1 + 20 + 16 bytes per covered pixel.
+// A large frame runs all of this band by band (rows of the screen rectangle), so that the
+// moment and colour buffers (72 bytes per pixel at 4 moments) are one band's size: at 8192^2
+// the whole rectangle's would be ~4.8 GB per process.
 #include "apcCompositeFrame.h"
 #include "apcFixedPointMoments.h"
 #include "apcFrameEngine.h"
@@ -14,6 +17,7 @@
 #include "vtkCommunicator.h"
 #include "vtkMultiProcessController.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <vector>
@@ -156,60 +160,64 @@ std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGri
   ++record.MessagesSent;
   return all;
 }
-}
 
-void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame, bool inDouble,
-  FrameRecord& record, FrameResult& result)
+// One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
+// agreement, the moments' allreduce, pass 2 and the colour sums' reduce; the display process
+// resolves the band into result at its rows.
+void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  bool inDouble, FrameRecord& record, FrameResult& result)
 {
   const MomentParameters& parameters = frame.Moments;
   const int stride = parameters.Moments + 1;
-  const bool exchange = group.Parallel && frame.Tiles.Tiles() > 0;
+  const int width = frame.RectWidth();
+  const size_t pixels = static_cast<size_t>(width) * (band.J1 - band.J0);
+  const size_t offset = static_cast<size_t>(width) * band.J0; // of the band in the frame
+  const TileGrid tiles(width, 0, 0, width, band.J1 - band.J0);
+  const bool exchange = group.Parallel && tiles.Tiles() > 0;
 
-  std::vector<double> moments(frame.RectPixels() * stride, 0.0);
+  std::vector<double> moments(pixels * stride, 0.0);
   for (FrameEngine* engine : frame.Engines)
   {
-    engine->RenderMoments(parameters, moments.data());
+    engine->RenderMoments(parameters, moments.data(), band);
   }
   record.Clock.Lap("pass1");
-  for (size_t p = 0; p < frame.RectPixels(); ++p)
+  for (size_t p = 0; p < pixels; ++p)
   {
     record.OwnCoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
   }
 
   // The mask's allreduce is where a process waits for the slowest one's pass 1; the moments'
   // allreduce after it is the transfer alone.
-  const std::vector<unsigned char> covered =
-    AgreeOnTiles(group, frame.Tiles, moments, stride, record);
+  const std::vector<unsigned char> covered = AgreeOnTiles(group, tiles, moments, stride, record);
   record.Clock.Lap("tiles");
   auto sum = [&](std::vector<double>& image, int components, bool everywhere)
   {
     if (exchange)
     {
       record.BytesSent += inDouble
-        ? SumTiles<double>(group, frame.Tiles, covered, image, components, everywhere, record)
-        : SumTiles<float>(group, frame.Tiles, covered, image, components, everywhere, record);
+        ? SumTiles<double>(group, tiles, covered, image, components, everywhere, record)
+        : SumTiles<float>(group, tiles, covered, image, components, everywhere, record);
     }
   };
   if (exchange && !inDouble)
   {
-    record.BytesSent +=
-      SumMomentsInFixedPoint(group, frame.Tiles, covered, moments, stride, record);
+    record.BytesSent += SumMomentsInFixedPoint(group, tiles, covered, moments, stride, record);
   }
   else
   {
     sum(moments, stride, true);
   }
   record.Clock.Lap("allreduce");
-  record.Pixels = static_cast<vtkIdType>(frame.Tiles.PixelsIn(covered));
-  for (size_t p = 0; p < frame.RectPixels(); ++p)
+  record.Pixels += static_cast<vtkIdType>(tiles.PixelsIn(covered));
+  for (size_t p = 0; p < pixels; ++p)
   {
     record.CoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
   }
 
-  std::vector<double> colourSums(frame.RectPixels() * 4, 0.0);
+  std::vector<double> colourSums(pixels * 4, 0.0);
   for (FrameEngine* engine : frame.Engines)
   {
-    engine->RenderColour(parameters, moments.data(), colourSums.data());
+    engine->RenderColour(parameters, moments.data(), colourSums.data(), band);
   }
   record.Clock.Lap("pass2");
   sum(colourSums, 4, false);
@@ -219,25 +227,63 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
   {
     return;
   }
-  const size_t pixels = frame.RectPixels();
+  float* rgba = result.RGBA.data() + 4 * offset;
   if (frame.KeepFloatImages)
   {
-    result.RGBA.assign(4 * pixels, 0.0f);
-    ResolveImage(
-      parameters.Resolve, pixels, moments.data(), stride, colourSums.data(), result.RGBA.data());
-    record.Clock.Lap("resolve");
-    result.Moments.swap(moments);
-    result.ColourSums.swap(colourSums);
-    return;
+    ResolveImage(parameters.Resolve, pixels, moments.data(), stride, colourSums.data(), rgba);
+    std::copy(moments.begin(), moments.end(), result.Moments.begin() + stride * offset);
+    std::copy(colourSums.begin(), colourSums.end(), result.ColourSums.begin() + 4 * offset);
   }
-  // The image is resolved into the colour sums' own memory, and the moments go before it is
-  // copied out: the display process then peaks no higher than the others (in pass 2).
-  ResolveImageInPlace(parameters.Resolve, pixels, moments.data(), stride, colourSums.data());
-  moments = std::vector<double>();
-  const auto* rgba = reinterpret_cast<const unsigned char*>(colourSums.data());
-  result.RGBA.resize(4 * pixels);
-  std::memcpy(result.RGBA.data(), rgba, sizeof(float) * 4 * pixels);
+  else
+  {
+    // Resolved into the colour sums' own memory: no third band-sized buffer.
+    ResolveImageInPlace(parameters.Resolve, pixels, moments.data(), stride, colourSums.data());
+    std::memcpy(rgba, colourSums.data(), sizeof(float) * 4 * pixels);
+  }
   record.Clock.Lap("resolve");
+}
+}
+
+std::vector<RowBand> MomentBands(int width, int height, size_t maxPixels)
+{
+  // Whole marcher tile rows, so that a tile is never split between bands (the wire's tiles,
+  // of a size that divides the marcher's, then are whole too).
+  constexpr int unit = VolumeRayMarcher::kTileSize;
+  static_assert(VolumeRayMarcher::kTileSize % TileGrid::kDefaultTileSize == 0,
+    "a band boundary must fall between the wire's tiles");
+  std::vector<RowBand> bands;
+  if (width < 1 || height < 1)
+  {
+    return bands;
+  }
+  const size_t unitPixels = static_cast<size_t>(width) * unit;
+  const int rows = static_cast<int>(std::max<size_t>(1, maxPixels / unitPixels)) * unit;
+  for (int j0 = 0; j0 < height; j0 += rows)
+  {
+    bands.push_back({ j0, std::min(height, j0 + rows) });
+  }
+  return bands;
+}
+
+void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame, bool inDouble,
+  FrameRecord& record, FrameResult& result)
+{
+  record.Pixels = 0;
+  if (group.IsDisplay())
+  {
+    const size_t pixels = frame.RectPixels();
+    result.RGBA.assign(4 * pixels, 0.0f);
+    if (frame.KeepFloatImages)
+    {
+      result.Moments.assign(pixels * (frame.Moments.Moments + 1), 0.0);
+      result.ColourSums.assign(pixels * 4, 0.0);
+    }
+  }
+  // The same bands on every process: they follow from the agreed rectangle and band size.
+  for (const RowBand& band : MomentBands(frame.RectWidth(), frame.RectHeight(), frame.BandPixels))
+  {
+    CompositeBand(group, frame, band, inDouble, record, result);
+  }
 }
 
 } // namespace apc

@@ -233,6 +233,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   local.Mode = self->GetCompositeMode();
   local.InDouble = self->GetCompositeInDouble();
   local.DepthComposited = self->GetDisplayDepthComposited();
+  local.BandPixels = static_cast<double>(self->GetMaxBandPixels());
   const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
   if (agreed.AnyReportPending)
   {
@@ -268,6 +269,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Interactive = agreed.Interactive;
   frame.Reduction = agreed.Reduction;
   frame.SampleFactor = agreed.SampleFactor;
+  frame.BandPixels = static_cast<size_t>(agreed.BandPixels);
   frame.Width = (agreed.Width + frame.Reduction - 1) / frame.Reduction;
   frame.Height = (agreed.Height + frame.Reduction - 1) / frame.Reduction;
   frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height, frame.Aspect());
@@ -582,6 +584,7 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "DisplayProcess: " << this->DisplayProcess << "\n";
   os << indent << "DisplayDepthComposited: " << this->DisplayDepthComposited << "\n";
   os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
+  os << indent << "MaxBandPixels: " << this->MaxBandPixels << "\n";
   os << indent << "KeepLastImage: " << this->KeepLastImage << "\n";
   const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
   os << indent << "CompositeMode: " << modes[this->CompositeMode] << "\n";

@@ -22,6 +22,9 @@
  *    tiles to the display process;
  * 6. on the display process: resolve, and blend over the opaque image in the render window.
  *
+ * A screen rectangle of more than MaxBandPixels pixels runs steps 4-6 band by band (rows of
+ * the rectangle), so that the per-pixel buffers are one band's size whatever the view.
+ *
  * Only the tiles of the data's screen rectangle that some process covers are sent (depth:
  * the tiles where the display process has opaque geometry). Processes sum their own samples
  * in double. Unless CompositeInDouble is on, the moments travel as 32-bit fixed point with a
@@ -149,6 +152,20 @@ public:
   vtkSetMacro(CompositeInDouble, bool);
   vtkGetMacro(CompositeInDouble, bool);
   vtkBooleanMacro(CompositeInDouble, bool);
+  ///@}
+
+  ///@{
+  /**
+   * APC mode renders and composites a screen rectangle of more pixels than this band by band:
+   * pass 1, the moments' allreduce, pass 2 and the colour sums' reduce of one band of rows,
+   * then the next (default 4,194,304 = 2048^2; at least one 16-pixel row of tiles). The
+   * moment and colour buffers (72 bytes per pixel at 4 moments) then hold one band, and the
+   * sample cache one band's samples, whatever the view size; each band costs every process a
+   * wait for the slowest one. The image does not depend on it. The smallest setting of any
+   * process applies.
+   */
+  vtkSetClampMacro(MaxBandPixels, vtkIdType, 1, VTK_ID_MAX);
+  vtkGetMacro(MaxBandPixels, vtkIdType);
   ///@}
 
   enum CompositeModeType
@@ -314,6 +331,7 @@ protected:
   bool DisplayDepthComposited = true;
   bool CompositeInDouble = false;
   bool KeepLastImage = false;
+  vtkIdType MaxBandPixels = vtkIdType(1) << 22;
   int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;

@@ -23,6 +23,7 @@
 #include "vtkVolumeProperty.h"
 
 #include <algorithm>
+#include <cmath>
 
 vtkStandardNewMacro(vtkAPCVolumeRepresentation);
 
@@ -169,6 +170,8 @@ void vtkAPCVolumeRepresentation::Attach(bool attach)
     pass->SetImageFileName(this->ImageFileName.c_str());
     pass->SetInteractiveSampleDistanceFactor(this->InteractiveSampleDistanceFactor);
     pass->SetInteractiveImageReduction(this->InteractiveImageReduction);
+    pass->SetMaxBandPixels(
+      static_cast<vtkIdType>(std::max(1.0, std::ldexp(this->BandMegapixels, 20))));
   }
 }
 
@@ -262,6 +265,12 @@ void vtkAPCVolumeRepresentation::SetInteractiveImageReduction(int reduction)
   this->MarkModified();
 }
 
+void vtkAPCVolumeRepresentation::SetBandMegapixels(double megapixels)
+{
+  this->BandMegapixels = megapixels;
+  this->MarkModified();
+}
+
 void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
 {
   this->Verbosity = verbosity;
@@ -318,4 +327,5 @@ void vtkAPCVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "InteractiveSampleDistanceFactor: " << this->InteractiveSampleDistanceFactor
      << "\n";
   os << indent << "InteractiveImageReduction: " << this->InteractiveImageReduction << "\n";
+  os << indent << "BandMegapixels: " << this->BandMegapixels << "\n";
 }

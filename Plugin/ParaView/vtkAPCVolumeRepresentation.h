@@ -96,6 +96,15 @@ public:
   vtkGetMacro(InteractiveImageReduction, int);
   ///@}
 
+  ///@{
+  /**
+   * vtkAPCCompositePass's MaxBandPixels in units of 2^20 pixels (default 4): a larger screen
+   * rectangle is rendered and composited band by band, with one band's buffers.
+   */
+  void SetBandMegapixels(double megapixels);
+  vtkGetMacro(BandMegapixels, double);
+  ///@}
+
   /**
    * Does nothing: the panel's "Refresh Timings" button calls it, and the panel then pulls the
    * information properties (GetLastTimings) from the display rank.
@@ -147,6 +156,7 @@ protected:
   std::string ImageFileName;
   double InteractiveSampleDistanceFactor = 2.0;
   int InteractiveImageReduction = 4;
+  double BandMegapixels = 4.0;
   double LastTimings[15] = {};
   double LastSegmentStatistics[7] = {};
 

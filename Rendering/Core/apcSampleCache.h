@@ -55,11 +55,19 @@ struct SampleCache
     }
     std::fill(this->Kept.begin(), this->Kept.end(), uint8_t(0));
   }
-  // Ready to record a frame of this many tiles.
-  void Empty(size_t tiles)
+  // Ready to record tiles [first, last) of a frame of this many tiles. The memory of the other
+  // tiles goes (a large frame is rendered band by band: one band's samples at a time).
+  void Empty(size_t tiles, size_t first, size_t last)
   {
     this->Clear();
     this->Tiles.resize(tiles);
+    for (size_t t = 0; t < tiles; ++t)
+    {
+      if ((t < first || t >= last) && this->Tiles[t].capacity() > 0)
+      {
+        this->Tiles[t] = std::vector<CachedSample>();
+      }
+    }
     this->Kept.assign(tiles, 0);
     this->Bytes = 0;
     this->Record = this->MaxBytes > 0;

@@ -19,14 +19,24 @@ public:
     this->Seconds.clear();
     this->Last = std::chrono::steady_clock::now();
   }
-  // Closes the stage that started at the previous lap (or restart).
+  // Closes the stage that started at the previous lap (or restart). A stage that ran before
+  // (a frame rendered band by band) adds to its first entry.
   void Lap(const std::string& stage)
   {
     const auto now = std::chrono::steady_clock::now();
-    this->Seconds.emplace_back(stage, std::chrono::duration<double>(now - this->Last).count());
+    const double seconds = std::chrono::duration<double>(now - this->Last).count();
     this->Last = now;
+    for (auto& entry : this->Seconds)
+    {
+      if (entry.first == stage)
+      {
+        entry.second += seconds;
+        return;
+      }
+    }
+    this->Seconds.emplace_back(stage, seconds);
   }
-  // The stage's seconds (summed if it ran more than once); null gives the total.
+  // The stage's seconds; null gives the total.
   double Get(const char* stage) const
   {
     double seconds = 0.0;

@@ -272,18 +272,28 @@ struct VolumeRayMarcher::Walker
     return samples;
   }
 
+  // The visitor sees the tile rowOffset rows lower (where it lies in a band's buffers).
   template <class Visitor>
-  int64_t Tile(const std::vector<RaySetup>& rays, const TileRect& tile, Visitor& visitor) const
+  int64_t Tile(
+    const std::vector<RaySetup>& rays, const TileRect& tile, int rowOffset, Visitor& visitor) const
   {
     int64_t samples = 0;
     CellState state;
-    visitor.BeginTile(tile);
+    const TileRect inBand = Shifted(tile, rowOffset);
+    visitor.BeginTile(inBand);
     for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
     {
       samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state);
     }
-    visitor.EndTile(tile);
+    visitor.EndTile(inBand);
     return samples;
+  }
+
+  static TileRect Shifted(TileRect tile, int rows)
+  {
+    tile.J0 -= rows;
+    tile.J1 -= rows;
+    return tile;
   }
 };
 
@@ -332,9 +342,20 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
 }
 
 //------------------------------------------------------------------------------
+void VolumeRayMarcher::TilesOf(const RowBand& rows, int64_t& first, int64_t& last) const
+{
+  const TileGrid& grid = this->Bins->Grid;
+  const int j1 = std::min(rows.J1, grid.Height);
+  first = std::min(static_cast<int64_t>(rows.J0 / grid.Size) * grid.TilesX, grid.Count());
+  last =
+    j1 > rows.J0 ? static_cast<int64_t>((j1 + grid.Size - 1) / grid.Size) * grid.TilesX : first;
+  last = std::min(last, grid.Count());
+}
+
+//------------------------------------------------------------------------------
 template <class Visitor>
-void VolumeRayMarcher::March(
-  Visitor& prototype, const TransferTable& table, const std::vector<uint8_t>* skipTiles)
+void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
+  const std::vector<uint8_t>* skipTiles, const RowBand& rows)
 {
   this->LastSamples = 0;
   if (!this->Mesh || !this->Camera || this->Mesh->GetNumberOfCells() == 0)
@@ -350,12 +371,15 @@ void VolumeRayMarcher::March(
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;
-  ParallelFor(this->Threads, grid.Count(), 1,
+  int64_t first = 0;
+  int64_t last = 0;
+  this->TilesOf(rows, first, last);
+  ParallelFor(this->Threads, last - first, 1,
     [&](int64_t begin, int64_t end)
     {
       Visitor& visitor = visitors.local();
       std::vector<RaySetup>& rays = rayBuffers.local();
-      for (int64_t t = begin; t < end; ++t)
+      for (int64_t t = first + begin; t < first + end; ++t)
       {
         if (this->Bins->Empty(t) || (skipTiles && (*skipTiles)[t]))
         {
@@ -376,7 +400,7 @@ void VolumeRayMarcher::March(
                 this->Camera->GetCropJ0() + tile.J0 + p / tile.Width())
             : 0.0;
         }
-        samples.local() += walker.Tile(rays, tile, visitor);
+        samples.local() += walker.Tile(rays, tile, rows.J0, visitor);
       }
     });
   this->LastSamples = samples.combine(std::plus<int64_t>());
@@ -391,16 +415,22 @@ void VolumeRayMarcher::RenderExact(const TransferTable& table, float* rgba)
 
 //------------------------------------------------------------------------------
 template <int N>
-void VolumeRayMarcher::AccumulateMoments(
-  const TransferTable& table, const LogDepthWarp& warp, double* moments, bool keepOwn)
+void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDepthWarp& warp,
+  double* moments, bool keepOwn, const RowBand& rows)
 {
   SampleCache& cache = *this->Cache;
-  cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()));
+  int64_t first = 0;
+  int64_t last = 0;
+  this->TilesOf(rows, first, last);
+  cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()), static_cast<size_t>(first),
+    static_cast<size_t>(last));
   visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);
   this->OwnMomentsOrder = 0;
   if (keepOwn && this->Camera)
   {
-    const size_t pixels = static_cast<size_t>(this->Camera->GetWidth()) * this->Camera->GetHeight();
+    const int height = this->Camera->GetHeight();
+    const size_t pixels = static_cast<size_t>(this->Camera->GetWidth()) *
+      static_cast<size_t>(std::max(0, std::min(rows.J1, height) - rows.J0));
     this->OwnMoments.assign(pixels * (N + 1), 0.0);
     visitor.Own = this->OwnMoments.data();
   }
@@ -408,7 +438,7 @@ void VolumeRayMarcher::AccumulateMoments(
   {
     std::vector<double>().swap(this->OwnMoments); // no memory unless Hybrid asks for it
   }
-  this->March(visitor, table);
+  this->March(visitor, table, nullptr, rows);
   this->OwnMomentsOrder = visitor.Own ? N : 0;
   cache.Valid = cache.MaxBytes > 0;
   cache.Table = &table;
@@ -420,7 +450,8 @@ void VolumeRayMarcher::AccumulateMoments(
 //------------------------------------------------------------------------------
 template <int N>
 void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDepthWarp& warp,
-  const double* moments, const MomentSettings<N>& settings, double* colourSums, bool hybrid)
+  const double* moments, const MomentSettings<N>& settings, double* colourSums, bool hybrid,
+  const RowBand& rows)
 {
   const SampleCache& cache = *this->Cache;
   const bool usable = cache.Valid && cache.Table == &table && cache.Moments == N &&
@@ -428,8 +459,8 @@ void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDep
   // The tiles the cache does not hold (all of them without a cache) are marched again.
   auto run = [&](auto& visitor)
   {
-    const int64_t replayed = usable ? this->ReplayColour(table, visitor) : 0;
-    this->March(visitor, table, usable ? &cache.Kept : nullptr);
+    const int64_t replayed = usable ? this->ReplayColour(table, visitor, rows) : 0;
+    this->March(visitor, table, usable ? &cache.Kept : nullptr, rows);
     return replayed;
   };
   int64_t replayed = 0;
@@ -451,7 +482,8 @@ void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDep
 
 //------------------------------------------------------------------------------
 template <class Visitor>
-int64_t VolumeRayMarcher::ReplayColour(const TransferTable& table, const Visitor& prototype)
+int64_t VolumeRayMarcher::ReplayColour(
+  const TransferTable& table, const Visitor& prototype, const RowBand& rows)
 {
   // Pass 2 from pass 1's samples: the same samples with the same values, re-weighted by the
   // transmittance reconstructed from the global moments; no clipping, no interpolation.
@@ -459,18 +491,22 @@ int64_t VolumeRayMarcher::ReplayColour(const TransferTable& table, const Visitor
   tbb::combinable<Visitor> perThread([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   const SampleCache& cache = *this->Cache;
-  ParallelFor(this->Threads, static_cast<int64_t>(cache.Tiles.size()), 1,
+  int64_t first = 0;
+  int64_t last = 0;
+  this->TilesOf(rows, first, last);
+  last = std::min(last, static_cast<int64_t>(cache.Tiles.size()));
+  ParallelFor(this->Threads, std::max<int64_t>(0, last - first), 1,
     [&](int64_t begin, int64_t end)
     {
       Visitor& visitor = perThread.local();
-      for (int64_t t = begin; t < end; ++t)
+      for (int64_t t = first + begin; t < first + end; ++t)
       {
         const std::vector<CachedSample>& recorded = cache.Tiles[t];
         if (!cache.Kept[t] || recorded.empty())
         {
           continue;
         }
-        const TileRect tile = grid.Tile(t);
+        const TileRect tile = Walker::Shifted(grid.Tile(t), rows.J0);
         visitor.BeginTile(tile);
         for (const CachedSample& sample : recorded)
         {
@@ -541,16 +577,16 @@ void VolumeRayMarcher::CountSegments(int32_t* counts)
 }
 
 template void VolumeRayMarcher::AccumulateMoments<4>(
-  const TransferTable&, const LogDepthWarp&, double*, bool);
+  const TransferTable&, const LogDepthWarp&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateMoments<6>(
-  const TransferTable&, const LogDepthWarp&, double*, bool);
+  const TransferTable&, const LogDepthWarp&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateMoments<8>(
-  const TransferTable&, const LogDepthWarp&, double*, bool);
+  const TransferTable&, const LogDepthWarp&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateColour<4>(const TransferTable&, const LogDepthWarp&,
-  const double*, const MomentSettings<4>&, double*, bool);
+  const double*, const MomentSettings<4>&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateColour<6>(const TransferTable&, const LogDepthWarp&,
-  const double*, const MomentSettings<6>&, double*, bool);
+  const double*, const MomentSettings<6>&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateColour<8>(const TransferTable&, const LogDepthWarp&,
-  const double*, const MomentSettings<8>&, double*, bool);
+  const double*, const MomentSettings<8>&, double*, bool, const RowBand&);
 
 } // namespace apc

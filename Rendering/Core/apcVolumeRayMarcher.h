@@ -33,6 +33,16 @@ namespace apc
 struct SampleCache;
 struct TileBins;
 
+// Image rows [J0, J1): a band the moment and colour passes can be limited to, so that a large
+// image is rendered and composited band by band with band-sized buffers (the buffers then
+// hold the band's rows alone, row J0 first). J0 must be a multiple of
+// VolumeRayMarcher::kTileSize, and J1 too unless it is past the last row.
+struct RowBand
+{
+  int J0 = 0;
+  int J1 = 1 << 30;
+};
+
 class VolumeRayMarcher
 {
 public:
@@ -66,21 +76,23 @@ public:
   // Exact ordered blending: premultiplied RGBA, W*H*4.
   void RenderExact(const TransferTable& table, float* rgba);
 
-  // MBOIT pass 1: unnormalised power moments b0..bN per pixel, W*H*(N+1). keepOwn: the
-  // marcher also keeps this mesh's moments (W*H*(N+1) doubles, held only while asked for) for
-  // a Hybrid pass 2.
+  // MBOIT pass 1: unnormalised power moments b0..bN per pixel of rows, W*rows*(N+1). keepOwn:
+  // the marcher also keeps this mesh's moments (as many, held only while asked for) for a
+  // Hybrid pass 2. The sample cache then holds these rows' samples alone.
   template <int N>
-  void AccumulateMoments(
-    const TransferTable& table, const LogDepthWarp& warp, double* moments, bool keepOwn = false);
+  void AccumulateMoments(const TransferTable& table, const LogDepthWarp& warp, double* moments,
+    bool keepOwn = false, const RowBand& rows = {});
 
   // MBOIT pass 2: (sum w r, sum w g, sum w b, sum w) per pixel, W*H*4, w = alpha * T(z) with
   // T reconstructed from the (global) moments. hybrid (apcHybridTransmittance.h): T is the
   // exact ordered transmittance of this mesh's own samples times the one reconstructed from
   // the moments of everything else (global - own); it needs the own moments of a pass 1 with
   // keepOwn on the same view, N, table and warp, and without them weights as without hybrid.
+  // rows: as in the pass 1 just run (moments and colourSums hold those rows alone).
   template <int N>
   void AccumulateColour(const TransferTable& table, const LogDepthWarp& warp, const double* moments,
-    const MomentSettings<N>& settings, double* colourSums, bool hybrid = false);
+    const MomentSettings<N>& settings, double* colourSums, bool hybrid = false,
+    const RowBand& rows = {});
 
   // This mesh's segments of every pixel (see RaySegment), replacing segments' content.
   void RenderSegments(const TransferTable& table, SegmentImage& segments);
@@ -88,23 +100,26 @@ public:
   // Number of disjoint intervals of each ray inside the cells (before the ray end), W*H.
   void CountSegments(int32_t* counts);
 
+  // Square tiles of this many pixels a side: small enough to balance the TBB tasks and keep a
+  // tile's pixel index in the sample cache's 16 bits. Bands of rows are cut on tile rows.
+  static constexpr int kTileSize = 16;
+
   // Samples taken (lattice points inside cells) by the last pass, for benchmarks.
   int64_t GetLastSampleCount() const { return this->LastSamples; }
 
 private:
   struct Walker;
-  // skipTiles: tiles t with (*skipTiles)[t] set are left out.
+  // Marches the tiles of rows (all by default); visitors see them shifted by rows.J0, so that
+  // they write into band-sized buffers. skipTiles: tiles t with (*skipTiles)[t] set are left out.
   template <class Visitor>
   void March(Visitor& prototype, const TransferTable& table,
-    const std::vector<uint8_t>* skipTiles = nullptr);
+    const std::vector<uint8_t>* skipTiles = nullptr, const RowBand& rows = {});
   // Replays the cached tiles into copies of prototype; returns the samples replayed.
   template <class Visitor>
-  int64_t ReplayColour(const TransferTable& table, const Visitor& prototype);
+  int64_t ReplayColour(const TransferTable& table, const Visitor& prototype, const RowBand& rows);
   int Width() const { return this->Camera ? this->Camera->GetWidth() : 0; }
-
-  // Square tiles of this many pixels a side: small enough to balance the TBB tasks and keep a
-  // tile's pixel index in the sample cache's 16 bits.
-  static constexpr int kTileSize = 16;
+  // The tiles [first, last) of rows, in the bins' grid.
+  void TilesOf(const RowBand& rows, int64_t& first, int64_t& last) const;
 
   const CellMesh* Mesh = nullptr;
   std::unique_ptr<RayCamera> Camera;

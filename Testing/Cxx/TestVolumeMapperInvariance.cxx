@@ -627,6 +627,66 @@ TEST(VolumeMapperInvariance, CachedAndRemarchedPassTwoAgree)
 }
 }
 
+// A large frame is rendered band by band (rows), with band-sized buffers and the sample cache
+// holding one band: each band's moments and colour sums must be exactly the rows of the whole
+// image's, with and without the cache, and for Hybrid's own moments.
+TEST(VolumeMapperInvariance, BandsAreTheRowsOfTheWholeImage)
+{
+  auto grid = apctest::MixedBlock(10,
+    [](double x, double y, double z) { return 0.5 + 0.3 * std::sin(3 * x) * std::cos(2 * y) * z; });
+  apc::CellMesh mesh = apctest::ToMesh(grid);
+  // 56 rows: three whole bands of 16 and a last one of 8.
+  const apc::RayCamera camera = apctest::ObliqueCamera(64).Cropped(0, 4, 64, 56);
+  double tmin = 0;
+  double tmax = 0;
+  camera.DistanceRange(mesh.GetBounds(), tmin, tmax);
+  const apc::LogDepthWarp warp(tmin, tmax);
+  const apc::TransferTable table = apctest::RampTable(0.01, true);
+  const int width = camera.GetWidth();
+  const int height = camera.GetHeight();
+  constexpr int rows = apc::VolumeRayMarcher::kTileSize;
+  for (bool hybrid : { false, true })
+  {
+    for (size_t budget : { size_t(1) << 30, size_t(0) })
+    {
+      apc::VolumeRayMarcher marcher;
+      marcher.SetMaxSampleCacheBytes(budget);
+      marcher.SetMesh(&mesh);
+      marcher.SetView(camera, nullptr);
+      const size_t pixels = static_cast<size_t>(width) * height;
+      std::vector<double> moments(pixels * 5, 0.0);
+      std::vector<double> colour(pixels * 4, 0.0);
+      marcher.AccumulateMoments<4>(table, warp, moments.data(), hybrid);
+      marcher.AccumulateColour<4>(table, warp, moments.data(), {}, colour.data(), hybrid);
+      const int64_t wholeSamples = marcher.GetLastSampleCount();
+      int64_t bandSamples = 0;
+      int bands = 0;
+      for (int j0 = 0; j0 < height; j0 += rows, ++bands)
+      {
+        const apc::RowBand band{ j0, std::min(height, j0 + rows) };
+        const size_t offset = static_cast<size_t>(width) * j0;
+        const size_t n = static_cast<size_t>(width) * (band.J1 - band.J0);
+        std::vector<double> bandMoments(n * 5, 0.0);
+        std::vector<double> bandColour(n * 4, 0.0);
+        marcher.AccumulateMoments<4>(table, warp, bandMoments.data(), hybrid, band);
+        marcher.AccumulateColour<4>(
+          table, warp, bandMoments.data(), {}, bandColour.data(), hybrid, band);
+        bandSamples += marcher.GetLastSampleCount();
+        EXPECT_TRUE(
+          std::equal(bandMoments.begin(), bandMoments.end(), moments.begin() + 5 * offset))
+          << "band from row " << j0 << (hybrid ? ", hybrid" : "") << ", budget " << budget;
+        EXPECT_TRUE(std::equal(bandColour.begin(), bandColour.end(), colour.begin() + 4 * offset))
+          << "band from row " << j0 << (hybrid ? ", hybrid" : "") << ", budget " << budget;
+        EXPECT_EQ(marcher.GetLastColourCacheShare(), budget > 0 ? 1.0 : 0.0)
+          << "each band's pass 2 replays that band's samples";
+      }
+      EXPECT_EQ(bands, 4);
+      EXPECT_EQ(bandSamples, wholeSamples) << "every sample taken once, in one band";
+      EXPECT_GT(wholeSamples, 1000);
+    }
+  }
+}
+
 // Memory follows the data's footprint on screen (issue 14): a block seen small in a large
 // view is rendered into buffers of its screen rectangle only, and the picture is the one the
 // full view would show (nothing drawn outside the rectangle, the same pixels inside as a

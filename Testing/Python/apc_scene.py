@@ -31,6 +31,8 @@ parser.add_argument("--outliers", type=int, default=0,
                          "sample lies within one depth-buffer step of opaque geometry that "
                          "ParaView cut differently on N ranks (ordered compositing moves it)")
 parser.add_argument("--plane", action="store_true", help="add an opaque slice through the data")
+parser.add_argument("--band-megapixels", type=float, default=0.0,
+                    help="APC Band Size (megapixels): composite in bands of rows (0: default)")
 parser.add_argument("--sample-distance", type=float, default=0.0,
                     help="APC sample distance (0: the scene's own)")
 parser.add_argument("--paraview-volume", action="store_true",
@@ -265,6 +267,8 @@ def main():
     display.ScalarOpacityUnitDistance = unit
     display.APCSampleDistance = args.sample_distance if args.sample_distance > 0 else spacing
     display.APCMode = args.mode
+    if args.band_megapixels > 0:
+        display.APCBandMegapixels = args.band_megapixels
     display.APCResolveMode = args.resolve
     display.APCVerbosity = 1
     if args.out:
