@@ -60,7 +60,7 @@ struct CompositeFrame
   TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the depth share ships
   // APC mode renders and composites a frame larger than this many pixels band by band (see
   // MomentBands), so that its buffers are a band's size, not the rectangle's.
-  size_t BandPixels = size_t(1) << 22;
+  size_t BandPixels = size_t(1) << 21;
   MomentParameters Moments;
   std::vector<FrameEngine*> Engines;
   // The frame's float image is kept (KeepLastImage, or the display process's image file): the

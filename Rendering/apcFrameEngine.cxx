@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 namespace apc
@@ -186,7 +187,8 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   this->Marcher.SetLatticeJitter(mapper->GetLatticeJitter());
   this->Marcher.SetMaxSampleCacheBytes(static_cast<size_t>(mapper->GetSampleCacheSize()) << 20);
   this->Marcher.SetMesh(&this->Mesh);
-  this->Marcher.SetView(*this->Camera, rayEnds.data());
+  depth = std::vector<float>();
+  this->Marcher.SetView(*this->Camera, std::move(rayEnds));
   this->Samples = 0;
   this->Ready = true;
   this->Clock.Lap("setup");

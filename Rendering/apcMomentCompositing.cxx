@@ -26,10 +26,10 @@ namespace apc
 {
 namespace
 {
-// The packed copies of a large image are made and summed this many pixels at a time
-// (~160 MB of temporaries at 4 moments), so that they stay a bounded size at any view size;
-// a 1024^2 or 1448^2 frame still sends each buffer in one message.
-constexpr size_t kChunkPixels = size_t(1) << 21;
+// The packed copies of a band are made and summed this many pixels at a time (~80 MB of
+// temporaries at 4 moments), so that they stay a bounded size whatever the band size; a
+// 1024^2 frame still sends each buffer in one message.
+constexpr size_t kChunkPixels = size_t(1) << 20;
 
 // Sums the marked tiles of an image over all processes, in precision T: onto every process
 // (allreduce) or onto the display process (reduce). Returns the bytes this process sent.

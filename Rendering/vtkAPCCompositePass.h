@@ -158,11 +158,12 @@ public:
   /**
    * APC mode renders and composites a screen rectangle of more pixels than this band by band:
    * pass 1, the moments' allreduce, pass 2 and the colour sums' reduce of one band of rows,
-   * then the next (default 4,194,304 = 2048^2; at least one 16-pixel row of tiles). The
-   * moment and colour buffers (72 bytes per pixel at 4 moments) then hold one band, and the
-   * sample cache one band's samples, whatever the view size; each band costs every process a
-   * wait for the slowest one. The image does not depend on it. The smallest setting of any
-   * process applies.
+   * then the next (default 2,097,152 >= 1448^2; at least one 16-pixel row of tiles). The
+   * moment and colour buffers (72 bytes per pixel at 4 moments, ~150 MB by default) then hold
+   * one band, and the sample cache one band's samples, whatever the view size; each band
+   * costs every process a wait for the slowest one. The image does not depend on it (up to
+   * the order in which MPI adds float colour sums). The smallest setting of any process
+   * applies.
    */
   vtkSetClampMacro(MaxBandPixels, vtkIdType, 1, VTK_ID_MAX);
   vtkGetMacro(MaxBandPixels, vtkIdType);
@@ -331,7 +332,7 @@ protected:
   bool DisplayDepthComposited = true;
   bool CompositeInDouble = false;
   bool KeepLastImage = false;
-  vtkIdType MaxBandPixels = vtkIdType(1) << 22;
+  vtkIdType MaxBandPixels = vtkIdType(1) << 21;
   int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;

@@ -98,7 +98,7 @@ public:
 
   ///@{
   /**
-   * vtkAPCCompositePass's MaxBandPixels in units of 2^20 pixels (default 4): a larger screen
+   * vtkAPCCompositePass's MaxBandPixels in units of 2^20 pixels (default 2): a larger screen
    * rectangle is rendered and composited band by band, with one band's buffers.
    */
   void SetBandMegapixels(double megapixels);
@@ -156,7 +156,7 @@ protected:
   std::string ImageFileName;
   double InteractiveSampleDistanceFactor = 2.0;
   int InteractiveImageReduction = 4;
-  double BandMegapixels = 4.0;
+  double BandMegapixels = 2.0;
   double LastTimings[15] = {};
   double LastSegmentStatistics[7] = {};
 

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <utility>
 
 namespace apc
 {
@@ -329,14 +330,25 @@ void VolumeRayMarcher::SetMesh(const CellMesh* mesh)
 //------------------------------------------------------------------------------
 void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
 {
+  const size_t pixels = static_cast<size_t>(camera.GetWidth()) * camera.GetHeight();
+  std::vector<float> ends;
+  if (rayEnds)
+  {
+    ends.assign(rayEnds, rayEnds + pixels);
+  }
+  this->SetView(camera, std::move(ends));
+}
+
+void VolumeRayMarcher::SetView(const RayCamera& camera, std::vector<float>&& rayEnds)
+{
   this->Cache->Clear();
   this->OwnMomentsOrder = 0;
   this->Camera.reset(new RayCamera(camera));
   const size_t pixels = static_cast<size_t>(camera.GetWidth()) * camera.GetHeight();
-  this->RayEnds.assign(pixels, std::numeric_limits<float>::infinity());
-  if (rayEnds)
+  this->RayEnds = std::move(rayEnds);
+  if (this->RayEnds.size() != pixels)
   {
-    std::copy(rayEnds, rayEnds + pixels, this->RayEnds.begin());
+    this->RayEnds.assign(pixels, std::numeric_limits<float>::infinity());
   }
   BinCells(this->Mesh, camera, kTileSize, this->Threads, *this->Bins);
 }

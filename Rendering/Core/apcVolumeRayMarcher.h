@@ -57,6 +57,9 @@ public:
   // Per frame. rayEnds: W*H distances at which each ray stops (opaque geometry), or null for
   // none. Bins the cells into tiles; call again whenever the camera or the mesh changes.
   void SetView(const RayCamera& camera, const float* rayEnds);
+  // The same, taking over the W*H ray ends (none: no ray stops), so that they are not held
+  // twice while the view is set up.
+  void SetView(const RayCamera& camera, std::vector<float>&& rayEnds);
 
   // 0 = as many as TBB offers.
   void SetNumberOfThreads(int threads) { this->Threads = threads; }
