@@ -11,6 +11,7 @@
 #include <tbb/combinable.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -357,6 +358,8 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, std::vector<float>&& ray
 void VolumeRayMarcher::TilesOf(const RowBand& rows, int64_t& first, int64_t& last) const
 {
   const TileGrid& grid = this->Bins->Grid;
+  // A band starting inside a tile row would hand its visitors rows below the band's buffers.
+  assert(rows.J0 >= 0 && rows.J0 % grid.Size == 0);
   const int j1 = std::min(rows.J1, grid.Height);
   first = std::min(static_cast<int64_t>(rows.J0 / grid.Size) * grid.TilesX, grid.Count());
   last =

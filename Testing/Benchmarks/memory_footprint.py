@@ -22,6 +22,8 @@ parser.add_argument("--sample-distance", type=float, default=0.0,
 parser.add_argument("--frames", type=int, default=1)
 parser.add_argument("--sample-cache", type=int, default=1024,
                     help="APC Sample Cache (MB) per rank")
+parser.add_argument("--band-megapixels", type=float, default=0.0,
+                    help="APC Band Size (megapixels); 0: the default")
 args = parser.parse_args()
 
 
@@ -56,6 +58,8 @@ def main():
         display.APCSampleDistance = spacing
         if args.sample_cache != 1024:  # the property exists since issue 14
             display.APCSampleCacheSize = args.sample_cache
+        if args.band_megapixels > 0:  # the property exists since the bands
+            display.APCBandMegapixels = args.band_megapixels
     else:
         display.Representation = "Outline"
     # paraview.simple resets the camera on a view's first render: that render shows nothing,
@@ -69,11 +73,16 @@ def main():
     for _ in range(args.frames):
         Render(view)
     covered = 0
+    seconds = 0.0
     if args.case == "apc":
         display.UpdatePropertyInformation()
-        covered = int(display.GetProperty("APCLastTimings").GetData()[12])
+        timings = display.GetProperty("APCLastTimings").GetData()
+        covered = int(timings[12])
+        seconds = timings[8]
     print("APC-FOOTPRINT covered %d view %d" % (covered, args.size[0] * args.size[1]),
           flush=True)
+    # The last frame's total on the display rank (the mesh was converted in the first).
+    print("APC-FRAME seconds %.6f" % seconds, flush=True)
 
 
 main()

@@ -23,10 +23,13 @@ for scene in ${APC_MEMORY_SCENES:-wind puzzle}; do
     for n in ${APC_MEMORY_RANKS:-1 2 4}; do
       for case in outline apc; do
         log="$out/${scene}_${size}_np${n}_${case}.log"
+        # Each rank's line is appended to its own file (ranks writing one log interleave).
+        peaks="$out/${scene}_${size}_np${n}_${case}.peaks"
+        rm -f "$peaks"
         start=$(date +%s.%N)
         status=0
         timeout 3600 bash "$top/.ci/with-xvfb" mpirun --oversubscribe -np "$n" -x APC_PLUGIN -x LD_LIBRARY_PATH \
-          -x PYTHONPATH /usr/bin/time -f "APC-PEAK-KB %M" pvbatch --disable-xdisplay-test \
+          -x PYTHONPATH /usr/bin/time -a -o "$peaks" -f "APC-PEAK-KB %M" pvbatch --disable-xdisplay-test \
           "$script" --scene "$scene" --size "$size" "$size" --case "$case" "$@" \
           >"$log" 2>&1 || status=$?
         seconds=$(echo "$(date +%s.%N) - $start" | bc)
@@ -36,7 +39,7 @@ for scene in ${APC_MEMORY_SCENES:-wind puzzle}; do
           covered=-1
         fi
         rank=0
-        for kb in $(sed -n 's/.*APC-PEAK-KB \([0-9]*\).*/\1/p' "$log"); do
+        for kb in $(sed -n 's/^APC-PEAK-KB \([0-9]*\)$/\1/p' "$peaks" 2>/dev/null); do
           echo "$scene,$size,$n,$case,$rank,$(echo "scale=1; $kb / 1024" | bc),$covered,$seconds" >>"$csv"
           rank=$((rank + 1))
         done
