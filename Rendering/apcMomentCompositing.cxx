@@ -257,7 +257,9 @@ std::vector<RowBand> MomentBands(int width, int height, size_t maxPixels)
     return bands;
   }
   const size_t unitPixels = static_cast<size_t>(width) * unit;
-  const int rows = static_cast<int>(std::max<size_t>(1, maxPixels / unitPixels)) * unit;
+  const size_t units = (static_cast<size_t>(height) + unit - 1) / unit; // all the rows
+  const int rows =
+    static_cast<int>(std::min(units, std::max<size_t>(1, maxPixels / unitPixels))) * unit;
   for (int j0 = 0; j0 < height; j0 += rows)
   {
     bands.push_back({ j0, std::min(height, j0 + rows) });

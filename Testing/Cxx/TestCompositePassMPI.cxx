@@ -660,6 +660,7 @@ int main(int argc, char* argv[])
     double bounds[6];
     GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> whole;
+    whole->SetMaxBandPixels(VTK_ID_MAX); // one band, however large the setting
     const std::vector<float> one =
       RenderDistributed(controller, puzzle, piece, bounds, 64, true, whole, true, resolve);
     vtkNew<vtkAPCCompositePass> banded;
