@@ -59,8 +59,9 @@ struct CompositeFrame
   ScreenRect Rect;
   TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the depth share ships
   // APC mode renders and composites a frame larger than this many pixels band by band (see
-  // MomentBands), so that its buffers are a band's size, not the rectangle's.
-  size_t BandPixels = size_t(1) << 21;
+  // MomentBands), so that its buffers are a band's size, not the rectangle's. The agreed
+  // vtkAPCCompositePass::MaxBandPixels; one band unless set.
+  size_t BandPixels = static_cast<size_t>(-1);
   MomentParameters Moments;
   std::vector<FrameEngine*> Engines;
   // The frame's float image is kept (KeepLastImage, or the display process's image file): the

@@ -28,6 +28,17 @@ namespace apc
 namespace visitors
 {
 
+// One empty list per pixel of a tile; the lists keep their memory from tile to tile.
+template <class List>
+void ClearPixelLists(std::vector<List>& lists, int pixels)
+{
+  lists.resize(static_cast<size_t>(pixels));
+  for (List& list : lists)
+  {
+    list.clear();
+  }
+}
+
 // What a visitor needs from the walker. Transparent samples are passed on only if asked.
 struct NoSegments
 {
@@ -50,14 +61,7 @@ struct PixelSampleLists : NoSegments
 {
   std::vector<std::vector<SampleRecord>> Pixels;
 
-  void BeginTile(const TileRect& tile)
-  {
-    this->Pixels.resize(tile.Pixels());
-    for (auto& p : this->Pixels)
-    {
-      p.clear();
-    }
-  }
+  void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
   void Sample(int pixel, int64_t k, double, double, const TransferSample& s)
   {
     this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
@@ -288,14 +292,7 @@ struct HybridColour : NoSegments
     , Settings(settings)
   {
   }
-  void BeginTile(const TileRect& tile)
-  {
-    this->Pixels.resize(tile.Pixels());
-    for (auto& p : this->Pixels)
-    {
-      p.clear();
-    }
-  }
+  void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
   void Sample(int pixel, int64_t k, double t, double, const TransferSample& s)
   {
     this->Pixels[pixel].push_back({ k, (*this->Warp)(t), s.Absorbance, s.Colour });
@@ -353,14 +350,7 @@ struct SegmentCounts
     , Tolerance(tolerance)
   {
   }
-  void BeginTile(const TileRect& tile)
-  {
-    this->Pixels.resize(tile.Pixels());
-    for (auto& p : this->Pixels)
-    {
-      p.clear();
-    }
-  }
+  void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
   void Segment(int pixel, double tin, double tout) { this->Pixels[pixel].emplace_back(tin, tout); }
   void Sample(int, int64_t, double, double, const TransferSample&) {}
   void EndTile(const TileRect& tile)
