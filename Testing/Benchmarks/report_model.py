@@ -2,6 +2,7 @@
 
 import os
 import shutil
+from types import SimpleNamespace
 
 
 from report_common import fmt, mb, plt, read_csv, table
@@ -16,14 +17,30 @@ class ModelSection:
         recomputed, without rerunning: scaling_model.py --results docs/evaluation/model."""
         source = os.path.join(self.results, "model")
         get = lambda name: read_csv(os.path.join(source, name))  # noqa: E731
-        constants, validation = get("constants.csv"), get("validation.csv")
-        paper, crossover, collectives = get("paper_scale.csv"), get("crossover.csv"), \
-            get("collectives.csv")
+        m = SimpleNamespace(constants=get("constants.csv"), validation=get("validation.csv"),
+                            paper=get("paper_scale.csv"), crossover=get("crossover.csv"),
+                            collectives=get("collectives.csv"))
         self.add("## 5. Scaling model: compositing at the paper's scale\n")
-        if not constants or not paper:
+        if not m.constants or not m.paper:
             self.add("No results (run scaling_model.py: it needs comm.csv and the per-rank "
                      "columns of segment_transfer.csv).\n")
             return
+        self._model_keep_inputs(source)
+        paper = m.paper
+        m.gear = [r for r in paper if r["case"] == "gearteeth"]
+        calibrations = list(dict.fromkeys(r["calibration"] for r in paper))
+        m.machine, m.cluster = calibrations[0], calibrations[-1]
+        m.at = {(r["case"], int(r["ranks"]), r["calibration"], r["method"]): r for r in paper}
+        m.ranks = sorted({int(r["ranks"]) for r in m.gear})
+        m.cases = list(dict.fromkeys(r["case"] for r in paper))
+        for part in (self._model_intro, self._model_constants, self._model_collectives,
+                     self._model_validation, self._model_gear, self._model_plots,
+                     self._model_crossover, self._model_validation_headline,
+                     self._model_meshes):
+            part(m)
+
+    def _model_keep_inputs(self, source):
+        """The model's inputs and outputs, copied next to the report."""
         kept = os.path.join(self.figures, "model")
         os.makedirs(kept, exist_ok=True)
         for name in ("comm.csv", "segment_transfer.csv", "scaling.csv", "scaling_old_wire.csv"):
@@ -32,6 +49,9 @@ class ModelSection:
         for name in sorted(os.listdir(source)):
             if name.endswith(".csv"):
                 shutil.copyfile(os.path.join(source, name), os.path.join(kept, name))
+
+    def _model_intro(self, m):
+        constants = m.constants
         self.add(
             "An α–β–γ (latency–inverse bandwidth–reduction cost) model of one frame's "
             "compositing, `Testing/Benchmarks/scaling_model.py` (its docstring has every "
@@ -54,6 +74,9 @@ class ModelSection:
             "[evaluation/model/](evaluation/model/).\n" % fmt(num(constants[0]
                                                                   ["gamma_double_s_per_byte"])))
 
+
+    def _model_constants(self, m):
+        constants = m.constants
         # Constants.
         body = []
         for c in constants:
@@ -76,6 +99,9 @@ class ModelSection:
             "(<https://mvapich.cse.ohio-state.edu/performance/pt_to_pt/>). It uses this "
             "machine's γ and copy cost.\n")
 
+
+    def _model_collectives(self, m):
+        collectives = m.collectives
         if collectives:
             big = {}
             for r in collectives:
@@ -93,6 +119,9 @@ class ModelSection:
             self.add(table(["ranks", "op", "type", "MB per rank", "measured s", "model 1 s",
                             "model 2 s", "model 3 s", "closest", "its error"], body))
 
+
+    def _model_validation(self, m):
+        validation = m.validation
         # Validation.
         if validation:
             pct = lambda v: "%+.0f %%" % (100 * v) if v == v else "–"  # noqa: E731
@@ -134,13 +163,17 @@ class ModelSection:
                 "read the 2-rank rows as the model's accuracy and the 4–8-rank rows as how "
                 "far oversubscription is from it.\n")
 
-        # The gear teeth's per-rank traffic from the analysis, at the paper's size.
-        gear = [r for r in paper if r["case"] == "gearteeth"]
-        calibrations = list(dict.fromkeys(r["calibration"] for r in paper))
-        machine, cluster = calibrations[0], calibrations[-1]
-        at = {(r["case"], int(r["ranks"]), r["calibration"], r["method"]): r for r in paper}
-        ranks = sorted({int(r["ranks"]) for r in gear})
+
+    def _model_gear(self, m):
+        constants = m.constants
+        crossover = m.crossover
+        gear = m.gear
+        machine = m.machine
+        cluster = m.cluster
+        at = m.at
+        ranks = m.ranks
         trio = ("APC (compact wire)", "direct send", "binary swap")
+        # The gear teeth's per-rank traffic from the analysis, at the paper's size.
         if gear:
             body = []
             for n in ranks:
@@ -209,8 +242,13 @@ class ModelSection:
                         "break_even_blend_s_per_segment"])),
                     fmt(1e9 * num(constants[-1].get("blend_s_per_segment")))))
 
+
+    def _model_plots(self, m):
+        paper = m.paper
+        machine = m.machine
+        cluster = m.cluster
+        cases = m.cases
         # Plots: time and bytes vs ranks, per calibration, gear teeth (lines) and real data.
-        cases = list(dict.fromkeys(r["case"] for r in paper))
         styles = {"APC (old wire)": ("C0", ":"), "APC (compact wire)": ("C0", "-"),
                   "direct send": ("C1", "-"), "binary swap": ("C2", "-")}
         markers = {c: m for c, m in zip(cases, "os^vDP<>*")}
@@ -257,6 +295,11 @@ class ModelSection:
                     "direct send; green: binary swap; markers: data sets (gear teeth opaque, "
                     "real meshes pale).")
 
+
+    def _model_crossover(self, m):
+        constants = m.constants
+        crossover = m.crossover
+        at = m.at
         if crossover:
             body = [[r["case"], r["calibration"], r["apc"], "%s–%s" % (r["from_ranks"],
                                                                        r["to_ranks"]),
@@ -288,6 +331,9 @@ class ModelSection:
                             fmt(1e9 * num(be.get("break_even_blend_s_per_segment"))),
                             fmt(1e9 * num(constants[-1].get("blend_s_per_segment"))),
                             r["crossover_time"]))
+
+    def _model_validation_headline(self, m):
+        validation = m.validation
         if validation:
             two = [r for r in validation if r["ranks"] == "2"]
             if two:
@@ -298,6 +344,13 @@ class ModelSection:
                         "%s %s %+.0f %% / %+.0f %%" % (
                             r["mode"], r["model"], 100 * num(r.get("rel_error_vs_mpi_alone")),
                             100 * num(r["rel_error"])) for r in two))
+
+    def _model_meshes(self, m):
+        paper = m.paper
+        crossover = m.crossover
+        cluster = m.cluster
+        at = m.at
+        cases = m.cases
         for case in [c for c in cases if "metis" in c]:
             rs = sorted({int(r["ranks"]) for r in paper if r["case"] == case})
             lo = at[(case, rs[0], cluster, "direct send")]
