@@ -5,6 +5,7 @@
 #include "apcPartitionInput.h"
 #include "apcPartitionMove.h"
 
+#include "vtkDataObject.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkMultiProcessController.h"
