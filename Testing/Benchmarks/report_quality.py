@@ -91,6 +91,9 @@ class QualitySections:
                 resolve0, rank_default, len(ranking), mean.get(default, float("nan")),
                 worst.get(default, float("nan"))))
 
+        self._quality_figures(scenes, betas, moments, resolves, get, mean, best, default)
+
+    def _quality_figures(self, scenes, betas, moments, resolves, get, mean, best, default):
         # SSIM maps: one panel per scene (and the mean), beta x moments, RENORMALISED.
         res = "RENORMALISED" if "RENORMALISED" in resolves else resolves[0]
         panels = scenes + ["mean"]
@@ -127,8 +130,9 @@ class QualitySections:
                               "![](%s)" % self.copy_image(name(best), "quality_%s_best.png" % s)])
         if cells:
             self.add("\n")
-            self.add(table(["scene", "exact", "default β %g, %d moments" % (beta0, moments0),
+            self.add(table(["scene", "exact", "default β %g, %d moments" % (default[0], default[1]),
                             "best mean: β %g, %d moments" % (best[0], best[1])], cells))
+
 
     # ---------------------------------------------------------------- Hybrid resolve
     def hybrid(self):
@@ -190,9 +194,15 @@ class QualitySections:
             "rows repeat). Pass 2's cost is its %s over all pieces, best of 5, both modes "
             "in the same run (TBB threads on 2 shared cores). CSV: "
             "[evaluation/hybrid_ranks.csv](evaluation/hybrid_ranks.csv).\n" % (
-                ", ".join(str(k) for k in ranks), mapper_defaults(self.results)[0], self.quality_size(),
+                ", ".join(str(k) for k in ranks), mapper_defaults(self.results)[0],
+                self.quality_size(),
                 "CPU time (user + system, all threads)" if timing == "pass2_cpu_s"
                 else "wall time"))
+        self._hybrid_table(scenes, ranks, moments, val, db, cost)
+
+        self._hybrid_findings(scenes, ranks, moments, val, db, cost)
+
+    def _hybrid_table(self, scenes, ranks, moments, val, db, cost):
         header = ["scene", "ranks"]
         for m in moments:
             header += ["APC %d SSIM / PSNR" % m, "Hybrid %d SSIM / PSNR" % m, "Δ dB (%d)" % m,
@@ -211,6 +221,8 @@ class QualitySections:
                 body.append(line)
         self.add(table(header, body))
 
+
+    def _hybrid_findings(self, scenes, ranks, moments, val, db, cost):
         split = [k for k in ranks if k > 1]
         means = []
         for m in moments:
@@ -257,3 +269,4 @@ class QualitySections:
                 "APC's (median of the split rows)." % (
                     "; ".join("%s %s" % (s, "/".join("%+.1f" % db(s, k, 4) for k in split))
                               for s in slab), median(costs_split)))
+

@@ -85,6 +85,11 @@ class RealDataSection:
                     "(projected tetra, which redistributes first) = **%.2f**; later frames "
                     "%.2f." % (ranks, f, later))
 
+        self._realdata_identity(by)
+
+        self._realdata_figures(rows, by)
+
+    def _realdata_identity(self, by):
         # N ranks against 1 rank: float images.
         ident = []
         for (ranks, distance, case), r in sorted(by.items()):
@@ -108,6 +113,8 @@ class RealDataSection:
                      "and are listed as found:\n\n")
             self.add(table(["case", "ranks", "distance", "max |Δ| vs 1 rank"], ident))
 
+
+    def _realdata_figures(self, rows, by):
         # Frame-time plot.
         cases = [c for c in ("apc-default", "segments", "pt") if any(r["case"] == c for r in rows)]
         multi = sorted({k[0] for k in by if k[0] != "1"}, key=int)
@@ -146,3 +153,4 @@ class RealDataSection:
                 self.add("\nThe pictures (%s ranks, distance %s): %s.\n\n" % (
                     ranks, d, ", ".join(cases)))
                 self.add(table(cases[:len(cells)], [cells]))
+

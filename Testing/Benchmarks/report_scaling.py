@@ -86,6 +86,9 @@ class ScalingSections:
                                         s["apc_bytes"] / s["seg_bytes"], s["apc_msgs"],
                                         s["seg_msgs"]))
 
+        self._scaling_figures(ranks, summary)
+
+    def _scaling_figures(self, ranks, summary):
         fig, axes = plt.subplots(1, 3, figsize=(15, 4))
         xs = [n for n in ranks if n > 1]
         axes[0].plot(xs, [summary[n]["apc"] for n in xs], "o-", label="APC (allreduce + reduce)")
@@ -134,6 +137,7 @@ class ScalingSections:
         unique = dict(zip(labels, handles))
         ax.legend(unique.values(), unique.keys(), ncol=3, fontsize=8)
         self.figure(fig, "scaling_stages.png", "Stage breakdown per rank count.")
+
 
     # ---------------------------------------------------------------- segment transfers
     def transfers(self):
@@ -201,6 +205,9 @@ class ScalingSections:
                      "distributed `Exact (segments)` compositing equal this analysis's.\n"
                      % (sum(checks), len(checks)))
 
+        self._transfer_heatmaps(rows)
+
+    def _transfer_heatmaps(self, rows):
         heatmaps = [r for r in rows if r["heatmap"]]
         chosen = []
         for case in dict.fromkeys(r["case"] for r in heatmaps):
@@ -222,3 +229,4 @@ class ScalingSections:
                         "Per-pixel segment counts over all ranks (empty pixels white): the "
                         "paper's heatmap. APC sends the same bytes for every pixel of the "
                         "rectangle, whatever these counts.")
+
