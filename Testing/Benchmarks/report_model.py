@@ -9,6 +9,27 @@ from report_common import fmt, mb, plt, read_csv, table
 from scaling_model import num
 
 
+def model_panel(ax, paper, cases, calibration, key, scale, ylabel):
+    """One panel of the model's plot: key (times scale) against ranks, a line per method and
+    case, on log axes."""
+    styles = {"APC (old wire)": ("C0", ":"), "APC (compact wire)": ("C0", "-"),
+              "direct send": ("C1", "-"), "binary swap": ("C2", "-")}
+    markers = {c: m for c, m in zip(cases, "os^vDP<>*")}
+    for case in cases:
+        for method, (colour, line) in styles.items():
+            pts = sorted((int(r["ranks"]), num(r[key])) for r in paper
+                         if r["case"] == case and r["calibration"] == calibration and
+                         r["method"] == method and num(r[key]) == num(r[key]))
+            if pts:
+                ax.plot([p for p, _ in pts], [v * scale for _, v in pts], line, color=colour,
+                        marker=markers[case], markersize=4, label="%s, %s" % (method, case),
+                        alpha=1 if case == "gearteeth" else 0.55)
+    ax.set_xscale("log", base=2)
+    ax.set_yscale("log")
+    ax.set_xlabel("ranks")
+    ax.set_ylabel(ylabel)
+
+
 class ModelSection:
     # ---------------------------------------------------------------- scaling model
     def model(self):
@@ -249,42 +270,13 @@ class ModelSection:
         cluster = m.cluster
         cases = m.cases
         # Plots: time and bytes vs ranks, per calibration, gear teeth (lines) and real data.
-        styles = {"APC (old wire)": ("C0", ":"), "APC (compact wire)": ("C0", "-"),
-                  "direct send": ("C1", "-"), "binary swap": ("C2", "-")}
-        markers = {c: m for c, m in zip(cases, "os^vDP<>*")}
         fig, axes = plt.subplots(1, 4, figsize=(22, 4.6))
         panels = ((machine, "time_s", "with local work"), (cluster, "time_s", "with local work"),
                   (cluster, "time_comm_s", "latency and bandwidth only"))
         for ax, (cal, key, what) in zip(axes[:3], panels):
-            for case in cases:
-                for m, (colour, line) in styles.items():
-                    pts = sorted((int(r["ranks"]), num(r[key])) for r in paper
-                                 if r["case"] == case and r["calibration"] == cal and
-                                 r["method"] == m and num(r[key]) == num(r[key]))
-                    if pts:
-                        ax.plot([p for p, _ in pts], [t for _, t in pts], line,
-                                color=colour, marker=markers[case], markersize=4,
-                                label="%s, %s" % (m, case), alpha=1 if case == "gearteeth"
-                                else 0.55)
-            ax.set_xscale("log", base=2)
-            ax.set_yscale("log")
-            ax.set_xlabel("ranks")
-            ax.set_ylabel("modelled compositing s per frame")
+            model_panel(ax, paper, cases, cal, key, 1.0, "modelled compositing s per frame")
             ax.set_title("%s: %s" % (cal, what), fontsize=9)
-        for case in cases:
-            for m, (colour, line) in styles.items():
-                pts = sorted((int(r["ranks"]), num(r["bytes"])) for r in paper
-                             if r["case"] == case and r["calibration"] == cluster and
-                             r["method"] == m and num(r["bytes"]) == num(r["bytes"]))
-                if pts:
-                    axes[3].plot([p for p, _ in pts], [b / 1e6 for _, b in pts], line,
-                                 color=colour, marker=markers[case], markersize=4,
-                                 label="%s, %s" % (m, case),
-                                 alpha=1 if case == "gearteeth" else 0.55)
-        axes[3].set_xscale("log", base=2)
-        axes[3].set_yscale("log")
-        axes[3].set_xlabel("ranks")
-        axes[3].set_ylabel("MB per frame, all ranks")
+        model_panel(axes[3], paper, cases, cluster, "bytes", 1e-6, "MB per frame, all ranks")
         axes[3].set_title("bytes sent")
         axes[3].legend(fontsize=6, ncol=2, loc="upper left")
         self.figure(fig, "model_scaling.png",
