@@ -17,9 +17,7 @@ from paraview.simple import *  # noqa: F401,F403
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import apcparaview
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # pvpython may not add it
-from foam_label_list import write_label_list  # noqa: E402
+from foam_label_list import write_label_list
 
 case, nparts, name = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 seed = int(sys.argv[4]) if len(sys.argv) > 4 else 0
