@@ -92,7 +92,8 @@ bool RunScotch(MPI_Comm comm, const DistributedGraph& graph, int parts, int seed
   error = ok ? "" : "SCOTCH_dgraphBuild failed";
   if (AllOk(comm, ok))
   {
-    ok = SCOTCH_stratDgraphMapBuild(&strategy, SCOTCH_STRATQUALITY, processes, parts, 0.03) == 0;
+    ok = SCOTCH_stratDgraphMapBuild(
+           &strategy, SCOTCH_STRATQUALITY | SCOTCH_STRATBALANCE, processes, parts, 0.03) == 0;
     ok = ok && SCOTCH_contextBindDgraph(&context, &dgraph, &bound) == 0;
     ok = ok && SCOTCH_dgraphPart(&bound, parts, &strategy, part.data()) == 0;
     error = ok ? "" : "SCOTCH_dgraphPart failed";
