@@ -45,6 +45,9 @@ struct NoSegments
   static constexpr bool WantsSegments = false;
   static constexpr bool WantsSamples = true;
   static constexpr bool WantsTransparentSamples = false;
+  // The MBOIT passes leave out what lies behind an opaque ray (VolumeRayMarcher::
+  // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
+  static constexpr bool StopsWhenOpaque = false;
   void Segment(int, double, double) {}
 };
 
@@ -133,6 +136,7 @@ struct Exact : PixelSampleLists
 template <int N>
 struct Moments : NoSegments
 {
+  static constexpr bool StopsWhenOpaque = true;
   double* Output;
   double* Own = nullptr;
   int Width;
@@ -192,6 +196,7 @@ struct Moments : NoSegments
 template <int N>
 struct Colour : NoSegments
 {
+  static constexpr bool StopsWhenOpaque = true;
   double* Output;
   int Width;
   const LogDepthWarp* Warp;
@@ -266,6 +271,7 @@ inline int64_t ReplayOrder(const CachedSample& sample)
 template <int N>
 struct HybridColour : NoSegments
 {
+  static constexpr bool StopsWhenOpaque = true;
   struct OwnSample
   {
     int64_t Order; // lattice index k, or ReplayOrder for cached samples
@@ -336,6 +342,7 @@ struct HybridColour : NoSegments
 // Number of disjoint intervals of each ray inside the cells.
 struct SegmentCounts
 {
+  static constexpr bool StopsWhenOpaque = false;
   static constexpr bool WantsSegments = true;
   static constexpr bool WantsSamples = false;
   static constexpr bool WantsTransparentSamples = false;

@@ -143,6 +143,58 @@ struct Lattice
 }
 
 //------------------------------------------------------------------------------
+// How far each ray of a tile has come: the absorbance its samples have added, the largest t
+// among them, and once that absorbance reaches the opaque threshold, the t behind which it
+// takes no more samples. Every sample behind Stop lies behind all the samples summed so far,
+// so its transmittance is at most exp(-threshold) (see SetOpaqueAbsorbance). The walker keeps
+// this, not the visitor, so that pass 1 and a pass 2 that marches a tile again make the same
+// decisions from the same samples in the same order.
+struct RayProgress
+{
+  static constexpr int kPixels = VolumeRayMarcher::kTileSize * VolumeRayMarcher::kTileSize;
+  double Threshold = std::numeric_limits<double>::infinity();
+  double Absorbance[kPixels];
+  double Far[kPixels];
+  double Stop[kPixels];
+  // Once every pixel of the tile is opaque, the largest Stop: a cell nearer than none of them
+  // is skipped without looking at its rays.
+  double TileStop = std::numeric_limits<double>::infinity();
+  int Pixels = 0;
+  int Open = 0; // pixels not yet opaque
+
+  void Begin(int pixels, double threshold)
+  {
+    this->Threshold = threshold;
+    this->Pixels = pixels;
+    this->Open = pixels;
+    this->TileStop = std::numeric_limits<double>::infinity();
+    for (int p = 0; p < pixels; ++p)
+    {
+      this->Absorbance[p] = 0;
+      this->Far[p] = -std::numeric_limits<double>::infinity();
+      this->Stop[p] = std::numeric_limits<double>::infinity();
+    }
+  }
+  // Adds a sample at t; true if it made the ray opaque (nothing behind t is taken).
+  bool Add(int p, double t, double absorbance)
+  {
+    this->Absorbance[p] += absorbance;
+    this->Far[p] = std::max(this->Far[p], t);
+    if (!(this->Absorbance[p] >= this->Threshold) ||
+      this->Stop[p] < std::numeric_limits<double>::infinity())
+    {
+      return false;
+    }
+    this->Stop[p] = this->Far[p];
+    if (--this->Open == 0)
+    {
+      this->TileStop = *std::max_element(this->Stop, this->Stop + this->Pixels);
+    }
+    return true;
+  }
+};
+
+//------------------------------------------------------------------------------
 // Marches one tile: all its cells against all its pixels.
 struct VolumeRayMarcher::Walker
 {
@@ -151,6 +203,7 @@ struct VolumeRayMarcher::Walker
   const TransferTable& Table;
   double FarLimit;
   bool SharedOrigin; // a perspective camera: every ray starts at the eye
+  double OpaqueAbsorbance;
 
   // What a cell needs while its rays are marched; reused from cell to cell.
   struct CellState
@@ -163,9 +216,15 @@ struct VolumeRayMarcher::Walker
   // One cell against the tile's rays; returns the lattice samples taken.
   template <class Visitor>
   int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRect& tile,
-    Visitor& visitor, CellState& state) const
+    Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     constexpr bool keepsTransparent = Visitor::WantsSegments || Visitor::WantsTransparentSamples;
+    constexpr bool stops = Visitor::StopsWhenOpaque;
+    const double near = this->Bins.Near[cell];
+    if (stops && near >= progress.TileStop)
+    {
+      return 0; // behind every ray of the tile, all opaque
+    }
     const bool cellScalars = this->Mesh.HasCellScalars();
     const auto& range = this->Mesh.GetScalarRange(cell);
     const double lo = range[0];
@@ -214,6 +273,14 @@ struct VolumeRayMarcher::Walker
         // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes
         // fail to enclose it (rounding on a nearly flat cell) from sampling forever.
         double tout = std::min(ray.End, this->FarLimit);
+        if (stops)
+        {
+          if (near >= progress.Stop[local])
+          {
+            continue;
+          }
+          tout = std::min(tout, progress.Stop[local]);
+        }
         state.Planes.Clip(ray, tin, tout);
         if (!(tin < tout))
         {
@@ -267,6 +334,10 @@ struct VolumeRayMarcher::Walker
           if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
           {
             visitor.Sample(local, k, t, scalar, s);
+            if (stops && progress.Add(local, t, s.Absorbance))
+            {
+              break; // opaque: what lies behind t cannot be seen
+            }
           }
         }
       }
@@ -281,11 +352,13 @@ struct VolumeRayMarcher::Walker
   {
     int64_t samples = 0;
     CellState state;
+    RayProgress progress;
+    progress.Begin(tile.Pixels(), this->OpaqueAbsorbance);
     const TileRect inBand = Shifted(tile, rowOffset);
     visitor.BeginTile(inBand);
     for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
     {
-      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state);
+      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state, progress);
     }
     visitor.EndTile(inBand);
     return samples;
@@ -382,7 +455,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   double farLimit = 0;
   this->Camera->DistanceRange(this->Mesh->GetBounds(), nearLimit, farLimit);
   const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
-    !this->Camera->IsParallel() };
+    !this->Camera->IsParallel(), this->OpaqueAbsorbance };
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;
