@@ -144,7 +144,7 @@ struct Options
   vtkIdType ZSweepMaxCells = 100000;
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
-  int Moments = 4; // APC's MBOIT moments
+  int Moments = 4;                 // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
 };
@@ -266,8 +266,8 @@ void UseParaViewDefaults(MapperScene& scene)
   scene.TF.Opacities = { { range[0], 0.0 }, { range[1], 1.0 } };
   double b[6];
   scene.Grid->GetBounds(b);
-  const double diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
-    (b[5] - b[4]) * (b[5] - b[4]));
+  const double diagonal = std::sqrt(
+    (b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) + (b[5] - b[4]) * (b[5] - b[4]));
   scene.TF.UnitDistance = diagonal / std::cbrt(static_cast<double>(scene.Grid->GetNumberOfCells()));
   scene.SampleDistance = 0.0;
   scene.Note += std::string(scene.Note.empty() ? "" : "; ") + "ParaView's default setup";
@@ -586,10 +586,10 @@ public:
       if (s.Valid)
       {
         out << Format(s.Pass1NanosecondsPerSample()) << ',' << Format(s.Pass2NanosecondsPerSample())
-            << ',' << Format(s.HiddenShare()) << ',' << s.AllSamples << ','
-            << Format(s.CacheShare) << ',' << Format(s.ErrorVsExact) << ','
-            << Format(s.StopChange) << ',' << Format(s.StopChangeShare) << ','
-            << Format(s.ErrorVsExactAll) << ',' << Format(s.WorseShare);
+            << ',' << Format(s.HiddenShare()) << ',' << s.AllSamples << ',' << Format(s.CacheShare)
+            << ',' << Format(s.ErrorVsExact) << ',' << Format(s.StopChange) << ','
+            << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
+            << Format(s.WorseShare);
       }
       else
       {
@@ -821,7 +821,8 @@ private:
   // The core marcher alone on this scene's mesh, camera and transfer function.
   void RunSampler(const MapperScene& scene, int threads)
   {
-    Row row = NewRow(scene, scene.Grid->GetNumberOfCells(), "sampler", "mboit", std::to_string(threads));
+    Row row =
+      NewRow(scene, scene.Grid->GetNumberOfCells(), "sampler", "mboit", std::to_string(threads));
     row.BunykThreads = threads;
     Stage stage(scene, this->Opt.Size, this->Opt.TimeCap);
     vtkNew<vtkAPCVolumeMapper> mapper; // only for the camera's placement
@@ -847,10 +848,10 @@ private:
               << Format(s.Pass2NanosecondsPerSample()) << " ns/sample, " << s.Samples
               << " samples, hidden " << Format(s.HiddenShare()) << ", cached "
               << Format(s.CacheShare) << ", error vs exact " << Format(s.ErrorVsExact)
-              << ", stop change " << Format(s.StopChange) << " (pixels over 1/255: "
-              << Format(s.StopChangeShare) << "), unstopped error " << Format(s.ErrorVsExactAll)
-              << ", pixels worse by 1/255 " << Format(s.WorseShare) << ", bin " << Format(s.ViewSeconds)
-              << " s\n";
+              << ", stop change " << Format(s.StopChange)
+              << " (pixels over 1/255: " << Format(s.StopChangeShare) << "), unstopped error "
+              << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
+              << ", bin " << Format(s.ViewSeconds) << " s\n";
     this->Rows.push_back(row);
   }
 

@@ -23,10 +23,10 @@ struct SamplerTiming
 {
   bool Valid = false;
   int64_t Cells = 0;
-  int64_t Samples = 0;    // pass 1's samples (those in front of each ray's opaque point)
-  int64_t AllSamples = 0; // the same view marched without stopping (= Samples if it cannot)
+  int64_t Samples = 0;      // pass 1's samples (those in front of each ray's opaque point)
+  int64_t AllSamples = 0;   // the same view marched without stopping (= Samples if it cannot)
   int64_t Pass2Samples = 0; // pass 2's samples: pass 1's visible ones (absorbance > 0)
-  double CacheShare = NAN; // share of pass 2's samples replayed from the cache
+  double CacheShare = NAN;  // share of pass 2's samples replayed from the cache
   // Medians over the repeats, seconds: binning (SetView), pass 1, pass 2 (wall and CPU).
   double ViewSeconds = NAN;
   double Pass1Seconds = NAN;
@@ -39,14 +39,13 @@ struct SamplerTiming
   double ErrorVsExact = NAN;
   double StopChange = NAN;
   double StopChangeShare = NAN; // share of pixels the stop changes by more than 1/255
-  double ErrorVsExactAll = NAN;  // ErrorVsExact of the image marched without stopping
+  double ErrorVsExactAll = NAN; // ErrorVsExact of the image marched without stopping
   // Share of pixels farther from the exact blend with the stop than without by over 1/255.
   double WorseShare = NAN;
 
   double HiddenShare() const
   {
-    return this->AllSamples > 0 ? 1.0 - static_cast<double>(this->Samples) / this->AllSamples
-                                : NAN;
+    return this->AllSamples > 0 ? 1.0 - static_cast<double>(this->Samples) / this->AllSamples : NAN;
   }
   double Pass1NanosecondsPerSample() const { return 1e9 * this->Pass1Cpu / this->Samples; }
   double Pass2NanosecondsPerSample() const { return 1e9 * this->Pass2Cpu / this->Pass2Samples; }
