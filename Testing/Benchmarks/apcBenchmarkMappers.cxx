@@ -7,7 +7,7 @@
 //   apcBenchmarkMappers [--size N] [--quick] [--repeats N] [--datasets gear,wind,flange]
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
-//     [--no-images] [--setup benchmark|paraview] [--dolly F]
+//     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -147,6 +147,7 @@ struct Options
   int Moments = 4;                 // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
+  bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
 };
 
 // A shared scene (its Grid: the original cells, what APC renders) plus what VTK's mappers
@@ -830,7 +831,7 @@ private:
     stage.SetMapper(mapper, scene);
     auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
     const apcbench::SamplerTiming s = apcbench::TimeSampler(grid, stage.Renderer, stage.Property,
-      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, true);
+      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare);
     row.Sampler = s;
     row.Pass1 = s.Pass1Seconds;
     row.Pass2 = s.Pass2Seconds;
@@ -970,7 +971,7 @@ void Usage()
                "  [--threads 1,2] [--zsweep-max-cells N] [--time-cap SECONDS] [--spacing-scale F] "
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
-               "  [--no-images] [--setup benchmark|paraview] [--dolly F]\n";
+               "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n";
 }
 
 } // namespace
@@ -1053,6 +1054,10 @@ int main(int argc, char* argv[])
     else if (arg == "--setup")
     {
       options.Setup = value();
+    }
+    else if (arg == "--no-compare")
+    {
+      options.Compare = false;
     }
     else if (arg == "--dolly")
     {
