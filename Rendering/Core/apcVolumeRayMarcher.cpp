@@ -455,7 +455,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   double farLimit = 0;
   this->Camera->DistanceRange(this->Mesh->GetBounds(), nearLimit, farLimit);
   const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
-    !this->Camera->IsParallel(), this->OpaqueAbsorbance };
+    !this->Camera->IsParallel(),
+    Visitor::StopsWhenOpaque ? this->FrameStop : std::numeric_limits<double>::infinity() };
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;
@@ -514,6 +515,9 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
     static_cast<size_t>(last));
   visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);
   this->OwnMomentsOrder = 0;
+  // Hybrid (keepOwn) promises the exact ordered blend of a rank's own samples: every sample
+  // is marched. Pass 2 stops where this pass did.
+  this->FrameStop = keepOwn ? std::numeric_limits<double>::infinity() : this->OpaqueAbsorbance;
   if (keepOwn && this->Camera)
   {
     const int height = this->Camera->GetHeight();

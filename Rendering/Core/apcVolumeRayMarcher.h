@@ -72,8 +72,9 @@ public:
   // (and the tiles' cells are visited nearest first, so that happens early): a later sample
   // behind all the samples summed so far has a transmittance below exp(-absorbance) whatever
   // other meshes or ranks add in front of it, so it changes a pixel by less than that. Pass 2
-  // takes exactly pass 1's samples. +inf marches every sample; exact and segment renders
-  // always do. Set it before a frame's passes.
+  // takes exactly pass 1's samples (it stops where pass 1 did). +inf marches every sample;
+  // exact and segment renders always do, and so does a pass 1 that keeps its own moments for
+  // Hybrid, whose own transmittance is exact.
   void SetOpaqueAbsorbance(double absorbance) { this->OpaqueAbsorbance = absorbance; }
   double GetOpaqueAbsorbance() const { return this->OpaqueAbsorbance; }
   // ln 10^4: what a ray leaves unsampled is hidden behind a transmittance of at most 1e-4,
@@ -149,6 +150,8 @@ private:
   int Threads = 0;
   bool LatticeJitter = false;
   double OpaqueAbsorbance = kDefaultOpaqueAbsorbance;
+  // The stop of the last pass 1, which its pass 2 must use too.
+  double FrameStop = kDefaultOpaqueAbsorbance;
   int64_t LastSamples = 0;
 };
 

@@ -16,7 +16,6 @@
 #include <algorithm>
 #include <cmath>
 #include <iostream>
-#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -315,10 +314,8 @@ struct SlabScene
 
   // MBOIT's two passes over the pieces, one marcher each as one per process: moments summed,
   // then each piece's colour weighted by the global moments (and, Hybrid, its own).
-  // opaque: the marchers' opaque stop (VolumeRayMarcher::SetOpaqueAbsorbance).
   std::vector<float> Moments(const std::vector<const apc::CellMesh*>& pieces, bool hybrid,
-    size_t cacheBytes = size_t(1) << 30,
-    double opaque = apc::VolumeRayMarcher::kDefaultOpaqueAbsorbance) const
+    size_t cacheBytes = size_t(1) << 30) const
   {
     constexpr int N = 4;
     const size_t pixels = kSize * kSize;
@@ -329,7 +326,6 @@ struct SlabScene
     {
       marchers.emplace_back(new apc::VolumeRayMarcher);
       marchers.back()->SetMaxSampleCacheBytes(cacheBytes);
-      marchers.back()->SetOpaqueAbsorbance(opaque);
       marchers.back()->SetMesh(piece);
       marchers.back()->SetView(this->Camera, nullptr);
       marchers.back()->AccumulateMoments<N>(this->Table, this->Warp, global.data(), hybrid);
@@ -383,19 +379,12 @@ TEST(HybridTransmittance, OnePieceEqualsTheExactRender)
   const SlabScene scene;
   const std::vector<float> exact = scene.Exact();
   int covered = 0;
-  // Every sample marched: the exact blend. With the default opaque stop the samples behind
-  // an opacity of 1 - exp(-threshold) are left out, which changes a pixel by at most that.
-  const double inf = std::numeric_limits<double>::infinity();
-  const double stopBound = std::exp(-apc::VolumeRayMarcher::kDefaultOpaqueAbsorbance);
   for (size_t cache : { size_t(1) << 30, size_t(0) })
   {
-    const std::vector<float> hybrid = scene.Moments({ &scene.Whole }, true, cache, inf);
+    const std::vector<float> hybrid = scene.Moments({ &scene.Whole }, true, cache);
     const double diff = MaxDiff(hybrid, exact, &covered);
     std::cout << "one piece, cache " << cache << ": max |Hybrid - exact| = " << diff << "\n";
     EXPECT_LE(diff, 1e-6) << "cache " << cache;
-    const double stopped = MaxDiff(scene.Moments({ &scene.Whole }, true, cache), exact);
-    std::cout << "  with the opaque stop: " << stopped << "\n";
-    EXPECT_LE(stopped, stopBound + 1e-6) << "cache " << cache;
   }
   EXPECT_GT(covered, kSize * kSize / 4);
   const double apc = MaxDiff(scene.Moments({ &scene.Whole }, false), exact);

@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -230,4 +231,30 @@ TEST(OpaqueStop, TwoMeshesKeepTheBound)
   // than with one mesh, but some are.
   EXPECT_LT(stopped.Pass1Samples, all.Pass1Samples);
   ExpectWithinBound(stopped.Image(), all.Image(), exact, "two meshes");
+}
+
+TEST(OpaqueStop, HybridMarchesEverySample)
+{
+  // Hybrid's own transmittance is the exact ordered product of a rank's samples: a pass 1
+  // that keeps its own moments takes every sample, and its pass 2 too.
+  const Scene scene;
+  const apc::CellMesh mesh = BlockMesh(-1);
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  marcher.SetView(scene.View, nullptr);
+  std::vector<double> moments(kPixels * 5, 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data(), true);
+  const int64_t hybrid = marcher.GetLastSampleCount();
+  std::vector<double> sums(kPixels * 4, 0.0);
+  marcher.AccumulateColour<4>(
+    scene.TF, scene.Warp, moments.data(), apc::MomentSettings<4>(), sums.data(), true);
+  EXPECT_EQ(marcher.GetLastSampleCount(), hybrid);
+  std::fill(moments.begin(), moments.end(), 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data());
+  const int64_t stopped = marcher.GetLastSampleCount();
+  marcher.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
+  std::fill(moments.begin(), moments.end(), 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data());
+  EXPECT_EQ(hybrid, marcher.GetLastSampleCount());
+  EXPECT_LT(stopped, hybrid);
 }
