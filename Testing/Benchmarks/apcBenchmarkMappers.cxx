@@ -566,7 +566,8 @@ public:
     out << "dataset,cells,image,mapper,mode,threads,first_frame_s,frame_s,pass1_s,pass2_s,"
            "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
            "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
-           "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share\n";
+           "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
+           "mesh_s,finalize_s\n";
   }
 
   // Rows from index first on; written per data set so that a crash keeps what was measured.
@@ -590,11 +591,12 @@ public:
             << ',' << Format(s.HiddenShare()) << ',' << s.AllSamples << ',' << Format(s.CacheShare)
             << ',' << Format(s.ErrorVsExact) << ',' << Format(s.StopChange) << ','
             << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
-            << Format(s.WorseShare);
+            << Format(s.WorseShare) << ',' << Format(s.MeshSeconds) << ','
+            << Format(s.FinalizeSeconds);
       }
       else
       {
-        out << ",,,,,,,,,";
+        out << ",,,,,,,,,,,";
       }
       out << '\n';
     }
@@ -852,7 +854,8 @@ private:
               << ", stop change " << Format(s.StopChange)
               << " (pixels over 1/255: " << Format(s.StopChangeShare) << "), unstopped error "
               << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
-              << ", bin " << Format(s.ViewSeconds) << " s\n";
+              << ", mesh " << Format(s.MeshSeconds) << " s (finalize " << Format(s.FinalizeSeconds)
+              << " s), bin " << Format(s.ViewSeconds) << " s\n";
     this->Rows.push_back(row);
   }
 

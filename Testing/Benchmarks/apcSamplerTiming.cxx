@@ -197,11 +197,16 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   SamplerTiming result;
   apc::CellMesh mesh;
   std::string message;
+  double start = WallSeconds();
   if (!apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, message))
   {
     std::cerr << "   sampler: " << message << "\n";
     return result;
   }
+  result.MeshSeconds = WallSeconds() - start;
+  start = WallSeconds();
+  mesh.Finalize();
+  result.FinalizeSeconds = WallSeconds() - start;
   result.Cells = mesh.GetNumberOfCells();
   const auto& b = mesh.GetBounds();
   if (!(spacing > 0))
