@@ -30,9 +30,9 @@ namespace
 // Where the tracer starts and enters (metres, the case's coordinates): a slab in front of the
 // first buildings, a band of y, up to a height.
 constexpr double SlabEndX = 0.0;
-constexpr double BandY0 = 20.0;
-constexpr double BandY1 = 160.0;
-constexpr double BandTopZ = 50.0;
+constexpr double BandY0 = 50.0;
+constexpr double BandY1 = 130.0;
+constexpr double BandTopZ = 40.0;
 constexpr double PlaneTolerance = 0.1; // m: snapping left the box's sides a few mm uneven
 
 bool InBand(double y, double z)

@@ -58,7 +58,10 @@ label = Text(registrationName="label")
 
 def show_once():
     """Displays need data to colour by: set up at the first step that brings some."""
-    volume = Show(mesh, view)
+    # The representation type named: every rank runs this on its own data, and a rank that
+    # owns no cells would otherwise get another type (a geometry representation, which has no
+    # "APC Volume") than the others and leave them waiting.
+    volume = Show(mesh, view, "UnstructuredGridRepresentation")
     volume.Representation = REPRESENTATION
     ColorBy(volume, ("CELLS", "tracer"))
     # A fixed range, the same on every rank. Rescaling to the data would take each rank's own
@@ -68,8 +71,9 @@ def show_once():
     lut.AutomaticRescaleRangeMode = "Never"
     lut.RescaleTransferFunction(0.0, 1.0)
     opacity = GetOpacityTransferFunction("tracer")
-    opacity.Points = [0.0, 0.0, 0.5, 0.0, 0.02, 0.0, 0.5, 0.0, 0.3, 0.25, 0.5, 0.0,
-                      1.0, 0.9, 0.5, 0.0]
+    # Clear air where there is no tracer, the plume's thin edges faint, its core dense.
+    opacity.Points = [0.0, 0.0, 0.5, 0.0, 0.03, 0.0, 0.5, 0.0, 0.5, 0.08, 0.5, 0.0,
+                      1.0, 0.35, 0.5, 0.0]
     opacity.RescaleTransferFunction(0.0, 1.0)
     volume.ScalarOpacityUnitDistance = 4.0
     volume.SetScalarBarVisibility(view, True)
@@ -77,7 +81,7 @@ def show_once():
     bar.Title = "tracer"
     bar.ComponentTitle = ""
 
-    context = Show(walls, view)
+    context = Show(walls, view, "GeometryRepresentation")
     context.Representation = "Surface"
     ColorBy(context, ("CELLS", "patch"))
     patch = GetColorTransferFunction("patch")
@@ -90,8 +94,8 @@ def show_once():
     text.WindowLocation = "Upper Left Corner"
     text.FontSize = 14
 
-    view.CameraPosition = [-160.0, -280.0, 380.0]
-    view.CameraFocalPoint = [150.0, 90.0, 30.0]
+    view.CameraPosition = [-110.0, -230.0, 300.0]
+    view.CameraFocalPoint = [160.0, 90.0, 20.0]
     view.CameraViewUp = [0.0, 0.0, 1.0]
     view.CameraViewAngle = 30.0
 
