@@ -29,7 +29,7 @@ run() { # representation, output folder
   bash "$top/.ci/with-xvfb" mpirun --oversubscribe -np "$ranks" \
     "$top/build/bin/apcCatalystMiniApp" --script "$top/Examples/Catalyst/apc_catalyst_tracer.py" \
     --steps "${APC_DEMO_STEPS:-400}" --every "${APC_DEMO_EVERY:-200}" --size 960 600 \
-    --representation "$1" --output "$2" --csv "$csv" 2>&1 | grep -v "WARN|" || true
+    --representation "$1" --output "$2" --csv "$csv" 2>&1 | grep --line-buffered -v "WARN|" || true
 }
 echo "== APC Volume, in situ on $ranks ranks"
 run "APC Volume" "$out/apc"

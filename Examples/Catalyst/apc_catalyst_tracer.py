@@ -11,6 +11,7 @@ Settings come from the environment (the mini-app sets them from its options):
   APC_CATALYST_OUTPUT          folder for the images (default catalyst-out)
   APC_CATALYST_REPRESENTATION  "APC Volume" (default) or ParaView's own "Volume"
   APC_CATALYST_SIZE            image width and height (default "640 400")
+  APC_CATALYST_TIMINGS         1: rank 0 prints APC's stage times of every rendered step
 """
 import os
 
@@ -21,6 +22,7 @@ EVERY = int(os.environ.get("APC_CATALYST_EVERY", "100"))
 OUTPUT = os.environ.get("APC_CATALYST_OUTPUT", "catalyst-out")
 REPRESENTATION = os.environ.get("APC_CATALYST_REPRESENTATION", "APC Volume")
 SIZE = [int(v) for v in os.environ.get("APC_CATALYST_SIZE", "640 400").split()]
+TIMINGS = os.environ.get("APC_CATALYST_TIMINGS") == "1" and REPRESENTATION.startswith("APC")
 
 # The plugin must be loaded on every rank before a representation of it is asked for. A
 # missing library fails here, at the script's import, on every rank alike.
@@ -103,9 +105,30 @@ def show_once():
 shown = []
 
 
+def print_timings():
+    """APC's stages of the last frame on this rank (the display rank's are the frame's)."""
+    from paraview import servermanager
+    if servermanager.vtkProcessModule.GetProcessModule().GetPartitionId() != 0:
+        return
+    display = GetDisplayProperties(mesh, view)
+    display.UpdatePropertyInformation()
+    t = display.GetProperty("APCLastTimings").GetData()
+    names = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend",
+             "total"]
+    print("APC stages of the last frame: " + ", ".join(
+        "%s %.3f s" % (n, v) for n, v in zip(names, t[:9])), flush=True)
+
+
 def catalyst_execute(info):
     if not shown:
         show_once()
         shown.append(True)
+    elif TIMINGS:
+        print_timings()  # the previous step's frame: extractors render after this function
     label.Text = "wind tracer, step %d, t = %.1f s (%s)" % (info.timestep, info.time,
                                                            REPRESENTATION)
+
+
+def catalyst_finalize():
+    if TIMINGS and shown:
+        print_timings()
