@@ -18,7 +18,9 @@
  * trivial) and scatters the part of every cell back. So rank 0 holds the whole graph
  * (O(cells) memory and METIS time) but never the cells or their arrays. Then, unless
  * LabelOnly is on, every rank sends each of its cells to the rank of its piece
- * (vtkDIYDataExchanger, one all-to-all) and appends what it receives.
+ * (vtkDIYDataExchanger, one all-to-all) and appends what it receives. The stages are private
+ * helpers: apcPartitionInput (the input walked into meshes), apcPartitionGraph (the dual graph
+ * and its partition), apcPartitionMove (label or move); the VTK-free parts are in Filters/Core.
  *
  * Pieces to ranks: contiguous blocks, rank r of R gets pieces [r*K/R, (r+1)*K/R), so with
  * K > R a rank owns several pieces (the `PartitionId` cell array tells them apart) and with

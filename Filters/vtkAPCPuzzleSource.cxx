@@ -63,6 +63,70 @@ std::array<double, 3> ToWorld(int axis, double u, double v, double w)
       return { u, v, w };
   }
 }
+
+// One slab's lattice: (res + 1)^2 points per layer, three point layers for its two cell layers.
+struct SlabLattice
+{
+  vtkIdType Res;
+  vtkIdType PointsPerLayer;
+  double CellSize;
+  double Thickness;
+};
+
+// The three point layers of a slab starting at depth w0, with the field's value at each point.
+void AddSlabPoints(vtkPoints* points, vtkFloatArray* scalars, int axis, int field,
+  double sandwichValue, double w0, const SlabLattice& lattice, vtkIdType& pointId)
+{
+  for (int k = 0; k < 3; ++k)
+  {
+    const double w = w0 + 0.5 * lattice.Thickness * k;
+    for (vtkIdType j = 0; j <= lattice.Res; ++j)
+    {
+      const double v = -1.0 + lattice.CellSize * j;
+      for (vtkIdType i = 0; i <= lattice.Res; ++i, ++pointId)
+      {
+        const double u = -1.0 + lattice.CellSize * i;
+        const std::array<double, 3> p = ToWorld(axis, u, v, w);
+        points->SetPoint(pointId, p.data());
+        double value = sandwichValue;
+        if (field == vtkAPCPuzzleSource::SPHERES)
+        {
+          value = SpheresField(p);
+        }
+        else if (field == vtkAPCPuzzleSource::SMOOTH)
+        {
+          value = SmoothField(p);
+        }
+        scalars->SetValue(pointId, static_cast<float>(value));
+      }
+    }
+  }
+}
+
+// The slab's two layers of hexahedra on its points (from firstPoint), owned by puzzle piece pp.
+void AddSlabCells(vtkIdType* conn, vtkIdTypeArray* offsets, vtkIntArray* owner, int pp,
+  vtkIdType firstPoint, const SlabLattice& lattice, vtkIdType& cellId)
+{
+  const vtkIdType res = lattice.Res;
+  for (vtkIdType k = 0; k < 2; ++k)
+  {
+    for (vtkIdType j = 0; j < res; ++j)
+    {
+      for (vtkIdType i = 0; i < res; ++i, ++cellId)
+      {
+        const vtkIdType p0 = firstPoint + k * lattice.PointsPerLayer + j * (res + 1) + i;
+        const vtkIdType bottom[4] = { p0, p0 + 1, p0 + res + 2, p0 + res + 1 };
+        for (int c = 0; c < 4; ++c)
+        {
+          conn[8 * cellId + c] = bottom[c];
+          conn[8 * cellId + 4 + c] = bottom[c] + lattice.PointsPerLayer;
+        }
+        offsets->SetValue(cellId, 8 * cellId);
+        owner->SetValue(cellId, pp);
+      }
+    }
+  }
+}
 }
 
 //------------------------------------------------------------------------------
@@ -156,6 +220,7 @@ int vtkAPCPuzzleSource::RequestData(
   owner->SetName("PuzzlePiece");
   owner->SetNumberOfTuples(slabs * cellsPerSlab);
 
+  const SlabLattice lattice{ res, pointsPerLayer, cellSize, slabThickness };
   vtkIdType pointId = 0;
   vtkIdType cellId = 0;
   vtkIdType* conn = connectivity->GetPointer(0);
@@ -166,50 +231,10 @@ int vtkAPCPuzzleSource::RequestData(
     {
       this->UpdateProgress(static_cast<double>(cellId) / (slabs * cellsPerSlab));
       const int globalSlab = s * puzzlePieces + pp; // round robin: the "gear teeth"
-      const double w0 = -1.0 + globalSlab * slabThickness;
       const vtkIdType slabFirstPoint = pointId;
-      for (int k = 0; k < 3; ++k)
-      {
-        const double w = w0 + 0.5 * slabThickness * k;
-        for (vtkIdType j = 0; j <= res; ++j)
-        {
-          const double v = -1.0 + cellSize * j;
-          for (vtkIdType i = 0; i <= res; ++i, ++pointId)
-          {
-            const double u = -1.0 + cellSize * i;
-            const std::array<double, 3> p = ToWorld(this->Axis, u, v, w);
-            points->SetPoint(pointId, p.data());
-            double value = sandwichValue;
-            if (this->Field == SPHERES)
-            {
-              value = SpheresField(p);
-            }
-            else if (this->Field == SMOOTH)
-            {
-              value = SmoothField(p);
-            }
-            scalars->SetValue(pointId, static_cast<float>(value));
-          }
-        }
-      }
-      for (vtkIdType k = 0; k < 2; ++k)
-      {
-        for (vtkIdType j = 0; j < res; ++j)
-        {
-          for (vtkIdType i = 0; i < res; ++i, ++cellId)
-          {
-            const vtkIdType p0 = slabFirstPoint + k * pointsPerLayer + j * (res + 1) + i;
-            const vtkIdType bottom[4] = { p0, p0 + 1, p0 + res + 2, p0 + res + 1 };
-            for (int c = 0; c < 4; ++c)
-            {
-              conn[8 * cellId + c] = bottom[c];
-              conn[8 * cellId + 4 + c] = bottom[c] + pointsPerLayer;
-            }
-            offsets->SetValue(cellId, 8 * cellId);
-            owner->SetValue(cellId, pp);
-          }
-        }
-      }
+      AddSlabPoints(points, scalars, this->Axis, this->Field, sandwichValue,
+        -1.0 + globalSlab * slabThickness, lattice, pointId);
+      AddSlabCells(conn, offsets, owner, pp, slabFirstPoint, lattice, cellId);
     }
   }
   offsets->SetValue(cellId, 8 * cellId);

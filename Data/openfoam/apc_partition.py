@@ -17,6 +17,7 @@ from paraview.simple import *  # noqa: F401,F403
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import apcparaview
+from foam_label_list import write_label_list
 
 case, nparts, name = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 seed = int(sys.argv[4]) if len(sys.argv) > 4 else 0
@@ -37,8 +38,4 @@ sizes = np.bincount(part, minlength=nparts)
 print(f"vtkAPCGraphPartition (METIS): {len(part)} cells -> {nparts} parts, "
       f"sizes {sizes.min()}..{sizes.max()}")
 
-with open(f"{case}/constant/{name}", "w") as f:
-    f.write("FoamFile\n{\n    version 2.0;\n    format ascii;\n    class labelList;\n"
-            f"    object {name};\n}}\n{len(part)}\n(\n")
-    f.write("\n".join(map(str, part)))
-    f.write("\n)\n")
+write_label_list(f"{case}/constant/{name}", part)

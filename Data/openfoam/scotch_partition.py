@@ -16,6 +16,8 @@ import tempfile
 
 import numpy as np
 
+from foam_label_list import write_label_list
+
 
 def read_label_list(path):
     """An OpenFOAM labelList file, ascii or binary (label=32, as Debian builds it)."""
@@ -59,8 +61,4 @@ cut = int(np.count_nonzero(part[a] != part[b]))
 print(f"scotch_gpart: {ncells} cells, {len(edges) // 2} edges -> {nparts} parts, "
       f"sizes {sizes.min()}..{sizes.max()}, {cut} cut faces")
 
-with open(f"{case}/constant/{name}", "w") as f:
-    f.write("FoamFile\n{\n    version 2.0;\n    format ascii;\n    class labelList;\n"
-            f"    object {name};\n}}\n{ncells}\n(\n")
-    f.write("\n".join(map(str, part)))
-    f.write("\n)\n")
+write_label_list(f"{case}/constant/{name}", part)

@@ -52,13 +52,13 @@ struct HashedFacet
     return this->Hash < o.Hash || (this->Hash == o.Hash && this->Facet < o.Facet);
   }
 };
-} // namespace
 
-FacetMatches MatchFacets(const Facets& facets)
+// Each facet's keys sorted (a facet's orientation and starting point differ between its
+// cells) into `sorted`, and the facets ordered by the hash of their sorted keys.
+std::vector<HashedFacet> SortKeysAndHash(const Facets& facets, std::vector<std::int64_t>& sorted)
 {
   const std::size_t n = facets.Size();
-  // Keys sorted per facet: a facet's orientation and starting point differ between its cells.
-  std::vector<std::int64_t> sorted(facets.Points);
+  sorted = facets.Points;
   std::vector<HashedFacet> order(n);
   for (std::size_t f = 0; f < n; ++f)
   {
@@ -83,51 +83,40 @@ FacetMatches MatchFacets(const Facets& facets)
     order[f] = { h, static_cast<std::int64_t>(f) };
   }
   std::sort(order.begin(), order.end());
+  return order;
+}
 
-  auto same = [&](std::int64_t a, std::int64_t b)
+// Matches the facets of one run of equal hashes. A run is almost always one facet seen from
+// its two cells; anything longer (a hash collision or a non-manifold facet) is split by exact
+// comparison, and a facet shared by more than two cells links each of them to the first.
+class RunMatcher
+{
+public:
+  RunMatcher(const Facets& facets, const std::vector<std::int64_t>& sorted)
+    : Input(facets)
+    , Sorted(sorted)
   {
-    const std::int64_t na = facets.Offsets[a + 1] - facets.Offsets[a];
-    const std::int64_t nb = facets.Offsets[b + 1] - facets.Offsets[b];
-    return na == nb &&
-      std::equal(sorted.begin() + facets.Offsets[a], sorted.begin() + facets.Offsets[a + 1],
-        sorted.begin() + facets.Offsets[b]);
-  };
+  }
 
-  FacetMatches result;
-  result.Pairs.reserve(n / 2);
-  std::vector<std::int64_t> run;
-  std::vector<char> grouped;
-  for (std::size_t begin = 0; begin < n;)
+  void Match(const std::vector<std::int64_t>& run, FacetMatches& result)
   {
-    std::size_t end = begin + 1;
-    while (end < n && order[end].Hash == order[begin].Hash)
-    {
-      ++end;
-    }
-    // A run of equal hashes is almost always one facet seen from its two cells; anything
-    // longer (a hash collision or a non-manifold facet) is split by exact comparison.
-    run.clear();
-    for (std::size_t i = begin; i < end; ++i)
-    {
-      run.push_back(order[i].Facet);
-    }
-    grouped.assign(run.size(), 0);
+    this->Grouped.assign(run.size(), 0);
     for (std::size_t i = 0; i < run.size(); ++i)
     {
-      if (grouped[i])
+      if (this->Grouped[i])
       {
         continue;
       }
-      grouped[i] = 1;
+      this->Grouped[i] = 1;
       bool matched = false;
-      const std::int64_t cellA = facets.Cell[run[i]];
+      const std::int64_t cellA = this->Input.Cell[run[i]];
       for (std::size_t j = i + 1; j < run.size(); ++j)
       {
-        if (!grouped[j] && same(run[i], run[j]))
+        if (!this->Grouped[j] && this->Same(run[i], run[j]))
         {
-          grouped[j] = 1;
+          this->Grouped[j] = 1;
           matched = true;
-          const std::int64_t cellB = facets.Cell[run[j]];
+          const std::int64_t cellB = this->Input.Cell[run[j]];
           if (cellA != cellB)
           {
             result.Pairs.emplace_back(std::min(cellA, cellB), std::max(cellA, cellB));
@@ -139,6 +128,45 @@ FacetMatches MatchFacets(const Facets& facets)
         result.Unmatched.push_back(run[i]);
       }
     }
+  }
+
+private:
+  bool Same(std::int64_t a, std::int64_t b) const
+  {
+    const std::vector<std::int64_t>& offsets = this->Input.Offsets;
+    return offsets[a + 1] - offsets[a] == offsets[b + 1] - offsets[b] &&
+      std::equal(this->Sorted.begin() + offsets[a], this->Sorted.begin() + offsets[a + 1],
+        this->Sorted.begin() + offsets[b]);
+  }
+
+  const Facets& Input;
+  const std::vector<std::int64_t>& Sorted;
+  std::vector<char> Grouped;
+};
+} // namespace
+
+FacetMatches MatchFacets(const Facets& facets)
+{
+  const std::size_t n = facets.Size();
+  std::vector<std::int64_t> sorted;
+  const std::vector<HashedFacet> order = SortKeysAndHash(facets, sorted);
+  RunMatcher matcher(facets, sorted);
+  FacetMatches result;
+  result.Pairs.reserve(n / 2);
+  std::vector<std::int64_t> run;
+  for (std::size_t begin = 0; begin < n;)
+  {
+    std::size_t end = begin + 1;
+    while (end < n && order[end].Hash == order[begin].Hash)
+    {
+      ++end;
+    }
+    run.clear();
+    for (std::size_t i = begin; i < end; ++i)
+    {
+      run.push_back(order[i].Facet);
+    }
+    matcher.Match(run, result);
     begin = end;
   }
   std::sort(result.Unmatched.begin(), result.Unmatched.end());

@@ -28,25 +28,16 @@ double Dot(const Vec& a, const Vec& b)
 //------------------------------------------------------------------------------
 const CellFaces& FacesOf(CellShape shape)
 {
-  static const CellFaces tetra = { 4, { 3, 3, 3, 3 },
-    { { 0, 1, 3 }, { 1, 2, 3 }, { 2, 0, 3 }, { 0, 2, 1 } } };
-  static const CellFaces pyramid = { 5, { 4, 3, 3, 3, 3 },
-    { { 0, 3, 2, 1 }, { 0, 1, 4 }, { 1, 2, 4 }, { 2, 3, 4 }, { 3, 0, 4 } } };
-  static const CellFaces wedge = { 5, { 3, 3, 4, 4, 4 },
-    { { 0, 1, 2 }, { 3, 5, 4 }, { 0, 3, 4, 1 }, { 1, 4, 5, 2 }, { 2, 5, 3, 0 } } };
-  static const CellFaces hexahedron = { 6, { 4, 4, 4, 4, 4, 4 },
-    { { 0, 4, 7, 3 }, { 1, 2, 6, 5 }, { 0, 1, 5, 4 }, { 3, 7, 6, 2 }, { 0, 3, 2, 1 },
-      { 4, 5, 6, 7 } } };
   switch (shape)
   {
     case CellShape::Tetra:
-      return tetra;
+      return *FacetsOfCellType(CellType::Tetra);
     case CellShape::Pyramid:
-      return pyramid;
+      return *FacetsOfCellType(CellType::Pyramid);
     case CellShape::Wedge:
-      return wedge;
+      return *FacetsOfCellType(CellType::Wedge);
     default:
-      return hexahedron;
+      return *FacetsOfCellType(CellType::Hexahedron);
   }
 }
 

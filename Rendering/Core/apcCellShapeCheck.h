@@ -20,10 +20,12 @@
 // rounded planes, and it holds a negligible share of any ray (its thickness in units of its
 // size), so kMinRelativeThickness = 1e-6.
 //
-// The faces of each shape live here too, as the one list CellMesh takes its planes from.
+// FacesOf gives each shape's faces from the one cell facet table (Filters/Core/apcCellFacets),
+// which CellMesh takes its planes from too.
 #ifndef apcCellShapeCheck_h
 #define apcCellShapeCheck_h
 
+#include "apcCellFacets.h"
 #include "apcCellInterpolation.h"
 
 #include <array>
@@ -36,12 +38,7 @@ constexpr double kMinRelativeThickness = 1e-6;
 // The faces of a shape in VTK's corner numbering, as VTK lists them: consistently oriented
 // (all outward, or all inward for the wedge, whose corner order VTK flips), which the volume
 // needs; CellMesh orients its planes by the centroid instead.
-struct CellFaces
-{
-  int Count;
-  int Size[6];
-  int Corner[6][4];
-};
+using CellFaces = CellFacets;
 const CellFaces& FacesOf(CellShape shape);
 
 // |V| / (A_max * D) as above for the corners of a cell (VTK's corner order for its shape); 0

@@ -11,7 +11,7 @@
 // A cropped camera (Cropped) is a rectangle of another's pixels: its pixel (i, j) has the same
 // ray as the full camera's pixel (i + I0, j + J0). Rendering only the pixels whose rays can
 // meet the data keeps every per-pixel buffer the size of the data's footprint on screen, not
-// of the view (issue 14: 8192^2 views on a few ranks).
+// of the view (8192^2 views on a few ranks).
 //
 // t is the world-space distance along a ray from its origin: the eye for a perspective camera,
 // the plane through the eye perpendicular to the view direction for a parallel one. The

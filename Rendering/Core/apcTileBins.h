@@ -1,8 +1,8 @@
 // Screen tiles and the cells each one must march: the marcher's per-view set-up. Work is
 // organised by cell, not by ray: every cell is binned once per view into the tiles its
 // projection covers, so no per-ray cell search is needed (a VTK cell locator query per ray,
-// FindCellsAlongLine, measured 200-360 us per ray on a 330k-cell mesh here: minutes per
-// 1024^2 frame).
+// FindCellsAlongLine, costs minutes per 1024^2 frame on a mesh of a few hundred thousand
+// cells).
 #ifndef apcTileBins_h
 #define apcTileBins_h
 

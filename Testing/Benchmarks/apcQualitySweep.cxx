@@ -27,6 +27,11 @@
 // the one-process EXACT image, with the wall and CPU time of pass 2 over all pieces (best of
 // 5):
 // DIR/ranks.csv and DIR/ranks_<scene>_k<k>_m<moments>_<resolve>.png.
+//
+//   apcQualitySweep --defaults [--out DIR]
+//
+// only writes DIR/defaults.csv: the mapper's default beta, moments and resolve, which the
+// evaluation report compares every setting with.
 
 #include "apcTestImages.h"
 #include "apcTestPuzzles.h"
@@ -395,6 +400,18 @@ int RanksStudy(const std::vector<apctest::Scene>& scenes, const std::string& out
   return 0;
 }
 
+// The mapper's defaults as a default-constructed mapper has them, for the report (it compares
+// every setting with the default one and must not drift from the code).
+int WriteDefaults(const std::string& out)
+{
+  vtkNew<vtkAPCVolumeMapper> mapper;
+  const int resolve = mapper->GetResolveMode();
+  std::ofstream csv(out + "/defaults.csv");
+  csv << "beta,moments,resolve\n"
+      << mapper->GetOverestimation() << "," << mapper->GetNumberOfMoments() << ","
+      << (resolve == vtkAPCVolumeMapper::HYBRID ? "HYBRID" : ResolveName(resolve)) << "\n";
+  return csv ? 0 : 1;
+}
 } // namespace
 
 int main(int argc, char* argv[])
@@ -404,12 +421,17 @@ int main(int argc, char* argv[])
   std::string wanted;
   bool lattice = false;
   bool ranks = false;
+  bool defaults = false;
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
     if (arg == "--lattice")
     {
       lattice = true;
+    }
+    else if (arg == "--defaults")
+    {
+      defaults = true;
     }
     else if (arg == "--ranks")
     {
@@ -425,13 +447,17 @@ int main(int argc, char* argv[])
     }
     else
     {
-      std::cerr
-        << "usage: apcQualitySweep [--lattice | --ranks] [--out DIR] [--data DIR] [--size S >= 16] "
-           "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
+      std::cerr << "usage: apcQualitySweep [--lattice | --ranks | --defaults] [--out DIR] [--data "
+                   "DIR] [--size S >= 16] "
+                   "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
       return 1;
     }
   }
   std::filesystem::create_directories(out);
+  if (defaults)
+  {
+    return WriteDefaults(out);
+  }
   const auto start = std::chrono::steady_clock::now();
   if (lattice)
   {

@@ -90,6 +90,10 @@ log="$out/evaluation.log"
 start=$(date +%s)
 step() { echo "== $* ($(($(date +%s) - start)) s; load average $(cut -d' ' -f1-3 /proc/loadavg))" | tee -a "$log"; }
 
+# The mapper's defaults from the build, not from its headers: the report compares each
+# setting with them.
+"$bin/apcQualitySweep" --defaults --out "$out/quality" >>"$log" 2>&1
+
 if [ "$model_only" = 0 ]; then
   step "1/7 image quality"
   bash "$top/.ci/with-xvfb" "$bin/apcQualitySweep" --out "$out/quality" "${quality[@]}" >>"$log" 2>&1

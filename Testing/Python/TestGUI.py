@@ -15,13 +15,13 @@ Run under an X server; the environment carries APC_PLUGIN, PYTHONPATH and the OM
 
 import json
 import os
-import socket
 import subprocess
 import sys
-import time
 
 import numpy
 from PIL import Image
+
+from apc_pvserver import PvServer
 
 ranks, reference_png, reference_2x_png, workdir = sys.argv[1:5]
 here = os.path.dirname(os.path.abspath(__file__))
@@ -29,12 +29,6 @@ os.makedirs(workdir, exist_ok=True)
 for name in ("gui_result.json", "gui_still.png", "gui_tiled.png", "gui_single.png"):
     if os.path.exists(os.path.join(workdir, name)):
         os.remove(os.path.join(workdir, name))
-
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 failures = []
@@ -57,27 +51,12 @@ def compare(a_path, b_path, what, tolerance=1):
           % (what, int(diff.max()), int((diff.max(axis=2) > 0).sum())))
 
 
-port = free_port()
-server_log = open(os.path.join(workdir, "pvserver.log"), "w")
-server = subprocess.Popen(
-    ["mpirun", "--oversubscribe", "-np", ranks, "-x", "APC_PLUGIN", "-x", "PYTHONPATH",
-     "-x", "DISPLAY", "pvserver", "--disable-xdisplay-test", "--server-port=%d" % port],
-    stdout=server_log, stderr=subprocess.STDOUT, start_new_session=True)
+server = PvServer(ranks, workdir)
 try:
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                break
-        if server.poll() is not None:
-            raise RuntimeError("pvserver exited early (see pvserver.log)")
-        time.sleep(0.5)
-    else:
-        raise RuntimeError("pvserver did not listen within 60 s")
-    time.sleep(1.0)
+    server.start()
     env = dict(os.environ, APC_GUI_OUT=workdir)
     gui = subprocess.run(
-        ["paraview", "--dr", "--server-url=cs://localhost:%d" % port,
+        ["paraview", "--dr", "--server-url=" + server.url,
          "--script=%s" % os.path.join(here, "gui_apc.py")],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=150, env=env)
     with open(os.path.join(workdir, "paraview.log"), "w") as f:
@@ -105,13 +84,6 @@ try:
 except Exception as e:  # a broken launch is a failure, with the reason
     check(False, "GUI run: %r" % e)
 finally:
-    try:
-        os.killpg(server.pid, 15)
-    except ProcessLookupError:
-        pass
-    try:
-        server.wait(timeout=20)
-    except subprocess.TimeoutExpired:
-        os.killpg(server.pid, 9)
+    server.stop()
 print("APC-TEST-FAILED" if failures else "APC-TEST-PASSED")
 sys.exit(1 if failures else 0)

@@ -9,52 +9,26 @@ PYTHONPATH and the OMPI_* settings.
 """
 
 import os
-import socket
 import subprocess
 import sys
-import time
 
 import numpy
 from PIL import Image
+
+from apc_pvserver import PvServer
 
 ranks, reference_vti, reference_png, workdir = sys.argv[1:5]
 here = os.path.dirname(os.path.abspath(__file__))
 os.makedirs(workdir, exist_ok=True)
 
 
-def free_port():
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-port = free_port()
-server_log = open(os.path.join(workdir, "pvserver.log"), "w")
-server = subprocess.Popen(
-    ["mpirun", "--oversubscribe", "-np", ranks, "-x", "APC_PLUGIN", "-x", "PYTHONPATH",
-     "-x", "DISPLAY", "pvserver", "--disable-xdisplay-test", "--server-port=%d" % port],
-    stdout=server_log, stderr=subprocess.STDOUT, start_new_session=True)
 verdict = 1
-try:
-    # Wait (bounded) until the server accepts connections.
-    deadline = time.time() + 60
-    while time.time() < deadline:
-        with socket.socket() as s:
-            if s.connect_ex(("127.0.0.1", port)) == 0:
-                break
-        if server.poll() is not None:
-            raise RuntimeError("pvserver exited early (see pvserver.log)")
-        time.sleep(0.5)
-    else:
-        raise RuntimeError("pvserver did not listen within 60 s")
-    # The probe connection above counts as a client for some pvserver versions: give it a
-    # moment to go back to listening.
-    time.sleep(1.0)
+with PvServer(ranks, workdir) as server:
     out_vti = os.path.join(workdir, "server.vti")
     out_png = os.path.join(workdir, "client.png")
     client = subprocess.run(
         ["pvpython", "--force-offscreen-rendering", os.path.join(here, "apc_scene.py"),
-         "--scene", "puzzle", "--server", "localhost:%d" % port, "--out", out_vti,
+         "--scene", "puzzle", "--server", server.address, "--out", out_vti,
          "--png", out_png, "--compare", reference_vti, "--tiled", os.path.join(workdir, "tiled"),
          "--client-timings", "--interactive", os.path.join(workdir, "interactive")],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=240)
@@ -74,14 +48,5 @@ try:
             print("check failed: the client's screenshot differs from pvbatch's")
             ok = False
     verdict = 0 if ok else 1
-finally:
-    try:
-        os.killpg(server.pid, 15)
-    except ProcessLookupError:
-        pass
-    try:
-        server.wait(timeout=20)
-    except subprocess.TimeoutExpired:
-        os.killpg(server.pid, 9)
 print("APC-TEST-PASSED" if verdict == 0 else "APC-TEST-FAILED")
 sys.exit(verdict)
