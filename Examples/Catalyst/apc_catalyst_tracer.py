@@ -23,6 +23,8 @@ OUTPUT = os.environ.get("APC_CATALYST_OUTPUT", "catalyst-out")
 REPRESENTATION = os.environ.get("APC_CATALYST_REPRESENTATION", "APC Volume")
 SIZE = [int(v) for v in os.environ.get("APC_CATALYST_SIZE", "640 400").split()]
 TIMINGS = os.environ.get("APC_CATALYST_TIMINGS") == "1" and REPRESENTATION.startswith("APC")
+# The classic mistake, for the tests: every rank rescales the maps to its own data range.
+RANK_RANGE = os.environ.get("APC_CATALYST_RANK_RANGE") == "1"
 
 # The plugin must be loaded on every rank before a representation of it is asked for. A
 # missing library fails here, at the script's import, on every rank alike.
@@ -125,6 +127,10 @@ def catalyst_execute(info):
         shown.append(True)
     elif TIMINGS:
         print_timings()  # the previous step's frame: extractors render after this function
+    if RANK_RANGE:
+        low, high = mesh.CellData["tracer"].GetRange()  # this rank's own range
+        GetColorTransferFunction("tracer").RescaleTransferFunction(low, high)
+        GetOpacityTransferFunction("tracer").RescaleTransferFunction(low, high)
     label.Text = "wind tracer, step %d, t = %.1f s (%s)" % (info.timestep, info.time,
                                                            REPRESENTATION)
 
