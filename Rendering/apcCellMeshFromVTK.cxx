@@ -159,8 +159,11 @@ int AddTetrahedra(
 
 //------------------------------------------------------------------------------
 bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scalars, CellMesh& mesh,
-  InputReport& report, std::string& error)
+  InputReport& report, std::string& error, std::vector<long long>* sources)
 {
+  std::vector<long long> unused;
+  std::vector<long long>& origin = sources ? *sources : unused;
+  origin.clear();
   mesh = CellMesh();
   report = InputReport();
   error.clear();
@@ -212,6 +215,7 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scal
         corners[i] = type == VTK_VOXEL ? ids[kVoxelToHexahedron[i]] : ids[i];
       }
       mesh.AddCell(shape, corners);
+      origin.push_back(c);
       if (scalars.CellData)
       {
         mesh.CellScalars.push_back(value(c));
@@ -229,6 +233,7 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scal
         : 0;
       // A polyhedron VTK cannot cut into tetrahedra with volume has none to render.
       flatDecomposed += added == 0 ? 1 : 0;
+      origin.insert(origin.end(), added, c);
     }
     else if (TriangulatedByTheFilter(type))
     {
@@ -273,8 +278,10 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scal
       if (tets->GetCellType(t) == VTK_TETRA && count == 4)
       {
         const auto at = std::lower_bound(forTheFilter.begin(), forTheFilter.end(), c);
-        kept[at - forTheFilter.begin()] +=
+        const int added =
           AddTetrahedra(mesh, ids, 4, scalars.CellData, scalars.CellData ? value(c) : 0.f);
+        kept[at - forTheFilter.begin()] += added;
+        origin.insert(origin.end(), added, c);
       }
     }
     flatDecomposed += std::count(kept.begin(), kept.end(), 0);
@@ -290,6 +297,46 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scal
     static_cast<double>(mesh.GetNumberOfFlatCells() + flatDecomposed);
   report[InputReport::NonFiniteCorners] =
     static_cast<double>(mesh.GetNumberOfNonFiniteCornerCells());
+  report[InputReport::NonFiniteScalars] =
+    static_cast<double>(mesh.GetNumberOfNonFiniteScalarCells());
+  return true;
+}
+
+//------------------------------------------------------------------------------
+bool RefreshScalarsFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scalars,
+  const std::vector<long long>& sources, CellMesh& mesh, InputReport& report, std::string& error)
+{
+  error.clear();
+  if (!input || !scalars.Array || static_cast<int64_t>(sources.size()) != mesh.GetNumberOfCells() ||
+    static_cast<size_t>(input->GetNumberOfPoints()) != mesh.Points.size())
+  {
+    error = "the input is not the mesh's";
+    return false;
+  }
+  const ScalarReader value(scalars, report);
+  const vtkIdType tuples = scalars.Array->GetNumberOfTuples();
+  if (scalars.CellData)
+  {
+    mesh.PointScalars.clear();
+    mesh.CellScalars.resize(sources.size());
+    for (size_t i = 0; i < sources.size(); ++i)
+    {
+      mesh.CellScalars[i] = sources[i] < tuples ? value(sources[i]) : NAN;
+    }
+  }
+  else
+  {
+    mesh.CellScalars.clear();
+    mesh.PointScalars.resize(mesh.Points.size());
+    for (vtkIdType p = 0; p < static_cast<vtkIdType>(mesh.PointScalars.size()); ++p)
+    {
+      mesh.PointScalars[p] = p < tuples ? value(p) : NAN;
+    }
+  }
+  if (!mesh.RefreshScalarRanges(&error))
+  {
+    return false;
+  }
   report[InputReport::NonFiniteScalars] =
     static_cast<double>(mesh.GetNumberOfNonFiniteScalarCells());
   return true;

@@ -11,6 +11,7 @@
 #include "vtkScalarsToColors.h" // for the vector modes
 
 #include <string>
+#include <vector>
 
 class vtkDataArray;
 class vtkUnstructuredGridBase;
@@ -45,7 +46,19 @@ struct ScalarSelection
  * unusable.
  */
 APCRENDERING_EXPORT bool CellMeshFromVTK(vtkUnstructuredGridBase* input,
-  const ScalarSelection& scalars, CellMesh& mesh, InputReport& report, std::string& error);
+  const ScalarSelection& scalars, CellMesh& mesh, InputReport& report, std::string& error,
+  std::vector<long long>* sources = nullptr);
+
+/**
+ * A new step of the same mesh: only the scalars change. Replaces mesh's scalars with the
+ * selected values of input (which must have the points and cells mesh was made from, in the
+ * same order; sources is what CellMeshFromVTK gave: the input cell of every mesh cell) and
+ * refreshes the per-cell scalar ranges: no cell conversion, shape check or plane again.
+ * The report's scalar entries are updated. Returns false, with error, if sizes do not match.
+ */
+APCRENDERING_EXPORT bool RefreshScalarsFromVTK(vtkUnstructuredGridBase* input,
+  const ScalarSelection& scalars, const std::vector<long long>& sources, CellMesh& mesh,
+  InputReport& report, std::string& error);
 
 /**
  * The same for the magnitude of scalars; message gets the report's errors and warnings and

@@ -2,12 +2,18 @@
 #include "apcFrameAgreement.h"
 
 #include "apcCompositeFrame.h"
+#include "apcFrameInputsFromVTK.h"
 
 #include "vtkCommunicator.h"
 #include "vtkMultiProcessController.h"
 
+#include "vtkAPCVolumeMapper.h"
+#include "vtkObject.h"
+
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <sstream>
 
 namespace apc
 {
@@ -40,6 +46,14 @@ enum Slot
   MaxMode,
   MinModeNegated,
   MinBandPixelsNegated,
+  MaxColour,
+  MinColourNegated,
+  MaxOpacity,
+  MinOpacityNegated,
+  MaxRangeLow,
+  MinRangeLowNegated,
+  MaxRangeHigh,
+  MinRangeHighNegated,
   SlotCount
 };
 }
@@ -55,8 +69,24 @@ LocalFrame::LocalFrame()
   }
 }
 
-void LocalFrame::AddVolume(int moments, const double* bounds)
+void LocalFrame::AddVolume(int moments, const double* bounds, vtkVolumeProperty* property)
 {
+  const TransferSignature transfer =
+    property ? TransferSignatureFromVTK(property) : TransferSignature();
+  if (this->Volumes == 0)
+  {
+    this->Transfer = transfer;
+  }
+  else
+  {
+    // Several volumes: the checksums combined in order, the ranges' union.
+    this->Transfer.Colour =
+      std::fmod(this->Transfer.Colour * 31 + transfer.Colour, 281474976710656.0);
+    this->Transfer.Opacity =
+      std::fmod(this->Transfer.Opacity * 31 + transfer.Opacity, 281474976710656.0);
+    this->Transfer.Range[0] = std::min(this->Transfer.Range[0], transfer.Range[0]);
+    this->Transfer.Range[1] = std::max(this->Transfer.Range[1], transfer.Range[1]);
+  }
   this->MinMoments = this->Volumes == 0 ? moments : std::min(this->MinMoments, moments);
   this->MaxMoments = this->Volumes == 0 ? moments : std::max(this->MaxMoments, moments);
   ++this->Volumes;
@@ -94,6 +124,17 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   mine[slot::MaxMode] = mode;
   mine[slot::MinModeNegated] = -mode;
   mine[slot::MinBandPixelsNegated] = -std::max(local.BandPixels, 1.0);
+  // A process without volumes has no transfer function to compare: it leaves these slots.
+  const bool some = local.Volumes > 0;
+  const TransferSignature& t = local.Transfer;
+  mine[slot::MaxColour] = some ? t.Colour : -inf;
+  mine[slot::MinColourNegated] = some ? -t.Colour : -inf;
+  mine[slot::MaxOpacity] = some ? t.Opacity : -inf;
+  mine[slot::MinOpacityNegated] = some ? -t.Opacity : -inf;
+  mine[slot::MaxRangeLow] = some ? t.Range[0] : -inf;
+  mine[slot::MinRangeLowNegated] = some ? -t.Range[0] : -inf;
+  mine[slot::MaxRangeHigh] = some ? t.Range[1] : -inf;
+  mine[slot::MinRangeHighNegated] = some ? -t.Range[1] : -inf;
   double all[slot::SlotCount];
   std::copy(mine, mine + slot::SlotCount, all);
   if (group.Parallel)
@@ -123,6 +164,15 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
     agreed.Reduction = static_cast<int>(all[slot::Reduction]);
   }
   agreed.BandPixels = -all[slot::MinBandPixelsNegated];
+  if (all[slot::MaxVolumes] > 0)
+  {
+    agreed.ColourDiffers = all[slot::MaxColour] != -all[slot::MinColourNegated];
+    agreed.OpacityDiffers = all[slot::MaxOpacity] != -all[slot::MinOpacityNegated];
+    agreed.RangeLow[0] = -all[slot::MinRangeLowNegated];
+    agreed.RangeLow[1] = all[slot::MaxRangeLow];
+    agreed.RangeHigh[0] = -all[slot::MinRangeHighNegated];
+    agreed.RangeHigh[1] = all[slot::MaxRangeHigh];
+  }
   agreed.Width = local.Width;
   agreed.Height = local.Height;
   return agreed;
@@ -158,6 +208,59 @@ std::string FrameAgreement::Problem() const
     return "the APC volumes use different numbers of moments";
   }
   return std::string();
+}
+
+bool FrameAgreement::TransferFunctionsDiffer() const
+{
+  return this->ColourDiffers || this->OpacityDiffers || this->RangeLow[0] != this->RangeLow[1] ||
+    this->RangeHigh[0] != this->RangeHigh[1];
+}
+
+std::string FrameAgreement::TransferMismatch(const std::string& array) const
+{
+  if (!this->TransferFunctionsDiffer())
+  {
+    return std::string();
+  }
+  std::ostringstream out;
+  out << "APC: the processes map '" << array << "' with different transfer functions (";
+  const char* sep = "";
+  if (this->ColourDiffers)
+  {
+    out << "colour transfer function";
+    sep = ", ";
+  }
+  if (this->OpacityDiffers)
+  {
+    out << sep << "opacity transfer function";
+    sep = ", ";
+  }
+  if (this->RangeLow[0] != this->RangeLow[1] || this->RangeHigh[0] != this->RangeHigh[1])
+  {
+    out << sep << "scalar range from [" << this->RangeLow[0] << ", " << this->RangeHigh[0]
+        << "] to [" << this->RangeLow[1] << ", " << this->RangeHigh[1] << "]";
+  }
+  out << "): each process's cells are drawn with its own, so the picture mixes them. A script "
+         "every rank runs (Catalyst, pvbatch --symmetric) gets each rank's own data range: "
+         "rescale to one range on all ranks (a fixed one, or the global range from an MPI "
+         "allreduce of the ranks' minima and maxima).";
+  return out.str();
+}
+
+void WarnOnceIfTransferFunctionsDiffer(vtkObject* self, const ProcessGroup& group,
+  const FrameAgreement& agreed, const std::vector<vtkAPCVolumeMapper*>& mappers, bool& warned)
+{
+  if (!agreed.TransferFunctionsDiffer())
+  {
+    warned = false;
+    return;
+  }
+  if (!warned && group.IsDisplay())
+  {
+    const char* array = mappers.empty() ? nullptr : mappers.front()->GetArrayName();
+    vtkWarningWithObjectMacro(self, << agreed.TransferMismatch(array ? array : "the scalars"));
+  }
+  warned = true;
 }
 
 } // namespace apc

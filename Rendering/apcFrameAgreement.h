@@ -10,10 +10,23 @@
 #define apcFrameAgreement_h
 
 #include <string>
+#include <vector>
+
+class vtkAPCVolumeMapper;
+class vtkObject;
+class vtkVolumeProperty;
 
 namespace apc
 {
 struct ProcessGroup;
+
+// A volume's transfer functions as the mapper samples them (apcFrameInputsFromVTK.h).
+struct TransferSignature
+{
+  double Colour = 0;  // checksum of the colour (or gray) table
+  double Opacity = 0; // checksum of the opacity table and unit distance
+  double Range[2] = { 0, 0 };
+};
 
 // This process's side of the agreement.
 struct LocalFrame
@@ -33,10 +46,12 @@ struct LocalFrame
   bool InDouble = false;       // different collectives, so one process's odd setting would hang
   bool DepthComposited = true; // the pass's DisplayDepthComposited (depth broadcast or MIN)
   double BandPixels = 1;       // the pass's MaxBandPixels
+  TransferSignature Transfer;  // of the visible volumes (combined)
 
   LocalFrame();
-  // One visible APC volume: its number of moments and, if it has cells, their bounds.
-  void AddVolume(int moments, const double* bounds);
+  // One visible APC volume: its number of moments, if it has cells their bounds, and its
+  // transfer functions (TransferSignatureFromVTK), if given.
+  void AddVolume(int moments, const double* bounds, vtkVolumeProperty* property = nullptr);
 };
 
 // The agreed frame, the same on every process.
@@ -59,6 +74,12 @@ struct FrameAgreement
   double SampleFactor = 1.0; // 1 for still frames
   int Reduction = 1;         // 1 for still frames
   double BandPixels = 1;     // the smallest MaxBandPixels of any process: the bands of a frame
+  // Transfer functions: the frame is rendered anyway (each process maps its own cells with
+  // its own), but the picture mixes mappings, which the display process says.
+  bool ColourDiffers = false;
+  bool OpacityDiffers = false;
+  double RangeLow[2] = { 0, 0 };  // smallest and largest lower end over the processes
+  double RangeHigh[2] = { 0, 0 }; // smallest and largest upper end
 
   static FrameAgreement Agree(const ProcessGroup& group, const LocalFrame& local);
 
@@ -66,7 +87,15 @@ struct FrameAgreement
   bool HasCells() const;
   // Empty if the frame can be rendered; otherwise why every process skips it.
   std::string Problem() const;
+  bool TransferFunctionsDiffer() const;
+  // The warning for TransferFunctionsDiffer, naming the transfer functions of array.
+  std::string TransferMismatch(const std::string& array) const;
 };
+
+// On the display process, says agreed.TransferMismatch (naming the first mapper's array) once
+// while the processes disagree (warned remembers it; cleared when they agree again).
+void WarnOnceIfTransferFunctionsDiffer(vtkObject* self, const ProcessGroup& group,
+  const FrameAgreement& agreed, const std::vector<vtkAPCVolumeMapper*>& mappers, bool& warned);
 
 } // namespace apc
 

@@ -3,9 +3,13 @@
 
 #include "vtkAPCVolumeMapper.h"
 #include "vtkCamera.h"
+#include "vtkCellArray.h"
 #include "vtkDataArray.h"
+#include "vtkPoints.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
 
@@ -17,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -30,6 +35,59 @@ ImageSetup ImageSetup::FullQuality(vtkRenderer* ren)
   ren->GetTiledSizeAndOrigin(&image.Width, &image.Height, &image.X0, &image.Y0);
   image.Aspect = image.Height > 0 ? static_cast<double>(image.Width) / image.Height : 1.0;
   return image;
+}
+
+namespace
+{
+// Mixes an array's bytes into hash, eight at a time (FNV-1a steps on 64-bit words).
+void HashBytes(const void* data, size_t bytes, unsigned long long& hash)
+{
+  const auto* p = static_cast<const unsigned char*>(data);
+  size_t i = 0;
+  for (; i + 8 <= bytes; i += 8)
+  {
+    unsigned long long word;
+    std::memcpy(&word, p + i, 8);
+    hash = (hash ^ word) * 1099511628211ull;
+  }
+  for (; i < bytes; ++i)
+  {
+    hash = (hash ^ p[i]) * 1099511628211ull;
+  }
+  hash = (hash ^ bytes) * 1099511628211ull;
+}
+
+void HashArray(vtkDataArray* array, unsigned long long& hash)
+{
+  if (array)
+  {
+    HashBytes(array->GetVoidPointer(0),
+      static_cast<size_t>(array->GetNumberOfValues()) * array->GetDataTypeSize(), hash);
+  }
+  hash = (hash ^ (array ? array->GetDataType() : 0)) * 1099511628211ull;
+}
+
+// What a new time step of the same mesh keeps: points, cells, ghost flags. Their content,
+// not their arrays' identity: pipelines (ParaView's append of a rank's blocks, Catalyst's
+// producers) hand over fresh copies every step. 0 for grids that are not plain
+// vtkUnstructuredGrid (no raw arrays to read): those are converted every time.
+unsigned long long GeometryKey(vtkUnstructuredGridBase* input)
+{
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  if (!grid || !grid->GetPoints() || !grid->GetCells())
+  {
+    return 0;
+  }
+  unsigned long long hash = 1469598103934665603ull;
+  HashArray(grid->GetPoints()->GetData(), hash);
+  HashArray(grid->GetCells()->GetOffsetsArray(), hash);
+  HashArray(grid->GetCells()->GetConnectivityArray(), hash);
+  HashArray(grid->GetCellTypesArray(), hash);
+  HashArray(grid->GetCellGhostArray(), hash);
+  HashArray(grid->GetFaces(), hash); // polyhedra
+  HashArray(grid->GetFaceLocations(), hash);
+  return hash == 0 ? 1 : hash;
+}
 }
 
 FrameEngine::FrameEngine() = default;
@@ -46,6 +104,7 @@ bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
     this->Mesh.Finalize();
     this->MeshValid = true;
     this->MeshScalarKey.clear();
+    this->MeshGeometryKey = 0;
     this->Report = InputReport();
     this->ReportPending = false;
     return true;
@@ -68,16 +127,31 @@ bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
   selection.VectorMode = mapper->GetVectorMode();
   selection.VectorComponent = mapper->GetVectorComponent();
   // Rebuild the ray marcher's mesh only when the data or the scalar selection changed.
+  std::ostringstream selectionKey;
+  selectionKey << cellFlag << ' ' << selection.VectorMode << ' ' << selection.VectorComponent;
   std::ostringstream key;
-  key << scalars << ' ' << scalars->GetMTime() << ' ' << cellFlag << ' ' << selection.VectorMode
-      << ' ' << selection.VectorComponent;
+  key << scalars << ' ' << scalars->GetMTime() << ' ' << selectionKey.str();
   if (this->MeshValid && this->MeshInputTime >= input->GetMTime() &&
     this->MeshScalarKey == key.str())
   {
     return true;
   }
+  const unsigned long long geometry = GeometryKey(input);
   std::string error;
-  this->MeshValid = CellMeshFromVTK(input, selection, this->Mesh, this->Report, error);
+  if (this->MeshValid && geometry != 0 && geometry == this->MeshGeometryKey &&
+    this->MeshSelectionKey == selectionKey.str() && this->Mesh.GetNumberOfCells() > 0)
+  {
+    // Only the values changed: the cells, their checks and planes stay.
+    ++this->ScalarRefreshes;
+    this->MeshValid =
+      RefreshScalarsFromVTK(input, selection, this->MeshSources, this->Mesh, this->Report, error);
+  }
+  else
+  {
+    ++this->MeshConversions;
+    this->MeshValid =
+      CellMeshFromVTK(input, selection, this->Mesh, this->Report, error, &this->MeshSources);
+  }
   this->ReportPending = this->MeshValid && !this->Report.Empty();
   if (!this->MeshValid)
   {
@@ -88,6 +162,8 @@ bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
   }
   this->MeshInputTime = input->GetMTime();
   this->MeshScalarKey = key.str();
+  this->MeshSelectionKey = selectionKey.str();
+  this->MeshGeometryKey = this->MeshValid ? geometry : 0;
   this->Clock.Lap("mesh");
   return this->MeshValid;
 }

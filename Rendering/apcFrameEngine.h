@@ -26,6 +26,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 class vtkAPCVolumeMapper;
 class vtkRenderer;
@@ -63,9 +64,12 @@ public:
   ~FrameEngine();
 
   /**
-   * Copies mapper's input for the ray marcher if it or its scalar selection changed. False,
-   * with an error on mapper, if the input is unusable (cells but no scalars, a broken mesh);
-   * an empty or missing input is usable and renders nothing.
+   * Copies mapper's input for the ray marcher if it or its scalar selection changed. When
+   * only the scalars changed (a new time step of the same mesh: the same points, cells and
+   * ghost flags, by content, even in new arrays), only they and the per-cell scalar ranges are
+   * refreshed: no cell conversion, shape checks or face planes again. False, with an error on
+   * mapper, if the input is unusable (cells but no scalars, a broken mesh); an empty or
+   * missing input is usable and renders nothing.
    */
   bool UpdateInput(vtkAPCVolumeMapper* mapper);
 
@@ -77,6 +81,11 @@ public:
    */
   const InputReport& GetInputReport() const { return this->Report; }
   bool TakeNewInputReport();
+
+  /// How often UpdateInput converted the whole input, and how often it refreshed only the
+  /// scalars of the mesh it had (a new step of the same mesh).
+  int64_t GetNumberOfMeshConversions() const { return this->MeshConversions; }
+  int64_t GetNumberOfScalarRefreshes() const { return this->ScalarRefreshes; }
 
   /// Bounds of the renderable cells as of the last UpdateInput; false if there are none.
   bool GetLocalBounds(double bounds[6]) const;
@@ -129,6 +138,11 @@ private:
   bool MeshValid = false;
   vtkMTimeType MeshInputTime = 0;
   std::string MeshScalarKey;
+  std::string MeshSelectionKey;           // the scalar selection without the array's identity
+  unsigned long long MeshGeometryKey = 0; // a hash of points, cells and ghost flags; 0 if none
+  std::vector<long long> MeshSources;     // the input cell of every mesh cell
+  int64_t MeshConversions = 0;
+  int64_t ScalarRefreshes = 0;
   InputReport Report;
   bool ReportPending = false;
   VolumeRayMarcher Marcher;

@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace
@@ -25,13 +27,16 @@ constexpr int kTableSize = 1024;
 namespace apc
 {
 
-std::unique_ptr<TransferTable> TransferTableFromVTK(vtkVolumeProperty* property, double spacing)
+namespace
 {
-  // Tables over the union of the colour and opacity ranges.
+// The first component's colour (or gray) and opacity functions sampled over the union of
+// their ranges: what the table holds, before the opacity correction.
+void SampleTransferFunctions(vtkVolumeProperty* property, double range[2], std::vector<double>& rgb,
+  std::vector<double>& alphas)
+{
   vtkPiecewiseFunction* opacity = property->GetScalarOpacity(0);
-  double range[2];
   opacity->GetRange(range);
-  std::vector<double> rgb(3 * kTableSize);
+  rgb.assign(3 * kTableSize, 0.0);
   if (property->GetColorChannels(0) == 1)
   {
     vtkPiecewiseFunction* gray = property->GetGrayTransferFunction(0);
@@ -54,16 +59,53 @@ std::unique_ptr<TransferTable> TransferTableFromVTK(vtkVolumeProperty* property,
     range[1] = std::max(range[1], colourRange[1]);
     colour->GetTable(range[0], range[1], kTableSize, rgb.data());
   }
+  alphas.assign(kTableSize, 0.0);
+  opacity->GetTable(range[0], range[1], kTableSize, alphas.data());
+}
+
+// A 48-bit checksum of values rounded to float (exact in a double, so it travels in the frame
+// agreement's MAX allreduce unchanged).
+double Checksum(const std::vector<double>& values, double extra)
+{
+  std::uint64_t hash = 1469598103934665603ull;
+  auto mix = [&hash](float v)
+  {
+    std::uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    hash = (hash ^ bits) * 1099511628211ull;
+  };
+  for (double v : values)
+  {
+    mix(static_cast<float>(v));
+  }
+  mix(static_cast<float>(extra));
+  return static_cast<double>(hash >> 16);
+}
+}
+
+std::unique_ptr<TransferTable> TransferTableFromVTK(vtkVolumeProperty* property, double spacing)
+{
+  double range[2];
+  std::vector<double> rgb, alphas;
+  SampleTransferFunctions(property, range, rgb, alphas);
   std::vector<std::array<float, 3>> colours(kTableSize);
   for (int i = 0; i < kTableSize; ++i)
   {
     colours[i] = { static_cast<float>(rgb[3 * i]), static_cast<float>(rgb[3 * i + 1]),
       static_cast<float>(rgb[3 * i + 2]) };
   }
-  std::vector<double> alphas(kTableSize);
-  opacity->GetTable(range[0], range[1], kTableSize, alphas.data());
   return std::unique_ptr<TransferTable>(new TransferTable(
     range[0], range[1], colours, alphas, spacing, property->GetScalarOpacityUnitDistance(0)));
+}
+
+TransferSignature TransferSignatureFromVTK(vtkVolumeProperty* property)
+{
+  TransferSignature signature;
+  std::vector<double> rgb, alphas;
+  SampleTransferFunctions(property, signature.Range, rgb, alphas);
+  signature.Colour = Checksum(rgb, 0.0);
+  signature.Opacity = Checksum(alphas, property->GetScalarOpacityUnitDistance(0));
+  return signature;
 }
 
 std::unique_ptr<RayCamera> RayCameraFromVTK(vtkRenderer* ren, int width, int height, double aspect)

@@ -4,6 +4,8 @@
 #ifndef apcFrameInputsFromVTK_h
 #define apcFrameInputsFromVTK_h
 
+#include "apcFrameAgreement.h" // for TransferSignature
+
 #include <memory>
 
 class vtkRenderer;
@@ -23,6 +25,10 @@ std::unique_ptr<RayCamera> RayCameraFromVTK(
 // The first component's colour (or gray) and opacity functions, sampled over the union of
 // their ranges; opacity corrected for samples spacing apart.
 std::unique_ptr<TransferTable> TransferTableFromVTK(vtkVolumeProperty* property, double spacing);
+
+// What TransferTableFromVTK samples, in a few numbers that processes can compare: checksums
+// of the colour and of the opacity table (with the unit distance), and the scalar range.
+TransferSignature TransferSignatureFromVTK(vtkVolumeProperty* property);
 }
 
 #endif

@@ -41,6 +41,7 @@ struct vtkAPCCompositePass::Internals
   apc::AutoMode Auto; // the same on every process: fed only by collectives' results
   vtkNew<vtkImageData> Image;
   vtkSmartPointer<vtkFloatArray> DelegateDepth; // this frame's, if its delegate gave one
+  bool TransferWarned = false; // the display process said that transfer functions differ
 };
 
 //------------------------------------------------------------------------------
@@ -186,7 +187,8 @@ namespace
 // the agreement itself. False if the frame is skipped on every process (failures reported).
 bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   const std::vector<vtkSmartPointer<vtkVolume>>& volumes, vtkRenderer* ren,
-  apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible, apc::FrameRecord& record)
+  apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible, apc::FrameRecord& record,
+  bool& transferWarned)
 {
   apc::LocalFrame local;
   std::ostringstream problem;
@@ -215,8 +217,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
     local.ReportPending = engine->TakeNewInputReport() || local.ReportPending;
     reports.Add(engine->GetInputReport());
     double bounds[6];
-    local.AddVolume(
-      mapper->GetNumberOfMoments(), engine->GetLocalBounds(bounds) ? bounds : nullptr);
+    local.AddVolume(mapper->GetNumberOfMoments(), engine->GetLocalBounds(bounds) ? bounds : nullptr,
+      volume->GetProperty());
     mappers.push_back(mapper);
     visible.push_back(volume);
   }
@@ -240,6 +242,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
     apc::ShareInputReports(group, reports,
       mappers.empty() ? static_cast<vtkObject*>(self) : static_cast<vtkObject*>(mappers.front()));
   }
+  apc::WarnOnceIfTransferFunctionsDiffer(self, group, agreed, mappers, transferWarned);
   record.Clock.Lap("agree");
   if (agreed.NoVolumes())
   {
@@ -393,8 +396,8 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   const apc::ProcessGroup group(this->Controller, this->DisplayProcess);
   apc::CompositeFrame frame;
   std::vector<vtkVolume*> volumes;
-  if (!AgreeOnFrame(
-        this, group, internal.Volumes, s->GetRenderer(), frame, volumes, internal.Record))
+  if (!AgreeOnFrame(this, group, internal.Volumes, s->GetRenderer(), frame, volumes,
+        internal.Record, internal.TransferWarned))
   {
     return;
   }

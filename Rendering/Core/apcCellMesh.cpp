@@ -244,6 +244,33 @@ void CellMesh::CountFate(int64_t cell, CellFate fate)
 }
 
 //------------------------------------------------------------------------------
+bool CellMesh::RefreshScalarRanges(std::string* error)
+{
+  const int64_t numCells = this->GetNumberOfCells();
+  const bool cellScalars = !this->CellScalars.empty();
+  if ((cellScalars && static_cast<int64_t>(this->CellScalars.size()) != numCells) ||
+    (!cellScalars && this->PointScalars.size() != this->Points.size()) ||
+    static_cast<int64_t>(this->ScalarRanges.size()) != numCells ||
+    static_cast<int64_t>(this->PlaneOffsets.size()) != numCells + 1)
+  {
+    if (error)
+    {
+      *error = "the scalars do not match the finalized mesh";
+    }
+    return false;
+  }
+  this->NonFiniteScalarCells = 0;
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
+    // Skipped cells (no planes) are not rendered: Finalize does not count them either.
+    const bool rendered = this->PlaneOffsets[cell + 1] > this->PlaneOffsets[cell];
+    this->NonFiniteScalarCells += rendered && std::isnan(this->ScalarRanges[cell][0]) ? 1 : 0;
+  }
+  return true;
+}
+
+//------------------------------------------------------------------------------
 std::array<float, 2> CellMesh::ScalarRangeOf(int64_t cell) const
 {
   // One non-finite corner (NaN or +-inf) makes the whole cell NaN, hence transparent: an

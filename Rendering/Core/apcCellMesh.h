@@ -47,6 +47,12 @@ public:
   // Returns false, with a message, if the mesh is unusable (ids out of range, scalars missing).
   bool Finalize(std::string* error = nullptr);
 
+  // After new values in PointScalars or CellScalars (same sizes, same cells and points): the
+  // per-cell scalar ranges and the count of non-finite scalar cells, without redoing what
+  // Finalize derived from the geometry (bounds, planes, shape checks). Returns false, with a
+  // message, if the scalars no longer match the cells or points.
+  bool RefreshScalarRanges(std::string* error = nullptr);
+
   int64_t GetNumberOfCells() const { return static_cast<int64_t>(this->Shapes.size()); }
   bool HasCellScalars() const { return !this->CellScalars.empty(); }
   CellShape GetShape(int64_t cell) const { return this->Shapes[cell]; }
