@@ -8,8 +8,6 @@
 #include "vtkMultiProcessController.h"
 
 #include <algorithm>
-#include <chrono>
-#include <cstring>
 
 namespace apc
 {
@@ -17,13 +15,6 @@ namespace partition
 {
 namespace
 {
-using Clock = std::chrono::steady_clock;
-
-double SecondsSince(Clock::time_point start)
-{
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 // Sends send[r] to rank r and returns what every rank sent this one, in rank order.
 template <typename T>
 std::vector<T> AllToAll(MPI_Comm comm, const std::vector<std::vector<T>>& send, MPI_Datatype type)
@@ -90,16 +81,11 @@ Numbering NumberCells(MPI_Comm comm, std::int64_t localCells)
 int FacetHome(std::vector<std::array<double, 3>>& points, int ranks)
 {
   std::sort(points.begin(), points.end());
-  std::uint64_t h = 1469598103934665603ULL;
+  const PositionKeys::Hash hash;
+  std::uint64_t h = points.size();
   for (const auto& p : points)
   {
-    for (const double v : p)
-    {
-      std::uint64_t bits;
-      std::memcpy(&bits, &v, sizeof(bits));
-      h = (h ^ bits) * 1099511628211ULL;
-      h ^= h >> 29;
-    }
+    h = (h ^ hash(p)) * 1099511628211ULL;
   }
   return static_cast<int>(h % static_cast<std::uint64_t>(ranks));
 }

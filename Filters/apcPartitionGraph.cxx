@@ -17,7 +17,6 @@
 #include "vtkUnstructuredGrid.h"
 
 #include <array>
-#include <chrono>
 #include <cstring>
 #include <unordered_map>
 
@@ -35,13 +34,6 @@ namespace partition
 {
 namespace
 {
-using Clock = std::chrono::steady_clock;
-
-double SecondsSince(Clock::time_point start)
-{
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 // Lists the facets of one part's cells, their points keyed by position.
 struct FacetLister
 {

@@ -10,6 +10,7 @@
 #include "vtkSmartPointer.h"
 #include "vtkType.h"
 
+#include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
@@ -22,6 +23,13 @@ namespace apc
 namespace partition
 {
 using UGrids = std::vector<vtkSmartPointer<vtkUnstructuredGrid>>;
+
+// The stages' wall clock (the filter's Last*Seconds).
+using Clock = std::chrono::steady_clock;
+inline double SecondsSince(Clock::time_point start)
+{
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 // One mesh to partition: an unstructured-grid leaf (one part, or none where the leaf is absent
 // on this rank) or a vtkPartitionedDataSet (its partitions on this rank).

@@ -13,7 +13,6 @@
 #include "vtkObjectFactory.h"
 
 #include <algorithm>
-#include <chrono>
 #include <string>
 #include <vector>
 
@@ -23,11 +22,6 @@ vtkCxxSetObjectMacro(vtkAPCGraphPartition, Controller, vtkMultiProcessController
 namespace
 {
 using namespace apc::partition;
-
-double SecondsSince(std::chrono::steady_clock::time_point start)
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // A local error, or one on another rank, and the number of units, agreed in one reduction
 // ([failure, units, -units]) so that a failing rank never leaves the others in a collective.
@@ -148,7 +142,7 @@ int vtkAPCGraphPartition::RequestData(
     this->LastEdgeCut += outcome.EdgeCut;
     this->LastImbalance = std::max(this->LastImbalance, outcome.Imbalance);
 
-    const auto start = std::chrono::steady_clock::now();
+    const Clock::time_point start = Clock::now();
     if (this->LabelOnly)
     {
       InstallLabelled(units[u], cells[u], outcome.Piece.data());

@@ -68,10 +68,13 @@ bool RunScotch(MPI_Comm comm, const DistributedGraph& graph, int parts, int seed
   part.assign(static_cast<std::size_t>(std::max<std::int64_t>(n, 1)), 0);
   int processes = 1;
   MPI_Comm_size(comm, &processes);
-  // A context asking for a deterministic run with a fixed seed: Debian's Scotch is threaded,
-  // and threads otherwise make runs differ.
+  // A context of one thread, deterministic, with a fixed seed. Debian's Scotch is threaded:
+  // its threads make runs differ, and they call MPI at the same time (folding the graph onto
+  // half the processes), which hangs unless MPI was started with MPI_THREAD_MULTIPLE, which
+  // VTK and ParaView do not ask for.
   SCOTCH_Context context;
   SCOTCH_contextInit(&context);
+  SCOTCH_contextThreadSpawn(&context, 1, nullptr);
   SCOTCH_contextOptionSetNum(&context, SCOTCH_OPTIONNUMDETERMINISTIC, 1);
   SCOTCH_contextOptionSetNum(&context, SCOTCH_OPTIONNUMRANDOMFIXEDSEED, 1);
   SCOTCH_contextRandomSeed(&context, seed);

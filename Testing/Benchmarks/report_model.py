@@ -95,7 +95,6 @@ class ModelSection:
             "[evaluation/model/](evaluation/model/).\n" % fmt(num(constants[0]
                                                                   ["gamma_double_s_per_byte"])))
 
-
     def _model_constants(self, m):
         constants = m.constants
         # Constants.
@@ -120,7 +119,6 @@ class ModelSection:
             "(<https://mvapich.cse.ohio-state.edu/performance/pt_to_pt/>). It uses this "
             "machine's γ and copy cost.\n")
 
-
     def _model_collectives(self, m):
         collectives = m.collectives
         if collectives:
@@ -139,7 +137,6 @@ class ModelSection:
                      "all sizes ≥ 64 KiB in `collectives.csv`):\n\n")
             self.add(table(["ranks", "op", "type", "MB per rank", "measured s", "model 1 s",
                             "model 2 s", "model 3 s", "closest", "its error"], body))
-
 
     def _model_validation(self, m):
         validation = m.validation
@@ -184,15 +181,9 @@ class ModelSection:
                 "read the 2-rank rows as the model's accuracy and the 4–8-rank rows as how "
                 "far oversubscription is from it.\n")
 
-
     def _model_gear(self, m):
-        constants = m.constants
-        crossover = m.crossover
-        gear = m.gear
-        machine = m.machine
-        cluster = m.cluster
-        at = m.at
-        ranks = m.ranks
+        constants, crossover, gear = m.constants, m.crossover, m.gear
+        machine, cluster, at, ranks = m.machine, m.cluster, m.at, m.ranks
         trio = ("APC (compact wire)", "direct send", "binary swap")
         # The gear teeth's per-rank traffic from the analysis, at the paper's size.
         if gear:
@@ -263,12 +254,8 @@ class ModelSection:
                         "break_even_blend_s_per_segment"])),
                     fmt(1e9 * num(constants[-1].get("blend_s_per_segment")))))
 
-
     def _model_plots(self, m):
-        paper = m.paper
-        machine = m.machine
-        cluster = m.cluster
-        cases = m.cases
+        paper, machine, cluster, cases = m.paper, m.machine, m.cluster, m.cases
         # Plots: time and bytes vs ranks, per calibration, gear teeth (lines) and real data.
         fig, axes = plt.subplots(1, 4, figsize=(22, 4.6))
         panels = ((machine, "time_s", "with local work"), (cluster, "time_s", "with local work"),
@@ -287,11 +274,8 @@ class ModelSection:
                     "direct send; green: binary swap; markers: data sets (gear teeth opaque, "
                     "real meshes pale).")
 
-
     def _model_crossover(self, m):
-        constants = m.constants
-        crossover = m.crossover
-        at = m.at
+        constants, crossover, at = m.constants, m.crossover, m.at
         if crossover:
             body = [[r["case"], r["calibration"], r["apc"], "%s–%s" % (r["from_ranks"],
                                                                        r["to_ranks"]),
@@ -338,11 +322,7 @@ class ModelSection:
                             100 * num(r["rel_error"])) for r in two))
 
     def _model_meshes(self, m):
-        paper = m.paper
-        crossover = m.crossover
-        cluster = m.cluster
-        at = m.at
-        cases = m.cases
+        paper, crossover, cluster, at, cases = m.paper, m.crossover, m.cluster, m.at, m.cases
         for case in [c for c in cases if "metis" in c]:
             rs = sorted({int(r["ranks"]) for r in paper if r["case"] == case})
             lo = at[(case, rs[0], cluster, "direct send")]
