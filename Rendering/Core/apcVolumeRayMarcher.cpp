@@ -135,7 +135,15 @@ struct VolumeRayMarcher::Walker
           haveCorners = true;
         }
         // Affine cells are inverted in closed form: nothing to carry.
-        const bool follow = interpolate && !state.Interpolator.IsAffine();
+        // Affine cells (any tetrahedron, parallelepipeds) in closed form, linear along the ray.
+        const bool affine = interpolate && state.Interpolator.IsAffine();
+        const bool follow = interpolate && !affine;
+        double p0[3] = { 0, 0, 0 };
+        double dp[3] = { 0, 0, 0 };
+        if (affine)
+        {
+          state.Interpolator.AffineRay(ray.O, ray.D, p0, dp);
+        }
         NewtonMemory memory;
         if (follow)
         {
@@ -149,7 +157,14 @@ struct VolumeRayMarcher::Walker
         {
           TransferSample s = cellSample;
           double scalar = cellScalar;
-          if (interpolate)
+          if (affine)
+          {
+            for (int d = 0; d < 3; ++d)
+            {
+              pcoords[d] = p0[d] + t * dp[d];
+            }
+          }
+          else if (follow)
           {
             const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
               ray.O[2] + t * ray.D[2] };
@@ -159,6 +174,9 @@ struct VolumeRayMarcher::Walker
               firstMemory = memory;
               first = false;
             }
+          }
+          if (interpolate)
+          {
             // Clamped to the cell's range: a point inside the planes but outside the
             // interpolating map's cell (non-planar faces) must not extrapolate past the
             // corners, and it is what makes skipping by range exact.
