@@ -134,6 +134,19 @@ public:
   // after a failure).
   bool Follow(const double x[3], NewtonMemory& memory, double pcoords[3], double tolerance) const;
 
+  // An affine cell's parametric coordinates along the ray x(t) = o + t d: p(t) = p0 + t dp,
+  // the closed form ParametricCoordinates evaluates, set up once per ray. Only for cells
+  // that are IsAffine().
+  void AffineRay(const double o[3], const double d[3], double p0[3], double dp[3]) const
+  {
+    const double y[3] = { o[0] - this->C[0][0], o[1] - this->C[0][1], o[2] - this->C[0][2] };
+    for (int i = 0; i < 3; ++i)
+    {
+      p0[i] = this->Inverse[i][0] * y[0] + this->Inverse[i][1] * y[1] + this->Inverse[i][2] * y[2];
+      dp[i] = this->Inverse[i][0] * d[0] + this->Inverse[i][1] * d[1] + this->Inverse[i][2] * d[2];
+    }
+  }
+
   // Sum of VTK's weights times the corner scalars: exact at the corners.
   double InterpolateScalar(const double pcoords[3]) const;
 

@@ -40,140 +40,198 @@ struct VolumeRayMarcher::Walker
   bool SharedOrigin; // a perspective camera: every ray starts at the eye
   double OpaqueAbsorbance;
 
+  Lattice Grid; // the samples t_k of every ray
+
   // What a cell needs while its rays are marched; reused from cell to cell.
   struct CellState
   {
     CellPlanes Planes;
     CellCorners Corners;
     CellInterpolator Interpolator;
+    int64_t Cell = -1;
+    double Near = 0; // no point of the cell lies at a smaller t (TileBins::Near)
+    double Lo = 0;   // the cell's scalar range
+    double Hi = 0;
+    bool Interpolate = false; // point scalars of a visible cell
+    bool HaveCorners = false; // Corners and Interpolator are set up
+    TransferSample CellSample{};
+    double CellScalar = std::numeric_limits<double>::quiet_NaN();
+    // Newton starts a ray from the first sample of the cell's previous ray (a neighbouring
+    // pixel at about the same depth), then goes on from the previous sample.
+    NewtonMemory FirstMemory;
+    double Centre[3] = { 0, 0, 0 };
   };
+
+  // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
+  template <class Visitor>
+  bool SetUp(
+    int64_t cell, const RaySetup& anyRay, CellState& state, const RayProgress& progress) const
+  {
+    constexpr bool keepsTransparent = Visitor::WantsSegments || Visitor::WantsTransparentSamples;
+    state.Near = this->Bins.Near[cell];
+    if (Visitor::StopsWhenOpaque && state.Near >= progress.TileStop)
+    {
+      return false; // behind every ray of the tile, all opaque
+    }
+    const bool cellScalars = this->Mesh.HasCellScalars();
+    const auto& range = this->Mesh.GetScalarRange(cell);
+    state.Lo = range[0];
+    state.Hi = range[1];
+    // A cell whose scalars all map to zero opacity adds nothing: skip it, unless the visitor
+    // needs its extent (segment runs go on through transparent cells).
+    const bool visible = this->Table.MayBeVisible(state.Lo, state.Hi);
+    if (!visible && !keepsTransparent)
+    {
+      return false;
+    }
+    state.CellSample = TransferSample{};
+    state.CellScalar = std::numeric_limits<double>::quiet_NaN();
+    if (cellScalars && visible)
+    {
+      state.CellScalar = this->Mesh.CellScalars[cell];
+      state.CellSample = this->Table.Lookup(state.CellScalar);
+    }
+    int planeCount = 0;
+    const FacePlane* planes = this->Mesh.GetPlanes(cell, planeCount);
+    if (planeCount == 0)
+    {
+      return false; // a cell the mesh left out (see CellMesh::GetNumberOfSkippedCells)
+    }
+    state.Planes.Set(planes, planeCount, anyRay, this->SharedOrigin);
+    state.Cell = cell;
+    state.Interpolate = visible && !cellScalars;
+    state.HaveCorners = false;
+    state.FirstMemory = NewtonMemory();
+    return true;
+  }
 
   // One cell against the tile's rays; returns the lattice samples taken.
   template <class Visitor>
   int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRect& tile,
     Visitor& visitor, CellState& state, RayProgress& progress) const
   {
-    constexpr bool keepsTransparent = Visitor::WantsSegments || Visitor::WantsTransparentSamples;
-    constexpr bool stops = Visitor::StopsWhenOpaque;
-    const double near = this->Bins.Near[cell];
-    if (stops && near >= progress.TileStop)
-    {
-      return 0; // behind every ray of the tile, all opaque
-    }
-    const bool cellScalars = this->Mesh.HasCellScalars();
-    const auto& range = this->Mesh.GetScalarRange(cell);
-    const double lo = range[0];
-    const double hi = range[1];
-    // A cell whose scalars all map to zero opacity adds nothing: skip it, unless the visitor
-    // needs its extent (segment runs go on through transparent cells).
-    const bool visible = this->Table.MayBeVisible(lo, hi);
-    if (!visible && !keepsTransparent)
+    if (!this->SetUp<Visitor>(cell, rays.front(), state, progress))
     {
       return 0;
-    }
-    TransferSample cellSample{};
-    double cellScalar = std::numeric_limits<double>::quiet_NaN();
-    if (cellScalars && visible)
-    {
-      cellScalar = this->Mesh.CellScalars[cell];
-      cellSample = this->Table.Lookup(cellScalar);
-    }
-    int planeCount = 0;
-    const FacePlane* planes = this->Mesh.GetPlanes(cell, planeCount);
-    if (planeCount == 0)
-    {
-      return 0; // a cell the mesh left out (see CellMesh::GetNumberOfSkippedCells)
     }
     const auto& r = this->Bins.Rects[cell];
     const int i0 = std::max(r[0], tile.I0);
     const int i1 = std::min(r[2], tile.I1 - 1);
     const int j0 = std::max(r[1], tile.J0);
     const int j1 = std::min(r[3], tile.J1 - 1);
-    state.Planes.Set(planes, planeCount, rays.front(), this->SharedOrigin);
-    const bool interpolate = visible && !cellScalars;
-    const Lattice lattice(this->Table.GetSampleSpacing());
     int64_t samples = 0;
-    bool haveCorners = false;
-    // Newton starts a ray from the first sample of the cell's previous ray (a neighbouring
-    // pixel at about the same depth), then goes on from the previous sample.
-    NewtonMemory firstMemory;
-    double centre[3] = { 0, 0, 0 };
     for (int j = j0; j <= j1; ++j)
     {
       for (int i = i0; i <= i1; ++i)
       {
         const int local = (j - tile.J0) * tile.Width() + (i - tile.I0);
-        const RaySetup& ray = rays[local];
-        double tin = 0.0;
-        // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes
-        // fail to enclose it (rounding on a nearly flat cell) from sampling forever.
-        double tout = std::min(ray.End, this->FarLimit);
-        if (stops)
+        samples += this->Ray(local, rays[local], visitor, state, progress);
+      }
+    }
+    return samples;
+  }
+
+  // The tile's ray local through the cell state holds: clipped, then sampled; returns the
+  // samples taken.
+  template <class Visitor>
+  int64_t Ray(
+    int local, const RaySetup& ray, Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    double tin = 0.0;
+    // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes fail to
+    // enclose it (rounding on a nearly flat cell) from sampling forever.
+    double tout = std::min(ray.End, this->FarLimit);
+    if (Visitor::StopsWhenOpaque)
+    {
+      if (state.Near >= progress.Stop[local])
+      {
+        return 0; // the whole cell lies behind where this ray is opaque
+      }
+      tout = std::min(tout, progress.Stop[local]);
+    }
+    state.Planes.Clip(ray, tin, tout);
+    if (!(tin < tout))
+    {
+      return 0;
+    }
+    visitor.Segment(local, tin, tout);
+    if (!Visitor::WantsSamples)
+    {
+      return 0;
+    }
+    if (state.Interpolate && !state.HaveCorners)
+    {
+      // Set up lazily: most binned cells miss most of their rectangle's rays.
+      this->Mesh.GetCorners(state.Cell, state.Corners);
+      state.Interpolator.Set(state.Corners);
+      ParametricCenter(state.Corners.Shape, state.Centre);
+      state.HaveCorners = true;
+    }
+    return this->Samples(local, ray, tin, tout, visitor, state, progress);
+  }
+
+  // The lattice samples of the ray in [tin, tout), the same points on every rank.
+  template <class Visitor>
+  int64_t Samples(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
+  {
+    // Affine cells (any tetrahedron, parallelepipeds) in closed form, linear along the ray;
+    // the others by Newton, following the ray.
+    const bool affine = state.Interpolate && state.Interpolator.IsAffine();
+    const bool follow = state.Interpolate && !affine;
+    double p0[3] = { 0, 0, 0 };
+    double dp[3] = { 0, 0, 0 };
+    if (affine)
+    {
+      state.Interpolator.AffineRay(ray.O, ray.D, p0, dp);
+    }
+    NewtonMemory memory;
+    if (follow)
+    {
+      memory = state.FirstMemory;
+    }
+    double pcoords[3] = { state.Centre[0], state.Centre[1], state.Centre[2] };
+    bool first = follow;
+    int64_t samples = 0;
+    int64_t k = this->Grid.First(tin, ray.Offset);
+    for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
+    {
+      TransferSample s = state.CellSample;
+      double scalar = state.CellScalar;
+      if (affine)
+      {
+        for (int d = 0; d < 3; ++d)
         {
-          if (near >= progress.Stop[local])
-          {
-            continue;
-          }
-          tout = std::min(tout, progress.Stop[local]);
+          pcoords[d] = p0[d] + t * dp[d];
         }
-        state.Planes.Clip(ray, tin, tout);
-        if (!(tin < tout))
+      }
+      else if (follow)
+      {
+        const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
+          ray.O[2] + t * ray.D[2] };
+        state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance);
+        if (first)
         {
-          continue;
+          state.FirstMemory = memory;
+          first = false;
         }
-        visitor.Segment(local, tin, tout);
-        if (!Visitor::WantsSamples)
+      }
+      if (state.Interpolate)
+      {
+        // Clamped to the cell's range: a point inside the planes but outside the
+        // interpolating map's cell (non-planar faces) must not extrapolate past the corners,
+        // and it is what makes skipping by range exact.
+        scalar =
+          std::min(std::max(state.Interpolator.InterpolateScalar(pcoords), state.Lo), state.Hi);
+        s = this->Table.Lookup(scalar);
+      }
+      ++samples;
+      if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
+      {
+        visitor.Sample(local, k, t, scalar, s);
+        if (Visitor::StopsWhenOpaque && progress.Add(local, t, s.Absorbance))
         {
-          continue;
-        }
-        if (interpolate && !haveCorners)
-        {
-          // Set up lazily: most binned cells miss most of their rectangle's rays.
-          this->Mesh.GetCorners(cell, state.Corners);
-          state.Interpolator.Set(state.Corners);
-          ParametricCenter(state.Corners.Shape, centre);
-          haveCorners = true;
-        }
-        // Affine cells are inverted in closed form: nothing to carry.
-        const bool follow = interpolate && !state.Interpolator.IsAffine();
-        NewtonMemory memory;
-        if (follow)
-        {
-          memory = firstMemory;
-        }
-        double pcoords[3] = { centre[0], centre[1], centre[2] };
-        bool first = follow;
-        // Lattice samples in [tin, tout), the same points on every rank.
-        int64_t k = lattice.First(tin, ray.Offset);
-        for (double t = lattice.At(k, ray.Offset); t < tout; ++k, t = lattice.At(k, ray.Offset))
-        {
-          TransferSample s = cellSample;
-          double scalar = cellScalar;
-          if (interpolate)
-          {
-            const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
-              ray.O[2] + t * ray.D[2] };
-            state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance);
-            if (first)
-            {
-              firstMemory = memory;
-              first = false;
-            }
-            // Clamped to the cell's range: a point inside the planes but outside the
-            // interpolating map's cell (non-planar faces) must not extrapolate past the
-            // corners, and it is what makes skipping by range exact.
-            scalar = std::min(std::max(state.Interpolator.InterpolateScalar(pcoords), lo), hi);
-            s = this->Table.Lookup(scalar);
-          }
-          ++samples;
-          if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
-          {
-            visitor.Sample(local, k, t, scalar, s);
-            if (stops && progress.Add(local, t, s.Absorbance))
-            {
-              break; // opaque: what lies behind t cannot be seen
-            }
-          }
+          break; // opaque: what lies behind t cannot be seen
         }
       }
     }
@@ -291,7 +349,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   this->Camera->DistanceRange(this->Mesh->GetBounds(), nearLimit, farLimit);
   const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
     !this->Camera->IsParallel(),
-    Visitor::StopsWhenOpaque ? this->FrameStop : std::numeric_limits<double>::infinity() };
+    Visitor::StopsWhenOpaque ? this->FrameStop : std::numeric_limits<double>::infinity(),
+    Lattice(table.GetSampleSpacing()) };
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;

@@ -24,6 +24,7 @@
 #include "apcTransferTable.h"
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -68,18 +69,22 @@ public:
   // Set it before a frame's passes: pass 2 replays pass 1's samples.
   void SetLatticeJitter(bool jitter) { this->LatticeJitter = jitter; }
 
-  // The MBOIT passes stop a ray once the absorbance of its samples on this mesh reaches this
-  // (and the tiles' cells are visited nearest first, so that happens early): a later sample
+  // The MBOIT passes may stop a ray once the absorbance of its samples on this mesh reaches
+  // this (the tiles' cells are visited nearest first, so that happens early): a later sample
   // behind all the samples summed so far has a transmittance below exp(-absorbance) whatever
-  // other meshes or ranks add in front of it, so it changes a pixel by less than that. Pass 2
-  // takes exactly pass 1's samples (it stops where pass 1 did). +inf marches every sample;
-  // exact and segment renders always do, and so does a pass 1 that keeps its own moments for
-  // Hybrid, whose own transmittance is exact.
+  // other meshes or ranks add in front of it, so leaving it out changes a pixel's opacity by
+  // less than that. Pass 2 takes exactly pass 1's samples (it stops where pass 1 did). Off
+  // (+inf, every sample) by default: which samples a rank leaves out depends on its own
+  // cells, so MBOIT's moments, and its image, then depend on how the cells are split among
+  // ranks (well within the stop's bound against the exact blend, not within the 1e-5 that
+  // N ranks and one process agree to without it). kRecommendedOpaqueAbsorbance is the value
+  // to use where that does not matter. Exact and segment renders never stop, nor does a pass
+  // 1 that keeps its own moments for Hybrid, whose own transmittance is exact.
   void SetOpaqueAbsorbance(double absorbance) { this->OpaqueAbsorbance = absorbance; }
   double GetOpaqueAbsorbance() const { return this->OpaqueAbsorbance; }
   // ln 10^4: what a ray leaves unsampled is hidden behind a transmittance of at most 1e-4,
   // far below one step of an 8-bit colour (1/255).
-  static constexpr double kDefaultOpaqueAbsorbance = 9.210340371976184;
+  static constexpr double kRecommendedOpaqueAbsorbance = 9.210340371976184;
 
   // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
   // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
@@ -149,9 +154,9 @@ private:
   double LastColourCacheShare = 0;
   int Threads = 0;
   bool LatticeJitter = false;
-  double OpaqueAbsorbance = kDefaultOpaqueAbsorbance;
+  double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
   // The stop of the last pass 1, which its pass 2 must use too.
-  double FrameStop = kDefaultOpaqueAbsorbance;
+  double FrameStop = std::numeric_limits<double>::infinity();
   int64_t LastSamples = 0;
 };
 

@@ -80,6 +80,20 @@ bool SetStop(M& marcher, double absorbance)
     return false;
   }
 }
+// The marcher's recommended stop (it is off by default), +inf where it has none.
+template <class M>
+double RecommendedStop()
+{
+  if constexpr (CanStop<M>::value)
+  {
+    return M::kRecommendedOpaqueAbsorbance;
+  }
+  else
+  {
+    return std::numeric_limits<double>::infinity();
+  }
+}
+
 template <class M>
 double GetStop(const M& marcher)
 {
@@ -225,6 +239,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
 
   apc::VolumeRayMarcher marcher;
   marcher.SetNumberOfThreads(threads);
+  SetStop(marcher, RecommendedStop<apc::VolumeRayMarcher>());
   marcher.SetMesh(&mesh);
   std::vector<double> view, pass1, pass2, cpu1, cpu2;
   std::vector<double> moments(pixels * 5);

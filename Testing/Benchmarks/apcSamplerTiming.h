@@ -2,7 +2,8 @@
 // The core ray marcher's own cost per sample, without the mapper around it: the mesh, camera
 // and transfer function of a benchmark scene handed to apc::VolumeRayMarcher directly, pass 1
 // (moments) and pass 2 (colour, replayed from pass 1's sample cache) timed separately in
-// process CPU time, the samples a ray skips once it is opaque counted against a run that
+// process CPU time with the marcher's recommended opaque stop on (off by default), the samples
+// a ray skips once it is opaque counted against a run that
 // marches them all, and the resolved image held against the exact ordered blend of every
 // sample. The same source builds against a marcher that cannot stop rays (it then reports no
 // hidden samples), so that one benchmark measures the code before and after side by side.

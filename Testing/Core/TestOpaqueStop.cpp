@@ -150,7 +150,7 @@ std::vector<float> Exact(const Scene& scene, apc::VolumeRayMarcher& marcher)
 void ExpectWithinBound(const std::vector<float>& stopped, const std::vector<float>& unstopped,
   const std::vector<float>& exact, const char* what)
 {
-  const double opacityBound = std::exp(-apc::VolumeRayMarcher::kDefaultOpaqueAbsorbance) + 1e-6;
+  const double opacityBound = std::exp(-apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance) + 1e-6;
   int covered = 0;
   for (size_t p = 0; p < kPixels; ++p)
   {
@@ -173,7 +173,9 @@ TEST(OpaqueStop, SkipsWhatIsHiddenWithinBound)
   const apc::CellMesh mesh = BlockMesh(-1);
   apc::VolumeRayMarcher marcher;
   marcher.SetMesh(&mesh);
-  ASSERT_EQ(marcher.GetOpaqueAbsorbance(), apc::VolumeRayMarcher::kDefaultOpaqueAbsorbance);
+  // Off by default: every sample, as the partition invariance needs.
+  ASSERT_EQ(marcher.GetOpaqueAbsorbance(), std::numeric_limits<double>::infinity());
+  marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   const Frame stopped = Render(scene, { &marcher });
   marcher.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
   const Frame all = Render(scene, { &marcher });
@@ -192,8 +194,10 @@ TEST(OpaqueStop, PassTwoTakesPassOnesSamples)
   const apc::CellMesh mesh = BlockMesh(-1);
   apc::VolumeRayMarcher cached;
   cached.SetMesh(&mesh);
+  cached.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   apc::VolumeRayMarcher marched;
   marched.SetMesh(&mesh);
+  marched.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   marched.SetMaxSampleCacheBytes(0); // pass 2 clips and interpolates again
   const Frame replay = Render(scene, { &cached });
   const Frame again = Render(scene, { &marched });
@@ -220,6 +224,8 @@ TEST(OpaqueStop, TwoMeshesKeepTheBound)
   apc::VolumeRayMarcher b;
   a.SetMesh(&even);
   b.SetMesh(&odd);
+  a.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+  b.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   const Frame stopped = Render(scene, { &a, &b });
   a.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
   b.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
@@ -241,6 +247,7 @@ TEST(OpaqueStop, HybridMarchesEverySample)
   const apc::CellMesh mesh = BlockMesh(-1);
   apc::VolumeRayMarcher marcher;
   marcher.SetMesh(&mesh);
+  marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   marcher.SetView(scene.View, nullptr);
   std::vector<double> moments(kPixels * 5, 0.0);
   marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data(), true);
