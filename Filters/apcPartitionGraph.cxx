@@ -42,42 +42,6 @@ double SecondsSince(Clock::time_point start)
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// Points identified by their exact position: pieces cut from one mesh repeat a shared point
-// bit for bit, while point ids mean nothing across pieces (or across a reader's appended
-// pieces on one rank).
-struct PositionKeys
-{
-  struct Hash
-  {
-    std::size_t operator()(const std::array<double, 3>& p) const
-    {
-      std::size_t h = 1469598103934665603ULL;
-      for (double v : p)
-      {
-        std::uint64_t bits;
-        std::memcpy(&bits, &v, sizeof(bits));
-        h = (h ^ bits) * 1099511628211ULL;
-        h ^= h >> 29;
-      }
-      return h;
-    }
-  };
-  std::unordered_map<std::array<double, 3>, std::int64_t, Hash> Ids;
-  std::vector<std::array<double, 3>> Positions; // by key
-
-  std::int64_t Key(const double x[3])
-  {
-    // + 0.0 turns -0.0 into 0.0, which compares equal but hashes differently.
-    const std::array<double, 3> p{ x[0] + 0.0, x[1] + 0.0, x[2] + 0.0 };
-    auto inserted = this->Ids.emplace(p, static_cast<std::int64_t>(this->Positions.size()));
-    if (inserted.second)
-    {
-      this->Positions.push_back(p);
-    }
-    return inserted.first->second;
-  }
-};
-
 // Lists the facets of one part's cells, their points keyed by position.
 struct FacetLister
 {
@@ -183,28 +147,6 @@ struct FacetLister
     }
   }
 };
-
-// The facets of this rank's cells of one unit, keyed by point position.
-apc::Facets BuildFacets(const Unit& unit, const LocalCells& cells, PositionKeys& keys)
-{
-  apc::Facets facets;
-  // Hexahedra-dominated meshes: about 6 facets of 4 points per cell.
-  facets.Cell.reserve(static_cast<std::size_t>(6 * cells.Count));
-  facets.Offsets.reserve(static_cast<std::size_t>(6 * cells.Count + 1));
-  facets.Points.reserve(static_cast<std::size_t>(24 * cells.Count));
-  FacetLister lister{ facets };
-  for (std::size_t p = 0; p < unit.Parts.size(); ++p)
-  {
-    vtkUnstructuredGrid* part = unit.Parts[p];
-    lister.KeyPoints(part, keys);
-    for (const vtkIdType c : cells.Kept[p])
-    {
-      lister.AddCell(part, c);
-      ++lister.GraphCell;
-    }
-  }
-  return facets;
-}
 
 // What a rank sends rank 0: its graph edges and its unmatched facets with their positions.
 // Counts are [cells, pair ids, unmatched facets, their point coordinates' triples].
@@ -371,6 +313,55 @@ PartitionOutcome PartitionOnRanks(const apc::Facets& facets, const apc::FacetMat
   return outcome;
 }
 } // namespace
+
+//------------------------------------------------------------------------------
+apc::Facets BuildFacets(const Unit& unit, const LocalCells& cells, PositionKeys& keys)
+{
+  apc::Facets facets;
+  // Hexahedra-dominated meshes: about 6 facets of 4 points per cell.
+  facets.Cell.reserve(static_cast<std::size_t>(6 * cells.Count));
+  facets.Offsets.reserve(static_cast<std::size_t>(6 * cells.Count + 1));
+  facets.Points.reserve(static_cast<std::size_t>(24 * cells.Count));
+  FacetLister lister{ facets };
+  for (std::size_t p = 0; p < unit.Parts.size(); ++p)
+  {
+    vtkUnstructuredGrid* part = unit.Parts[p];
+    lister.KeyPoints(part, keys);
+    for (const vtkIdType c : cells.Kept[p])
+    {
+      lister.AddCell(part, c);
+      ++lister.GraphCell;
+    }
+  }
+  return facets;
+}
+
+//------------------------------------------------------------------------------
+std::int64_t PositionKeys::Key(const double x[3])
+{
+  // + 0.0 turns -0.0 into 0.0, which compares equal but hashes differently.
+  const std::array<double, 3> p{ x[0] + 0.0, x[1] + 0.0, x[2] + 0.0 };
+  auto inserted = this->Ids.emplace(p, static_cast<std::int64_t>(this->Positions.size()));
+  if (inserted.second)
+  {
+    this->Positions.push_back(p);
+  }
+  return inserted.first->second;
+}
+
+//------------------------------------------------------------------------------
+std::size_t PositionKeys::Hash::operator()(const std::array<double, 3>& p) const
+{
+  std::size_t h = 1469598103934665603ULL;
+  for (double v : p)
+  {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof(bits));
+    h = (h ^ bits) * 1099511628211ULL;
+    h ^= h >> 29;
+  }
+  return h;
+}
 
 //------------------------------------------------------------------------------
 PartitionOutcome PartitionCells(const Unit& unit, const LocalCells& cells, int pieces, int seed,

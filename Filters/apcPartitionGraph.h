@@ -13,9 +13,13 @@
 #ifndef apcPartitionGraph_h
 #define apcPartitionGraph_h
 
+#include "apcDualGraph.h"
 #include "apcPartitionInput.h"
 
+#include <array>
+#include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 class vtkMultiProcessController;
@@ -24,6 +28,25 @@ namespace apc
 {
 namespace partition
 {
+
+// Points identified by their exact position: pieces cut from one mesh repeat a shared point
+// bit for bit, while point ids mean nothing across pieces (or across a reader's appended
+// pieces on one rank).
+struct PositionKeys
+{
+  struct Hash
+  {
+    std::size_t operator()(const std::array<double, 3>& p) const;
+  };
+  std::unordered_map<std::array<double, 3>, std::int64_t, Hash> Ids;
+  std::vector<std::array<double, 3>> Positions; // by key
+
+  std::int64_t Key(const double x[3]);
+};
+
+// The facets of this rank's cells of one unit (cells numbered in graph order), their points
+// keyed by position in keys.
+apc::Facets BuildFacets(const Unit& unit, const LocalCells& cells, PositionKeys& keys);
 
 struct PartitionOutcome
 {

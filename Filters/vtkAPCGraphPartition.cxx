@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAPCGraphPartition.h"
 
+#include "apcPartitionDistributed.h"
 #include "apcPartitionGraph.h"
 #include "apcPartitionInput.h"
 #include "apcPartitionMove.h"
@@ -125,6 +126,8 @@ int vtkAPCGraphPartition::RequestData(
   }
   const int ranks = controller ? controller->GetNumberOfProcesses() : 1;
   const int pieces = this->NumberOfPartitions > 0 ? this->NumberOfPartitions : ranks;
+  const bool distributed =
+    this->Partitioner == PTSCOTCH || (this->Partitioner == AUTO && ranks > 1);
 
   for (std::size_t u = 0; u < units.size(); ++u)
   {
@@ -133,8 +136,9 @@ int vtkAPCGraphPartition::RequestData(
       InstallEmpty(units[u], cells[u]);
       continue;
     }
-    const PartitionOutcome outcome =
-      PartitionCells(units[u], cells[u], pieces, this->Seed, controller);
+    const PartitionOutcome outcome = distributed
+      ? PartitionCellsDistributed(units[u], cells[u], pieces, this->Seed, controller)
+      : PartitionCells(units[u], cells[u], pieces, this->Seed, controller);
     if (!outcome.Error.empty())
     {
       return fail(outcome.Error);
@@ -167,6 +171,7 @@ void vtkAPCGraphPartition::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "NumberOfPartitions: " << this->NumberOfPartitions << "\n";
+  os << indent << "Partitioner: " << this->Partitioner << "\n";
   os << indent << "Seed: " << this->Seed << "\n";
   os << indent << "LabelOnly: " << this->LabelOnly << "\n";
   os << indent << "Controller: " << this->Controller << "\n";

@@ -18,7 +18,13 @@
  * trivial) and scatters the part of every cell back. So rank 0 holds the whole graph
  * (O(cells) memory and METIS time) but never the cells or their arrays. Then, unless
  * LabelOnly is on, every rank sends each of its cells to the rank of its piece
- * (vtkDIYDataExchanger, one all-to-all) and appends what it receives. The stages are private
+ * (vtkDIYDataExchanger, one all-to-all) and appends what it receives.
+ *
+ * With the PT-Scotch partitioner (the default on more than one rank, see SetPartitioner) no
+ * rank gathers the graph: each unmatched facet goes to the rank its point positions hash to,
+ * where it meets its other half, and the edge goes back to both cells' ranks, all point to
+ * point; PT-Scotch (SCOTCH_dgraphPart) then partitions the distributed graph, each rank
+ * holding only its own cells and their neighbours' ids. The stages are private
  * helpers: apcPartitionInput (the input walked into meshes), apcPartitionGraph (the dual graph
  * and its partition), apcPartitionMove (label or move); the VTK-free parts are in Filters/Core.
  *
@@ -46,12 +52,14 @@
  *
  * Errors (vtkErrorMacro on every rank, output empty, no rank left waiting): input not an
  * unstructured grid or a composite of them, NumberOfPartitions < 0, no cells on any rank, a
- * composite structure that differs across ranks, METIS failing. Every rank agrees on the
+ * composite structure that differs across ranks, the partitioner failing. Every rank agrees on the
  * failure (an all-reduce of a status) before the next collective.
  *
- * @par Reference:
+ * @par References:
  * G. Karypis, V. Kumar, "A fast and high quality multilevel scheme for partitioning irregular
  * graphs", SIAM J. Sci. Comput. 20(1), 1998 (METIS).
+ * C. Chevalier, F. Pellegrini, "PT-Scotch: A tool for efficient parallel graph ordering",
+ * Parallel Computing 34(6-8), 2008 (PT-Scotch).
  */
 
 #ifndef vtkAPCGraphPartition_h
@@ -78,10 +86,28 @@ public:
   vtkGetMacro(NumberOfPartitions, int);
   ///@}
 
+  enum PartitionerType
+  {
+    AUTO = 0,    ///< METIS on one process, PT-Scotch on more
+    METIS = 1,   ///< the whole graph on rank 0, METIS_PartGraphKway
+    PTSCOTCH = 2 ///< the graph distributed, each rank its own cells, SCOTCH_dgraphPart
+  };
+
   ///@{
   /**
-   * Seed of METIS's random number generator (METIS_OPTION_SEED). The same graph, K and seed
-   * give the same partition. Default 0.
+   * Which graph partitioner cuts the pieces. METIS needs the whole dual graph on rank 0
+   * (about 50 bytes per cell) and runs serially; PT-Scotch keeps each rank's part of the graph
+   * where it is and partitions in parallel, so no rank holds more than its own share. Both
+   * balance the pieces to about 3 %. Default AUTO.
+   */
+  vtkSetClampMacro(Partitioner, int, AUTO, PTSCOTCH);
+  vtkGetMacro(Partitioner, int);
+  ///@}
+
+  ///@{
+  /**
+   * Seed of the partitioner's random number generator (METIS_OPTION_SEED, SCOTCH_randomSeed).
+   * The same graph, K, seed and number of processes give the same partition. Default 0.
    */
   vtkSetMacro(Seed, int);
   vtkGetMacro(Seed, int);
@@ -131,6 +157,7 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   int NumberOfPartitions = 0;
+  int Partitioner = AUTO;
   int Seed = 0;
   bool LabelOnly = false;
   vtkMultiProcessController* Controller = nullptr;

@@ -333,7 +333,8 @@ void CellInterpolator::Set(const CellCorners& cell)
   }
 }
 
-void CellInterpolator::Map(const double p[3], double offset[3]) const
+// Inlined into every Newton and chord step (the marcher's innermost work).
+[[gnu::always_inline]] inline void CellInterpolator::Map(const double p[3], double offset[3]) const
 {
   const double r = p[0], s = p[1], t = p[2];
   const double rs = r * s, rt = r * t, st = s * t;

@@ -1,6 +1,7 @@
 #include "apcCellMesh.h"
 
 #include "apcCellShapeCheck.h"
+#include "apcParallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -98,99 +99,148 @@ bool CellMesh::Finalize(std::string* error)
     }
   }
 
-  this->Planes.clear();
-  this->PlaneOffsets.assign(1, 0);
   this->Bounds.resize(numCells);
   this->ScalarRanges.resize(numCells);
+  std::vector<CellFate> fates(static_cast<size_t>(numCells));
+  std::vector<uint8_t> planeCounts(static_cast<size_t>(numCells));
+  // Cells are independent: fixed blocks of them derived in parallel, each into its own plane
+  // list, then joined in cell order, so the result is the serial one whatever the threads.
+  constexpr int64_t kBlock = 8192;
+  const int64_t blocks = (numCells + kBlock - 1) / kBlock;
+  std::vector<std::vector<FacePlane>> blockPlanes(static_cast<size_t>(blocks));
+  ParallelFor(0, blocks, 1,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t block = begin; block < end; ++block)
+      {
+        std::vector<FacePlane>& planes = blockPlanes[block];
+        for (int64_t cell = block * kBlock; cell < std::min(numCells, (block + 1) * kBlock); ++cell)
+        {
+          const size_t before = planes.size();
+          fates[cell] = this->DeriveCell(cell, planes);
+          planeCounts[cell] = static_cast<uint8_t>(planes.size() - before);
+        }
+      }
+    });
+
+  this->Planes.clear();
+  this->PlaneOffsets.assign(1, 0);
+  this->PlaneOffsets.reserve(static_cast<size_t>(numCells) + 1);
   const double inf = std::numeric_limits<double>::infinity();
   this->MeshBounds = { inf, -inf, inf, -inf, inf, -inf };
   this->SkippedCells = 0;
   this->NonFiniteCornerCells = 0;
   this->FlatCells = 0;
   this->NonFiniteScalarCells = 0;
+  size_t total = 0;
+  for (const auto& planes : blockPlanes)
+  {
+    total += planes.size();
+  }
+  this->Planes.reserve(total);
+  for (auto& planes : blockPlanes)
+  {
+    this->Planes.insert(this->Planes.end(), planes.begin(), planes.end());
+    planes = std::vector<FacePlane>();
+  }
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
-    const int64_t* ids = this->GetCellPoints(cell);
-    const int corners = static_cast<int>(this->Shapes[cell]);
-    this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
-    std::array<double, 6>& b = this->Bounds[cell];
-    b = { inf, -inf, inf, -inf, inf, -inf };
-    double centroid[3] = { 0, 0, 0 };
-    bool finite = true;
-    for (int i = 0; i < corners; ++i)
-    {
-      const auto& p = this->Points[ids[i]];
-      for (int d = 0; d < 3; ++d)
-      {
-        finite = finite && std::isfinite(p[d]);
-        b[2 * d] = std::min(b[2 * d], p[d]);
-        b[2 * d + 1] = std::max(b[2 * d + 1], p[d]);
-        centroid[d] += p[d] / corners;
-      }
-    }
-    if (!finite)
-    {
-      this->SkipCell(cell);
-      ++this->NonFiniteCornerCells;
-      continue;
-    }
-    std::array<std::array<double, 3>, 8> x;
-    for (int i = 0; i < corners; ++i)
-    {
-      x[i] = this->Points[ids[i]];
-    }
-    if (IsFlat(this->Shapes[cell], x))
-    {
-      this->SkipCell(cell);
-      ++this->FlatCells;
-      continue;
-    }
-    const CellFaces& faces = FacesOf(this->Shapes[cell]);
-    for (int f = 0; f < faces.Count; ++f)
-    {
-      int64_t faceIds[4];
-      for (int i = 0; i < faces.Size[f]; ++i)
-      {
-        faceIds[i] = ids[faces.Corner[f][i]];
-      }
-      double n[3];
-      double offset;
-      if (!CanonicalPlane(this->Points, faceIds, faces.Size[f], n, offset))
-      {
-        continue;
-      }
-      // Flipping the sign is exact, so the neighbour's copy stays bit-identical.
-      const double side = n[0] * centroid[0] + n[1] * centroid[1] + n[2] * centroid[2] - offset;
-      const double sign = side > 0 ? -1.0 : 1.0;
-      this->Planes.push_back({ { static_cast<float>(sign * n[0]), static_cast<float>(sign * n[1]),
-                                 static_cast<float>(sign * n[2]) },
-        static_cast<float>(sign * offset) });
-    }
-    // A cell needs at least four faces with area to enclose anything; with fewer (collapsed
-    // corners, a flat cell) its planes would leave rays unbounded, so it is left out.
-    if (static_cast<int64_t>(this->Planes.size()) - this->PlaneOffsets.back() < 4)
-    {
-      this->Planes.resize(this->PlaneOffsets.back());
-      this->SkipCell(cell);
-      ++this->FlatCells;
-      continue;
-    }
-    if (std::isnan(this->ScalarRanges[cell][0]))
-    {
-      ++this->NonFiniteScalarCells;
-    }
-    this->PlaneOffsets.push_back(static_cast<int64_t>(this->Planes.size()));
-    for (int d = 0; d < 3; ++d)
-    {
-      this->MeshBounds[2 * d] = std::min(this->MeshBounds[2 * d], b[2 * d]);
-      this->MeshBounds[2 * d + 1] = std::max(this->MeshBounds[2 * d + 1], b[2 * d + 1]);
-    }
+    this->PlaneOffsets.push_back(this->PlaneOffsets.back() + planeCounts[cell]);
+    this->CountFate(cell, fates[cell]);
   }
   if (!(this->MeshBounds[0] <= this->MeshBounds[1]))
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
   }
   return true;
+}
+
+//------------------------------------------------------------------------------
+CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, std::vector<FacePlane>& planes)
+{
+  const int64_t* ids = this->GetCellPoints(cell);
+  const int corners = static_cast<int>(this->Shapes[cell]);
+  const double inf = std::numeric_limits<double>::infinity();
+  this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
+  std::array<double, 6>& b = this->Bounds[cell];
+  b = { inf, -inf, inf, -inf, inf, -inf };
+  double centroid[3] = { 0, 0, 0 };
+  bool finite = true;
+  std::array<std::array<double, 3>, 8> x;
+  for (int i = 0; i < corners; ++i)
+  {
+    const auto& p = this->Points[ids[i]];
+    x[i] = p;
+    for (int d = 0; d < 3; ++d)
+    {
+      finite = finite && std::isfinite(p[d]);
+      b[2 * d] = std::min(b[2 * d], p[d]);
+      b[2 * d + 1] = std::max(b[2 * d + 1], p[d]);
+      centroid[d] += p[d] / corners;
+    }
+  }
+  if (!finite)
+  {
+    b = { inf, -inf, inf, -inf, inf, -inf };
+    return CellFate::NonFiniteCorners;
+  }
+  if (IsFlat(this->Shapes[cell], x))
+  {
+    b = { inf, -inf, inf, -inf, inf, -inf };
+    return CellFate::Flat;
+  }
+  const size_t first = planes.size();
+  const CellFaces& faces = FacesOf(this->Shapes[cell]);
+  for (int f = 0; f < faces.Count; ++f)
+  {
+    int64_t faceIds[4];
+    for (int i = 0; i < faces.Size[f]; ++i)
+    {
+      faceIds[i] = ids[faces.Corner[f][i]];
+    }
+    double n[3];
+    double offset;
+    if (!CanonicalPlane(this->Points, faceIds, faces.Size[f], n, offset))
+    {
+      continue;
+    }
+    // Flipping the sign is exact, so the neighbour's copy stays bit-identical.
+    const double side = n[0] * centroid[0] + n[1] * centroid[1] + n[2] * centroid[2] - offset;
+    const double sign = side > 0 ? -1.0 : 1.0;
+    planes.push_back({ { static_cast<float>(sign * n[0]), static_cast<float>(sign * n[1]),
+                         static_cast<float>(sign * n[2]) },
+      static_cast<float>(sign * offset) });
+  }
+  // A cell needs at least four faces with area to enclose anything; with fewer (collapsed
+  // corners, a flat cell) its planes would leave rays unbounded, so it is left out.
+  if (planes.size() - first < 4)
+  {
+    planes.resize(first);
+    b = { inf, -inf, inf, -inf, inf, -inf };
+    return CellFate::Flat;
+  }
+  return CellFate::Rendered;
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::CountFate(int64_t cell, CellFate fate)
+{
+  if (fate != CellFate::Rendered)
+  {
+    ++this->SkippedCells;
+    ++(fate == CellFate::Flat ? this->FlatCells : this->NonFiniteCornerCells);
+    return;
+  }
+  if (std::isnan(this->ScalarRanges[cell][0]))
+  {
+    ++this->NonFiniteScalarCells;
+  }
+  const std::array<double, 6>& b = this->Bounds[cell];
+  for (int d = 0; d < 3; ++d)
+  {
+    this->MeshBounds[2 * d] = std::min(this->MeshBounds[2 * d], b[2 * d]);
+    this->MeshBounds[2 * d + 1] = std::max(this->MeshBounds[2 * d + 1], b[2 * d + 1]);
+  }
 }
 
 //------------------------------------------------------------------------------
@@ -246,16 +296,6 @@ std::array<float, 2> CellMesh::ScalarRangeOf(int64_t cell) const
     hi = std::max(hi, s);
   }
   return { lo, hi };
-}
-
-//------------------------------------------------------------------------------
-void CellMesh::SkipCell(int64_t cell)
-{
-  // No planes and empty bounds: the binning and the walker pass over it.
-  const double inf = std::numeric_limits<double>::infinity();
-  this->Bounds[cell] = { inf, -inf, inf, -inf, inf, -inf };
-  this->PlaneOffsets.push_back(static_cast<int64_t>(this->Planes.size()));
-  ++this->SkippedCells;
 }
 
 //------------------------------------------------------------------------------

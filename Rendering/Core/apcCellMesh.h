@@ -92,7 +92,18 @@ public:
   void GetCorners(int64_t cell, CellCorners& corners) const;
 
 private:
-  void SkipCell(int64_t cell);
+  // What Finalize made of a cell.
+  enum class CellFate : std::uint8_t
+  {
+    Rendered,
+    NonFiniteCorners,
+    Flat
+  };
+  // One cell's scalar range, bounds (empty if left out) and face planes (appended to planes;
+  // none if left out): independent of every other cell, so cells are derived in parallel.
+  CellFate DeriveCell(int64_t cell, std::vector<FacePlane>& planes);
+  // Adds a derived cell to the counts and the mesh bounds.
+  void CountFate(int64_t cell, CellFate fate);
   std::array<float, 2> ScalarRangeOf(int64_t cell) const;
 
   std::vector<CellShape> Shapes;

@@ -45,6 +45,9 @@ struct NoSegments
   static constexpr bool WantsSegments = false;
   static constexpr bool WantsSamples = true;
   static constexpr bool WantsTransparentSamples = false;
+  // The MBOIT passes leave out what lies behind an opaque ray (VolumeRayMarcher::
+  // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
+  static constexpr bool StopsWhenOpaque = false;
   void Segment(int, double, double) {}
 };
 
@@ -133,15 +136,18 @@ struct Exact : PixelSampleLists
 template <int N>
 struct Moments : NoSegments
 {
+  static constexpr bool StopsWhenOpaque = true;
   double* Output;
   double* Own = nullptr;
   int Width;
   const LogDepthWarp* Warp;
   SampleCache* Cache;
   std::vector<double> Sums;
-  // The tile's samples are recorded here and swapped into the cache at EndTile: pushing into
-  // the cache's own vectors made threads on neighbouring tiles write the same cache lines
-  // (the vectors' ends), which cost pass 1 a sixth of its speed on 2 threads.
+  // The tile's samples are recorded here, in the tile's own vector from the last frame taken
+  // out of the cache at BeginTile and put back at EndTile: its capacity fits a static view's
+  // samples, so recording neither grows nor copies. Pushing into the cache's vectors in place
+  // made threads on neighbouring tiles write the same cache lines (the vectors' ends), which
+  // cost pass 1 a sixth of its speed on 2 threads.
   std::vector<CachedSample> Recorded;
   bool Recording = false;
 
@@ -155,8 +161,12 @@ struct Moments : NoSegments
   void BeginTile(const TileRect& tile)
   {
     this->Sums.assign(tile.Pixels() * (N + 1), 0.0);
-    this->Recorded.clear();
     this->Recording = this->Cache && this->Cache->Record;
+    if (this->Recording)
+    {
+      this->Recorded.swap(this->Cache->Tiles[tile.Index]);
+    }
+    this->Recorded.clear();
   }
   void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
@@ -170,11 +180,18 @@ struct Moments : NoSegments
   }
   void EndTile(const TileRect& tile)
   {
-    if (this->Recording && this->Cache->Record)
+    if (this->Recording)
     {
-      // The cache's vector (last frame's memory) comes back to be refilled by the next tile.
       this->Cache->Tiles[tile.Index].swap(this->Recorded);
-      this->Cache->Keep(tile.Index);
+      if (this->Cache->Record)
+      {
+        this->Cache->Keep(tile.Index);
+      }
+      else
+      {
+        // Another tile found the budget spent: this one is not kept (and keeps no memory).
+        this->Cache->Tiles[tile.Index] = std::vector<CachedSample>();
+      }
     }
     for (int p = 0; p < tile.Pixels(); ++p)
     {
@@ -192,6 +209,7 @@ struct Moments : NoSegments
 template <int N>
 struct Colour : NoSegments
 {
+  static constexpr bool StopsWhenOpaque = true;
   double* Output;
   int Width;
   const LogDepthWarp* Warp;
@@ -266,6 +284,7 @@ inline int64_t ReplayOrder(const CachedSample& sample)
 template <int N>
 struct HybridColour : NoSegments
 {
+  static constexpr bool StopsWhenOpaque = true;
   struct OwnSample
   {
     int64_t Order; // lattice index k, or ReplayOrder for cached samples
@@ -336,6 +355,7 @@ struct HybridColour : NoSegments
 // Number of disjoint intervals of each ray inside the cells.
 struct SegmentCounts
 {
+  static constexpr bool StopsWhenOpaque = false;
   static constexpr bool WantsSegments = true;
   static constexpr bool WantsSamples = false;
   static constexpr bool WantsTransparentSamples = false;

@@ -31,6 +31,75 @@ TileRect TileGrid::Tile(int64_t index) const
 
 namespace
 {
+// Depths the cells are binned to for their front-to-back order within a tile: about a
+// tenth of a cell apart on the meshes at hand, and a counting sort over them costs far less
+// than a comparison sort of the cells.
+constexpr int kDepthBins = 1 << 14;
+
+// The smallest depth of a cell's corners along the view direction: a lower bound of t over
+// the cell (a linear function takes its minimum over a convex cell at a corner, and t is that
+// depth for a parallel camera and at least it for a perspective one, whose rays are unit
+// vectors from the eye).
+double NearDepth(const CellMesh& mesh, const RayCamera& camera, int64_t cell)
+{
+  const auto& eye = camera.GetPosition();
+  const auto& forward = camera.GetViewDirection();
+  const int64_t* ids = mesh.GetCellPoints(cell);
+  const int corners = static_cast<int>(mesh.GetShape(cell));
+  double nearest = std::numeric_limits<double>::infinity();
+  for (int c = 0; c < corners; ++c)
+  {
+    const auto& x = mesh.Points[ids[c]];
+    nearest = std::min(nearest,
+      (x[0] - eye[0]) * forward[0] + (x[1] - eye[1]) * forward[1] + (x[2] - eye[2]) * forward[2]);
+  }
+  return nearest;
+}
+
+// The cells that cover a pixel, nearest first (Near binned to kDepthBins depths; a stable
+// counting sort, so the order is the same whenever the view is).
+std::vector<int64_t> FrontToBackOrder(const TileBins& bins)
+{
+  const int64_t numCells = static_cast<int64_t>(bins.Rects.size());
+  auto covers = [&bins](int64_t cell)
+  {
+    const auto& r = bins.Rects[cell];
+    return r[0] <= r[2] && r[1] <= r[3];
+  };
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -lo;
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    if (covers(cell))
+    {
+      lo = std::min(lo, bins.Near[cell]);
+      hi = std::max(hi, bins.Near[cell]);
+    }
+  }
+  const double scale = hi > lo ? (kDepthBins - 1) / (hi - lo) : 0.0;
+  auto binOf = [&](int64_t cell)
+  {
+    const double x = (bins.Near[cell] - lo) * scale;
+    return x > 0 ? std::min(static_cast<int64_t>(x), int64_t(kDepthBins - 1)) : int64_t(0);
+  };
+  std::vector<int64_t> start;
+  std::vector<int64_t> order;
+  BuildCompressedRows<int64_t>(
+    kDepthBins,
+    [&](auto&& emit)
+    {
+      for (int64_t cell = 0; cell < numCells; ++cell)
+      {
+        if (covers(cell))
+        {
+          emit(binOf(cell), cell);
+        }
+      }
+    },
+    start, order);
+  return order;
+}
+
 // The pixel centres a cell's projected corners cover.
 std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, int64_t cell)
 {
@@ -82,27 +151,26 @@ void BinCells(
   bins.Grid = TileGrid(tileSize, camera.GetWidth(), camera.GetHeight());
   const int64_t numCells = mesh ? mesh->GetNumberOfCells() : 0;
   bins.Rects.resize(numCells);
+  bins.Near.resize(numCells);
   ParallelFor(threads, numCells, 4096,
     [&](int64_t begin, int64_t end)
     {
       for (int64_t cell = begin; cell < end; ++cell)
       {
         bins.Rects[cell] = CoveredPixels(*mesh, camera, cell);
+        bins.Near[cell] = NearDepth(*mesh, camera, cell);
       }
     });
 
   const TileGrid& grid = bins.Grid;
+  const std::vector<int64_t> order = FrontToBackOrder(bins);
   BuildCompressedRows<int64_t>(
     grid.Count(),
     [&](auto&& emit)
     {
-      for (int64_t cell = 0; cell < numCells; ++cell)
+      for (int64_t cell : order)
       {
         const auto& r = bins.Rects[cell];
-        if (r[0] > r[2] || r[1] > r[3])
-        {
-          continue;
-        }
         for (int ty = r[1] / grid.Size; ty <= r[3] / grid.Size; ++ty)
         {
           for (int tx = r[0] / grid.Size; tx <= r[2] / grid.Size; ++tx)

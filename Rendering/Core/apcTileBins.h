@@ -54,7 +54,14 @@ struct TileBins
   TileGrid Grid;
   // Per cell: the covered pixel centres i0, j0, i1, j1 (inclusive); empty if i0 > i1.
   std::vector<std::array<int, 4>> Rects;
-  // Compressed rows: tile t's cells are Cells[Start[t] .. Start[t + 1]).
+  // Per cell: a lower bound of the ray parameter t of any of its points on any ray (the
+  // smallest depth of its corners along the view direction, which is t for a parallel camera
+  // and at most t for a perspective one), so that a ray already opaque before it can skip it
+  // without clipping.
+  std::vector<double> Near;
+  // Compressed rows: tile t's cells are Cells[Start[t] .. Start[t + 1]), nearest first (by
+  // Near, binned to a few thousand depths): a ray meets its front cells first and is opaque
+  // sooner.
   std::vector<int64_t> Start{ 0 };
   std::vector<int64_t> Cells;
 

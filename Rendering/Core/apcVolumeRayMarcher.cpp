@@ -5,6 +5,7 @@
 #include "apcLatticeJitter.h"
 #include "apcParallel.h"
 #include "apcRayVisitors.h"
+#include "apcRayWalk.h"
 #include "apcSampleCache.h"
 #include "apcTileBins.h"
 
@@ -20,127 +21,13 @@
 namespace apc
 {
 
-namespace
-{
-struct RaySetup
-{
-  double O[3];
-  double D[3];
-  double End;
-  double Offset; // the ray's lattice offset, in units of the spacing: 0, or apcLatticeJitter
-};
-
-// True for exactly one of n and -n (n non-zero): the first non-zero component is positive.
-inline bool InPositiveHalf(const std::array<float, 3>& n)
-{
-  return n[0] != 0 ? n[0] > 0 : (n[1] != 0 ? n[1] > 0 : n[2] > 0);
-}
-
-// A cell's face planes, set up once per cell and tile. Every ray of a perspective camera
-// starts at the eye, so each plane's distance from it is computed here once, not per ray
-// (with the same expression, so the numbers are the ones a per-ray evaluation gives).
-struct CellPlanes
-{
-  static constexpr int kMaxPlanes = 6;
-  int Count = 0;
-  bool SharedOrigin = false;
-  double N[kMaxPlanes][3];
-  double Offset[kMaxPlanes];
-  double Num[kMaxPlanes];
-  bool KeepsParallelRays[kMaxPlanes];
-
-  void Set(const FacePlane* planes, int count, const RaySetup& anyRay, bool sharedOrigin)
-  {
-    this->Count = std::min(count, kMaxPlanes);
-    this->SharedOrigin = sharedOrigin;
-    for (int p = 0; p < this->Count; ++p)
-    {
-      for (int d = 0; d < 3; ++d)
-      {
-        this->N[p][d] = planes[p].Normal[d];
-      }
-      this->Offset[p] = planes[p].Offset;
-      this->KeepsParallelRays[p] = InPositiveHalf(planes[p].Normal);
-      if (sharedOrigin)
-      {
-        this->Num[p] = this->Numerator(p, anyRay);
-      }
-    }
-  }
-  double Numerator(int p, const RaySetup& ray) const
-  {
-    return this->Offset[p] -
-      (this->N[p][0] * ray.O[0] + this->N[p][1] * ray.O[1] + this->N[p][2] * ray.O[2]);
-  }
-
-  // Clips a ray against the planes: [tin, tout) is the part inside the cell. Every cell
-  // evaluates a shared face with the same numbers (up to an exact sign flip), so the
-  // intervals of neighbours meet exactly.
-  void Clip(const RaySetup& ray, double& tin, double& tout) const
-  {
-    for (int p = 0; p < this->Count && tin < tout; ++p)
-    {
-      const double denom =
-        this->N[p][0] * ray.D[0] + this->N[p][1] * ray.D[1] + this->N[p][2] * ray.D[2];
-      const double num = this->SharedOrigin ? this->Num[p] : this->Numerator(p, ray);
-      if (denom < 0)
-      {
-        tin = std::max(tin, num / denom);
-      }
-      else if (denom > 0)
-      {
-        tout = std::min(tout, num / denom);
-      }
-      else if (num < 0 || (num == 0 && !this->KeepsParallelRays[p]))
-      {
-        // The ray is outside this plane, or runs inside it. A plane shared by two cells
-        // appears in both with exactly opposite normals, so letting only the copy whose
-        // normal points into the "positive" half-space keep such a ray gives it to exactly
-        // one cell.
-        tout = -std::numeric_limits<double>::infinity();
-      }
-    }
-  }
-};
-
-// Scalars need about single precision: 1e-7 in parametric units is ample and saves Newton
-// steps on distorted cells.
-constexpr double kSampleTolerance = 1e-7;
-
-// The lattice t_k = (k + offset) * spacing of one ray (offset 0 unless jittered). A sample
-// belongs to the cell whose [tin, tout) holds the rounded value, so the first index of an
-// interval must be the smallest k whose value is >= tin, exactly; a quotient only gives a
-// first guess, which rounding can leave one off in either direction. Every cell computes
-// t_k with the same expression, so neighbours agree on which of them takes a sample.
-struct Lattice
-{
-  double Spacing;
-  double InverseSpacing;
-
-  explicit Lattice(double spacing)
-    : Spacing(spacing)
-    , InverseSpacing(1.0 / spacing)
-  {
-  }
-  double At(int64_t k, double offset) const
-  {
-    return (static_cast<double>(k) + offset) * this->Spacing;
-  }
-  int64_t First(double t, double offset) const
-  {
-    int64_t k = static_cast<int64_t>(std::ceil(t * this->InverseSpacing - offset));
-    while (this->At(k - 1, offset) >= t)
-    {
-      --k;
-    }
-    while (this->At(k, offset) < t)
-    {
-      ++k;
-    }
-    return k;
-  }
-};
-}
+using walk::CellPlanes;
+using walk::kSampleTolerance;
+using walk::Lattice;
+using walk::RayProgress;
+using walk::RaySetup;
+static_assert(walk::kTilePixels == VolumeRayMarcher::kTileSize * VolumeRayMarcher::kTileSize,
+  "a tile's progress holds every pixel of it");
 
 //------------------------------------------------------------------------------
 // Marches one tile: all its cells against all its pixels.
@@ -151,6 +38,7 @@ struct VolumeRayMarcher::Walker
   const TransferTable& Table;
   double FarLimit;
   bool SharedOrigin; // a perspective camera: every ray starts at the eye
+  double OpaqueAbsorbance;
 
   // What a cell needs while its rays are marched; reused from cell to cell.
   struct CellState
@@ -163,9 +51,15 @@ struct VolumeRayMarcher::Walker
   // One cell against the tile's rays; returns the lattice samples taken.
   template <class Visitor>
   int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRect& tile,
-    Visitor& visitor, CellState& state) const
+    Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     constexpr bool keepsTransparent = Visitor::WantsSegments || Visitor::WantsTransparentSamples;
+    constexpr bool stops = Visitor::StopsWhenOpaque;
+    const double near = this->Bins.Near[cell];
+    if (stops && near >= progress.TileStop)
+    {
+      return 0; // behind every ray of the tile, all opaque
+    }
     const bool cellScalars = this->Mesh.HasCellScalars();
     const auto& range = this->Mesh.GetScalarRange(cell);
     const double lo = range[0];
@@ -214,6 +108,14 @@ struct VolumeRayMarcher::Walker
         // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes
         // fail to enclose it (rounding on a nearly flat cell) from sampling forever.
         double tout = std::min(ray.End, this->FarLimit);
+        if (stops)
+        {
+          if (near >= progress.Stop[local])
+          {
+            continue;
+          }
+          tout = std::min(tout, progress.Stop[local]);
+        }
         state.Planes.Clip(ray, tin, tout);
         if (!(tin < tout))
         {
@@ -267,6 +169,10 @@ struct VolumeRayMarcher::Walker
           if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
           {
             visitor.Sample(local, k, t, scalar, s);
+            if (stops && progress.Add(local, t, s.Absorbance))
+            {
+              break; // opaque: what lies behind t cannot be seen
+            }
           }
         }
       }
@@ -281,11 +187,13 @@ struct VolumeRayMarcher::Walker
   {
     int64_t samples = 0;
     CellState state;
+    RayProgress progress;
+    progress.Begin(tile.Pixels(), this->OpaqueAbsorbance);
     const TileRect inBand = Shifted(tile, rowOffset);
     visitor.BeginTile(inBand);
     for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
     {
-      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state);
+      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state, progress);
     }
     visitor.EndTile(inBand);
     return samples;
@@ -382,7 +290,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   double farLimit = 0;
   this->Camera->DistanceRange(this->Mesh->GetBounds(), nearLimit, farLimit);
   const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
-    !this->Camera->IsParallel() };
+    !this->Camera->IsParallel(),
+    Visitor::StopsWhenOpaque ? this->FrameStop : std::numeric_limits<double>::infinity() };
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;
@@ -441,6 +350,9 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
     static_cast<size_t>(last));
   visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);
   this->OwnMomentsOrder = 0;
+  // Hybrid (keepOwn) promises the exact ordered blend of a rank's own samples: every sample
+  // is marched. Pass 2 stops where this pass did.
+  this->FrameStop = keepOwn ? std::numeric_limits<double>::infinity() : this->OpaqueAbsorbance;
   if (keepOwn && this->Camera)
   {
     const int height = this->Camera->GetHeight();

@@ -68,6 +68,19 @@ public:
   // Set it before a frame's passes: pass 2 replays pass 1's samples.
   void SetLatticeJitter(bool jitter) { this->LatticeJitter = jitter; }
 
+  // The MBOIT passes stop a ray once the absorbance of its samples on this mesh reaches this
+  // (and the tiles' cells are visited nearest first, so that happens early): a later sample
+  // behind all the samples summed so far has a transmittance below exp(-absorbance) whatever
+  // other meshes or ranks add in front of it, so it changes a pixel by less than that. Pass 2
+  // takes exactly pass 1's samples (it stops where pass 1 did). +inf marches every sample;
+  // exact and segment renders always do, and so does a pass 1 that keeps its own moments for
+  // Hybrid, whose own transmittance is exact.
+  void SetOpaqueAbsorbance(double absorbance) { this->OpaqueAbsorbance = absorbance; }
+  double GetOpaqueAbsorbance() const { return this->OpaqueAbsorbance; }
+  // ln 10^4: what a ray leaves unsampled is hidden behind a transmittance of at most 1e-4,
+  // far below one step of an 8-bit colour (1/255).
+  static constexpr double kDefaultOpaqueAbsorbance = 9.210340371976184;
+
   // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
   // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
   // the tiles beyond the budget are marched again. 0 disables. Default 1 GiB. Lowering it
@@ -136,6 +149,9 @@ private:
   double LastColourCacheShare = 0;
   int Threads = 0;
   bool LatticeJitter = false;
+  double OpaqueAbsorbance = kDefaultOpaqueAbsorbance;
+  // The stop of the last pass 1, which its pass 2 must use too.
+  double FrameStop = kDefaultOpaqueAbsorbance;
   int64_t LastSamples = 0;
 };
 

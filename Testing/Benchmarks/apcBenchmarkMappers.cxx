@@ -7,13 +7,21 @@
 //   apcBenchmarkMappers [--size N] [--quick] [--repeats N] [--datasets gear,wind,flange]
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
-//     [--no-images]
+//     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
+//
+// Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
+// pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
+// the resolved image's largest difference from the exact blend. --setup paraview renders as
+// ParaView does by default: a linear opacity ramp over the data range, a cool-to-warm colour
+// map, the opacity unit distance ParaView derives from the bounds (diagonal / cells^(1/3)) and
+// APC's default sample distance (bounding-box diagonal / 256).
 //
 // Run under an X server (xvfb-run); Testing/Benchmarks/run-benchmark.sh does everything.
 #include "vtkAPCPuzzleSource.h"
 #include "vtkAPCVolumeMapper.h"
 
 #include "apcImageMetrics.h"
+#include "apcSamplerTiming.h"
 #include "apcTestImages.h"
 #include "apcTestPuzzles.h"
 #include "apcTestScenes.h"
@@ -136,7 +144,10 @@ struct Options
   vtkIdType ZSweepMaxCells = 100000;
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
-  int Moments = 4; // APC's MBOIT moments
+  int Moments = 4;                 // APC's MBOIT moments
+  std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
+  double Dolly = 1.0;              // times the data set's own dolly
+  bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
 };
 
 // A shared scene (its Grid: the original cells, what APC renders) plus what VTK's mappers
@@ -170,6 +181,7 @@ struct Row
   double Samples = NAN;
   double RatioToBunyk = NAN;
   double Spacing = NAN;
+  apcbench::SamplerTiming Sampler; // mapper "sampler" only
   std::string Note;
   int BunykThreads = 0; // which Bunyk row the ratio refers to
 };
@@ -242,6 +254,26 @@ vtkSmartPointer<vtkUnstructuredGrid> KeepField(vtkUnstructuredGrid* in, const st
   return out;
 }
 
+// ParaView's default look for a freshly coloured volume: the cool-to-warm map and a linear
+// opacity ramp over the data range, the opacity unit distance of ParaView's
+// "approximate_cell_length" bounds domain and APC's default sample distance (0).
+void UseParaViewDefaults(MapperScene& scene)
+{
+  double range[2];
+  scene.Grid->GetPointData()->GetScalars()->GetRange(range);
+  const double mid = 0.5 * (range[0] + range[1]);
+  scene.TF.Colours = { { range[0], 0.23, 0.299, 0.754 }, { mid, 0.865, 0.865, 0.865 },
+    { range[1], 0.706, 0.016, 0.15 } };
+  scene.TF.Opacities = { { range[0], 0.0 }, { range[1], 1.0 } };
+  double b[6];
+  scene.Grid->GetBounds(b);
+  const double diagonal = std::sqrt(
+    (b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) + (b[5] - b[4]) * (b[5] - b[4]));
+  scene.TF.UnitDistance = diagonal / std::cbrt(static_cast<double>(scene.Grid->GetNumberOfCells()));
+  scene.SampleDistance = 0.0;
+  scene.Note += std::string(scene.Note.empty() ? "" : "; ") + "ParaView's default setup";
+}
+
 MapperScene MakeScene(const std::string& name, const Options& options, bool tetrahedra)
 {
   MapperScene scene;
@@ -309,6 +341,11 @@ MapperScene MakeScene(const std::string& name, const Options& options, bool tetr
     std::exit(2);
   }
   scene.SampleDistance = options.SpacingScale * MeanCellSize(scene.Grid);
+  scene.Dolly *= options.Dolly;
+  if (options.Setup == "paraview")
+  {
+    UseParaViewDefaults(scene);
+  }
 
   // Bunyk assumes tetrahedra and ZSweep reads only the first three points of every face, so
   // VTK's mappers get VTK's own tetrahedralisation; APC renders the original cells.
@@ -487,6 +524,13 @@ public:
       this->RunAPC(scene, vtkAPCVolumeMapper::MBOIT, maxThreads, true,
         scene.SampleDistance * apcSamples / bunykSamples, "mboit-matched");
     }
+    for (int threads : this->Opt.Threads)
+    {
+      if (this->Wants("sampler"))
+      {
+        this->RunSampler(scene, threads);
+      }
+    }
     if (this->Wants("zsweep"))
     {
       this->RunZSweep(scene);
@@ -520,7 +564,10 @@ public:
   static void WriteCsvHeader(std::ostream& out)
   {
     out << "dataset,cells,image,mapper,mode,threads,first_frame_s,frame_s,pass1_s,pass2_s,"
-           "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s\n";
+           "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
+           "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
+           "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
+           "mesh_s,finalize_s\n";
   }
 
   // Rows from index first on; written per data set so that a crash keeps what was measured.
@@ -536,7 +583,22 @@ public:
           << (std::isnan(row.Samples) ? "" : std::to_string(static_cast<int64_t>(row.Samples)))
           << ',' << Format(perSecond, 3) << ',' << Format(row.RatioToBunyk, 3) << ','
           << Quote(row.Note) << ',' << Format(row.Setup) << ',' << Format(row.Spacing) << ','
-          << Format(row.Cpu) << '\n';
+          << Format(row.Cpu) << ',';
+      const apcbench::SamplerTiming& s = row.Sampler;
+      if (s.Valid)
+      {
+        out << Format(s.Pass1NanosecondsPerSample()) << ',' << Format(s.Pass2NanosecondsPerSample())
+            << ',' << Format(s.HiddenShare()) << ',' << s.AllSamples << ',' << Format(s.CacheShare)
+            << ',' << Format(s.ErrorVsExact) << ',' << Format(s.StopChange) << ','
+            << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
+            << Format(s.WorseShare) << ',' << Format(s.MeshSeconds) << ','
+            << Format(s.FinalizeSeconds);
+      }
+      else
+      {
+        out << ",,,,,,,,,,,";
+      }
+      out << '\n';
     }
     out.flush();
   }
@@ -759,6 +821,44 @@ private:
     this->Rows.push_back(row);
   }
 
+  // The core marcher alone on this scene's mesh, camera and transfer function.
+  void RunSampler(const MapperScene& scene, int threads)
+  {
+    Row row =
+      NewRow(scene, scene.Grid->GetNumberOfCells(), "sampler", "mboit", std::to_string(threads));
+    row.BunykThreads = threads;
+    Stage stage(scene, this->Opt.Size, this->Opt.TimeCap);
+    vtkNew<vtkAPCVolumeMapper> mapper; // only for the camera's placement
+    mapper->SetInputData(scene.Grid);
+    stage.SetMapper(mapper, scene);
+    auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
+    const apcbench::SamplerTiming s = apcbench::TimeSampler(grid, stage.Renderer, stage.Property,
+      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare);
+    row.Sampler = s;
+    row.Pass1 = s.Pass1Seconds;
+    row.Pass2 = s.Pass2Seconds;
+    row.Frame = s.Pass1Seconds + s.Pass2Seconds;
+    row.Cpu = s.Pass1Cpu + s.Pass2Cpu;
+    row.Setup = s.ViewSeconds;
+    row.Samples = static_cast<double>(s.Samples);
+    row.Note = "core marcher alone: pass 1 + pass 2, CPU ns per sample; setup_s = binning";
+    if (!scene.Note.empty())
+    {
+      row.Note += "; " + scene.Note;
+    }
+    std::cerr << "   sampler threads " << threads << ": pass 1 "
+              << Format(s.Pass1NanosecondsPerSample()) << " ns/sample, pass 2 "
+              << Format(s.Pass2NanosecondsPerSample()) << " ns/sample, " << s.Samples
+              << " samples, hidden " << Format(s.HiddenShare()) << ", cached "
+              << Format(s.CacheShare) << ", error vs exact " << Format(s.ErrorVsExact)
+              << ", stop change " << Format(s.StopChange)
+              << " (pixels over 1/255: " << Format(s.StopChangeShare) << "), unstopped error "
+              << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
+              << ", mesh " << Format(s.MeshSeconds) << " s (finalize " << Format(s.FinalizeSeconds)
+              << " s), bin " << Format(s.ViewSeconds) << " s\n";
+    this->Rows.push_back(row);
+  }
+
   void RunZSweep(const MapperScene& scene)
   {
     Row row = NewRow(scene, scene.Tets->GetNumberOfCells(), "zsweep", "", "1");
@@ -874,7 +974,7 @@ void Usage()
                "  [--threads 1,2] [--zsweep-max-cells N] [--time-cap SECONDS] [--spacing-scale F] "
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
-               "  [--no-images]\n";
+               "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n";
 }
 
 } // namespace
@@ -953,6 +1053,18 @@ int main(int argc, char* argv[])
     else if (arg == "--spacing-scale")
     {
       options.SpacingScale = std::stod(value());
+    }
+    else if (arg == "--setup")
+    {
+      options.Setup = value();
+    }
+    else if (arg == "--no-compare")
+    {
+      options.Compare = false;
+    }
+    else if (arg == "--dolly")
+    {
+      options.Dolly = std::stod(value());
     }
     else if (arg == "--no-images")
     {

@@ -5,7 +5,8 @@
 // generated mesh starts on rank 0 only (the "one file" case), and the pieces are moved.
 //
 //   apcPartitionBenchmark [--mesh wind|tets|both] [--grid 50] [--k 2,4,8,16,64,256]
-//                         [--repeats 3] [--label-only] [--out file.csv]
+//                         [--repeats 3] [--label-only] [--partitioners metis,ptscotch]
+//                         [--out file.csv]
 // Not a test: run by Testing/Benchmarks/run-partition-benchmark.sh.
 
 #include "vtkAPCGraphPartition.h"
@@ -69,6 +70,8 @@ int main(int argc, char* argv[])
   int grid = 50, repeats = 3;
   bool labelOnly = false;
   std::vector<int> ks{ 2, 4, 8, 16, 64, 256 };
+  // METIS and PT-Scotch side by side in the same run (the machine is noisy).
+  std::vector<std::string> partitioners{ "metis", "ptscotch" };
   for (int i = 1; i < argc; ++i)
   {
     const std::string a = argv[i];
@@ -83,6 +86,16 @@ int main(int argc, char* argv[])
       labelOnly = true;
     else if (a == "--out")
       out = next();
+    else if (a == "--partitioners")
+    {
+      partitioners.clear();
+      std::stringstream list(next());
+      std::string item;
+      while (std::getline(list, item, ','))
+      {
+        partitioners.push_back(item);
+      }
+    }
     else if (a == "--k")
     {
       ks.clear();
@@ -95,6 +108,14 @@ int main(int argc, char* argv[])
     }
   }
 
+  std::vector<std::pair<std::string, int>> runs; // (partitioner, K)
+  for (const auto& partitioner : partitioners)
+  {
+    for (const int k : ks)
+    {
+      runs.emplace_back(partitioner, k);
+    }
+  }
   std::vector<std::pair<std::string, vtkSmartPointer<vtkUnstructuredGrid>>> meshes;
   if (mesh == "wind" || mesh == "both")
   {
@@ -113,15 +134,15 @@ int main(int argc, char* argv[])
     if (fresh)
     {
       std::fprintf(csv,
-        "mesh,cells,ranks,K,mode,graph_s,metis_s,move_s,total_s,cells_per_s,"
-        "edge_cut,imbalance\n");
+        "mesh,cells,ranks,K,mode,partitioner,graph_s,partition_s,move_s,total_s,"
+        "cells_per_s,edge_cut,imbalance\n");
     }
   }
   for (const auto& m : meshes)
   {
     vtkIdType local = m.second->GetNumberOfCells(), cells = 0;
     controller->AllReduce(&local, &cells, 1, vtkCommunicator::SUM_OP);
-    for (const int k : ks)
+    for (const auto& [partitioner, k] : runs)
     {
       // The fastest of the repeats: the machine is shared, the minimum is the least disturbed.
       double best[4] = { 1e300, 1e300, 1e300, 1e300 };
@@ -133,6 +154,9 @@ int main(int argc, char* argv[])
         partition->SetInputData(m.second);
         partition->SetNumberOfPartitions(k);
         partition->SetLabelOnly(labelOnly);
+        partition->SetPartitioner(partitioner == "metis" ? vtkAPCGraphPartition::METIS
+            : partitioner == "ptscotch"                  ? vtkAPCGraphPartition::PTSCOTCH
+                                                         : vtkAPCGraphPartition::AUTO);
         controller->Barrier();
         const auto start = std::chrono::steady_clock::now();
         partition->Update();
@@ -153,9 +177,10 @@ int main(int argc, char* argv[])
       controller->AllReduce(&best[2], &move, 1, vtkCommunicator::MAX_OP);
       if (csv)
       {
-        std::fprintf(csv, "%s,%lld,%d,%d,%s,%.4f,%.4f,%.4f,%.4f,%.0f,%lld,%.4f\n", m.first.c_str(),
-          static_cast<long long>(cells), ranks, k, labelOnly ? "label" : "move", best[0], best[1],
-          move, best[3], cells / best[3], static_cast<long long>(cut), imbalance);
+        std::fprintf(csv, "%s,%lld,%d,%d,%s,%s,%.4f,%.4f,%.4f,%.4f,%.0f,%lld,%.4f\n",
+          m.first.c_str(), static_cast<long long>(cells), ranks, k, labelOnly ? "label" : "move",
+          partitioner.c_str(), best[0], best[1], move, best[3], cells / best[3],
+          static_cast<long long>(cut), imbalance);
         std::fflush(csv);
       }
     }

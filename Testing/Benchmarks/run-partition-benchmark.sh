@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Speed of vtkAPCGraphPartition (Filters ▸ APC ▸ APC Graph Partition): builds, then runs
-# apcPartitionBenchmark on 1 rank (label only: graph + METIS) and, with RANKS="2 4", on more
+# apcPartitionBenchmark on 1 rank (label only: graph + partition) and, with RANKS="2 4", on more
 # ranks (the pieces moved too), for K = 2 4 8 16 64 256 on the wind data and a 625k-cell
-# tetrahedral mesh. Writes out/benchmark/partition.csv and prints it.
+# tetrahedral mesh, METIS and PT-Scotch side by side (--partitioners). Writes
+# out/benchmark/partition.csv and prints it.
 #
 # Arguments go to the program (e.g. --grid 58 --repeats 5 --k 2,16). Not a test: the times
 # need a quiet machine (the load average is printed before and after).

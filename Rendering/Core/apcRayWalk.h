@@ -1,0 +1,197 @@
+// The marcher's per-ray pieces (internal to apcVolumeRayMarcher.cpp): a ray's set-up, the
+// exact clipping of rays against a cell's face planes, the shared sample lattice, and how far
+// each ray of a tile has come towards opaque.
+#ifndef apcRayWalk_h
+#define apcRayWalk_h
+
+#include "apcCellMesh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+namespace apc
+{
+namespace walk
+{
+
+// Pixels of a tile (VolumeRayMarcher::kTileSize squared; the marcher checks).
+constexpr int kTilePixels = 16 * 16;
+
+struct RaySetup
+{
+  double O[3];
+  double D[3];
+  double End;
+  double Offset; // the ray's lattice offset, in units of the spacing: 0, or apcLatticeJitter
+};
+
+// True for exactly one of n and -n (n non-zero): the first non-zero component is positive.
+inline bool InPositiveHalf(const std::array<float, 3>& n)
+{
+  return n[0] != 0 ? n[0] > 0 : (n[1] != 0 ? n[1] > 0 : n[2] > 0);
+}
+
+// A cell's face planes, set up once per cell and tile. Every ray of a perspective camera
+// starts at the eye, so each plane's distance from it is computed here once, not per ray
+// (with the same expression, so the numbers are the ones a per-ray evaluation gives).
+struct CellPlanes
+{
+  static constexpr int kMaxPlanes = 6;
+  int Count = 0;
+  bool SharedOrigin = false;
+  double N[kMaxPlanes][3];
+  double Offset[kMaxPlanes];
+  double Num[kMaxPlanes];
+  bool KeepsParallelRays[kMaxPlanes];
+
+  void Set(const FacePlane* planes, int count, const RaySetup& anyRay, bool sharedOrigin)
+  {
+    this->Count = std::min(count, kMaxPlanes);
+    this->SharedOrigin = sharedOrigin;
+    for (int p = 0; p < this->Count; ++p)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        this->N[p][d] = planes[p].Normal[d];
+      }
+      this->Offset[p] = planes[p].Offset;
+      this->KeepsParallelRays[p] = InPositiveHalf(planes[p].Normal);
+      if (sharedOrigin)
+      {
+        this->Num[p] = this->Numerator(p, anyRay);
+      }
+    }
+  }
+  double Numerator(int p, const RaySetup& ray) const
+  {
+    return this->Offset[p] -
+      (this->N[p][0] * ray.O[0] + this->N[p][1] * ray.O[1] + this->N[p][2] * ray.O[2]);
+  }
+
+  // Clips a ray against the planes: [tin, tout) is the part inside the cell. Every cell
+  // evaluates a shared face with the same numbers (up to an exact sign flip), so the
+  // intervals of neighbours meet exactly.
+  void Clip(const RaySetup& ray, double& tin, double& tout) const
+  {
+    for (int p = 0; p < this->Count && tin < tout; ++p)
+    {
+      const double denom =
+        this->N[p][0] * ray.D[0] + this->N[p][1] * ray.D[1] + this->N[p][2] * ray.D[2];
+      const double num = this->SharedOrigin ? this->Num[p] : this->Numerator(p, ray);
+      if (denom < 0)
+      {
+        tin = std::max(tin, num / denom);
+      }
+      else if (denom > 0)
+      {
+        tout = std::min(tout, num / denom);
+      }
+      else if (num < 0 || (num == 0 && !this->KeepsParallelRays[p]))
+      {
+        // The ray is outside this plane, or runs inside it. A plane shared by two cells
+        // appears in both with exactly opposite normals, so letting only the copy whose
+        // normal points into the "positive" half-space keep such a ray gives it to exactly
+        // one cell.
+        tout = -std::numeric_limits<double>::infinity();
+      }
+    }
+  }
+};
+
+// Scalars need about single precision: 1e-7 in parametric units is ample and saves Newton
+// steps on distorted cells.
+constexpr double kSampleTolerance = 1e-7;
+
+// The lattice t_k = (k + offset) * spacing of one ray (offset 0 unless jittered). A sample
+// belongs to the cell whose [tin, tout) holds the rounded value, so the first index of an
+// interval must be the smallest k whose value is >= tin, exactly; a quotient only gives a
+// first guess, which rounding can leave one off in either direction. Every cell computes
+// t_k with the same expression, so neighbours agree on which of them takes a sample.
+struct Lattice
+{
+  double Spacing;
+  double InverseSpacing;
+
+  explicit Lattice(double spacing)
+    : Spacing(spacing)
+    , InverseSpacing(1.0 / spacing)
+  {
+  }
+  double At(int64_t k, double offset) const
+  {
+    return (static_cast<double>(k) + offset) * this->Spacing;
+  }
+  int64_t First(double t, double offset) const
+  {
+    int64_t k = static_cast<int64_t>(std::ceil(t * this->InverseSpacing - offset));
+    while (this->At(k - 1, offset) >= t)
+    {
+      --k;
+    }
+    while (this->At(k, offset) < t)
+    {
+      ++k;
+    }
+    return k;
+  }
+};
+
+//------------------------------------------------------------------------------
+// How far each ray of a tile has come: the absorbance its samples have added, the largest t
+// among them, and once that absorbance reaches the opaque threshold, the t behind which it
+// takes no more samples. Every sample behind Stop lies behind all the samples summed so far,
+// so its transmittance is at most exp(-threshold) (see SetOpaqueAbsorbance). The walker keeps
+// this, not the visitor, so that pass 1 and a pass 2 that marches a tile again make the same
+// decisions from the same samples in the same order.
+struct RayProgress
+{
+  static constexpr int kPixels = kTilePixels;
+  double Threshold = std::numeric_limits<double>::infinity();
+  double Absorbance[kPixels];
+  double Far[kPixels];
+  double Stop[kPixels];
+  // Once every pixel of the tile is opaque, the largest Stop: a cell nearer than none of them
+  // is skipped without looking at its rays.
+  double TileStop = std::numeric_limits<double>::infinity();
+  int Pixels = 0;
+  int Open = 0; // pixels not yet opaque
+
+  void Begin(int pixels, double threshold)
+  {
+    this->Threshold = threshold;
+    this->Pixels = pixels;
+    this->Open = pixels;
+    this->TileStop = std::numeric_limits<double>::infinity();
+    for (int p = 0; p < pixels; ++p)
+    {
+      this->Absorbance[p] = 0;
+      this->Far[p] = -std::numeric_limits<double>::infinity();
+      this->Stop[p] = std::numeric_limits<double>::infinity();
+    }
+  }
+  // Adds a sample at t; true if it made the ray opaque (nothing behind t is taken).
+  bool Add(int p, double t, double absorbance)
+  {
+    this->Absorbance[p] += absorbance;
+    this->Far[p] = std::max(this->Far[p], t);
+    if (!(this->Absorbance[p] >= this->Threshold) ||
+      this->Stop[p] < std::numeric_limits<double>::infinity())
+    {
+      return false;
+    }
+    this->Stop[p] = this->Far[p];
+    if (--this->Open == 0)
+    {
+      this->TileStop = *std::max_element(this->Stop, this->Stop + this->Pixels);
+    }
+    return true;
+  }
+};
+
+} // namespace walk
+} // namespace apc
+
+#endif

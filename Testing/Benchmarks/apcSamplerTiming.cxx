@@ -1,0 +1,286 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "apcSamplerTiming.h"
+
+#include "apcCellMesh.h"
+#include "apcCellMeshFromVTK.h"
+#include "apcDepthWarp.h"
+#include "apcRayCamera.h"
+#include "apcResolve.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
+
+#include "vtkCamera.h"
+#include "vtkColorTransferFunction.h"
+#include "vtkPiecewiseFunction.h"
+#include "vtkPointData.h"
+#include "vtkRenderer.h"
+#include "vtkUnstructuredGrid.h"
+#include "vtkVolumeProperty.h"
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <iostream>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace apcbench
+{
+namespace
+{
+
+double CpuSeconds()
+{
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+double WallSeconds()
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double Median(std::vector<double> values)
+{
+  if (values.empty())
+  {
+    return NAN;
+  }
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+// The marcher's opaque stop, where it has one: this benchmark also builds against the code
+// from before it existed.
+template <class M, class = void>
+struct CanStop : std::false_type
+{
+};
+template <class M>
+struct CanStop<M, std::void_t<decltype(std::declval<M&>().SetOpaqueAbsorbance(1.0))>>
+  : std::true_type
+{
+};
+template <class M>
+bool SetStop(M& marcher, double absorbance)
+{
+  if constexpr (CanStop<M>::value)
+  {
+    marcher.SetOpaqueAbsorbance(absorbance);
+    return true;
+  }
+  else
+  {
+    (void)marcher;
+    (void)absorbance;
+    return false;
+  }
+}
+template <class M>
+double GetStop(const M& marcher)
+{
+  if constexpr (CanStop<M>::value)
+  {
+    return marcher.GetOpaqueAbsorbance();
+  }
+  else
+  {
+    (void)marcher;
+    return std::numeric_limits<double>::infinity();
+  }
+}
+
+// The same table the mapper builds (apcFrameInputsFromVTK.cxx): colour and opacity sampled
+// over the union of their ranges, 1024 entries.
+apc::TransferTable MakeTable(vtkVolumeProperty* property, double spacing)
+{
+  constexpr int kEntries = 1024;
+  vtkPiecewiseFunction* opacity = property->GetScalarOpacity(0);
+  vtkColorTransferFunction* colour = property->GetRGBTransferFunction(0);
+  double range[2];
+  opacity->GetRange(range);
+  range[0] = std::min(range[0], colour->GetRange()[0]);
+  range[1] = std::max(range[1], colour->GetRange()[1]);
+  std::vector<double> rgb(3 * kEntries);
+  colour->GetTable(range[0], range[1], kEntries, rgb.data());
+  std::vector<std::array<float, 3>> colours(kEntries);
+  for (int i = 0; i < kEntries; ++i)
+  {
+    colours[i] = { static_cast<float>(rgb[3 * i]), static_cast<float>(rgb[3 * i + 1]),
+      static_cast<float>(rgb[3 * i + 2]) };
+  }
+  std::vector<double> alphas(kEntries);
+  opacity->GetTable(range[0], range[1], kEntries, alphas.data());
+  return apc::TransferTable(
+    range[0], range[1], colours, alphas, spacing, property->GetScalarOpacityUnitDistance(0));
+}
+
+apc::RayCamera MakeCamera(vtkRenderer* renderer, int size)
+{
+  vtkCamera* camera = renderer->GetActiveCamera();
+  double clip[2];
+  camera->GetClippingRange(clip);
+  const double* p = camera->GetPosition();
+  const double* f = camera->GetFocalPoint();
+  const double* u = camera->GetViewUp();
+  return apc::RayCamera({ p[0], p[1], p[2] }, { f[0], f[1], f[2] }, { u[0], u[1], u[2] },
+    camera->GetViewAngle(), camera->GetParallelProjection() != 0, camera->GetParallelScale(), size,
+    size, clip[0], clip[1]);
+}
+
+// Share of pixels (RGBA each) with a channel that differs by more than limit.
+double ShareOver(const std::vector<float>& a, const std::vector<float>& b, double limit)
+{
+  size_t over = 0;
+  for (size_t p = 0; p + 3 < a.size(); p += 4)
+  {
+    bool differs = false;
+    for (size_t c = p; c < p + 4; ++c)
+    {
+      differs = differs || std::abs(a[c] - b[c]) > limit;
+    }
+    over += differs ? 1 : 0;
+  }
+  return a.empty() ? 0.0 : static_cast<double>(over) / (a.size() / 4);
+}
+
+double MaxDifference(const std::vector<float>& a, const std::vector<float>& b)
+{
+  double worst = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+  {
+    worst = std::max(worst, static_cast<double>(std::abs(a[i] - b[i])));
+  }
+  return worst;
+}
+
+// Share of pixels where a is farther from reference than b by more than limit (any channel).
+double ShareWorse(const std::vector<float>& a, const std::vector<float>& b,
+  const std::vector<float>& reference, double limit)
+{
+  size_t worse = 0;
+  for (size_t p = 0; p + 3 < a.size(); p += 4)
+  {
+    bool differs = false;
+    for (size_t c = p; c < p + 4; ++c)
+    {
+      differs = differs || std::abs(a[c] - reference[c]) > std::abs(b[c] - reference[c]) + limit;
+    }
+    worse += differs ? 1 : 0;
+  }
+  return a.empty() ? 0.0 : static_cast<double>(worse) / (a.size() / 4);
+}
+
+// One MBOIT frame's resolved premultiplied RGBA (pass 1, pass 2, resolve); samples: pass 1's.
+std::vector<float> MboitImage(apc::VolumeRayMarcher& marcher, const apc::TransferTable& table,
+  const apc::LogDepthWarp& warp, size_t pixels, int64_t& samples)
+{
+  std::vector<double> moments(pixels * 5, 0.0);
+  std::vector<double> sums(pixels * 4, 0.0);
+  marcher.AccumulateMoments<4>(table, warp, moments.data());
+  samples = marcher.GetLastSampleCount();
+  marcher.AccumulateColour<4>(table, warp, moments.data(), apc::MomentSettings<4>(), sums.data());
+  std::vector<float> rgba(pixels * 4);
+  apc::ResolveImage(
+    apc::ResolveMode::Renormalised, pixels, moments.data(), 5, sums.data(), rgba.data());
+  return rgba;
+}
+}
+
+SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
+  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare)
+{
+  SamplerTiming result;
+  apc::CellMesh mesh;
+  std::string message;
+  double start = WallSeconds();
+  if (!apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, message))
+  {
+    std::cerr << "   sampler: " << message << "\n";
+    return result;
+  }
+  result.MeshSeconds = WallSeconds() - start;
+  start = WallSeconds();
+  mesh.Finalize();
+  result.FinalizeSeconds = WallSeconds() - start;
+  result.Cells = mesh.GetNumberOfCells();
+  const auto& b = mesh.GetBounds();
+  if (!(spacing > 0))
+  {
+    spacing = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
+                (b[5] - b[4]) * (b[5] - b[4])) /
+      256.0;
+  }
+  const apc::TransferTable table = MakeTable(property, spacing);
+  const apc::RayCamera camera = MakeCamera(renderer, size);
+  double tmin = 0;
+  double tmax = 0;
+  camera.DistanceRange(b, tmin, tmax);
+  const apc::LogDepthWarp warp(tmin, tmax);
+  const size_t pixels = static_cast<size_t>(size) * size;
+
+  apc::VolumeRayMarcher marcher;
+  marcher.SetNumberOfThreads(threads);
+  marcher.SetMesh(&mesh);
+  std::vector<double> view, pass1, pass2, cpu1, cpu2;
+  std::vector<double> moments(pixels * 5);
+  std::vector<double> sums(pixels * 4);
+  for (int r = 0; r < repeats; ++r)
+  {
+    double wall = WallSeconds();
+    marcher.SetView(camera, nullptr);
+    view.push_back(WallSeconds() - wall);
+    std::fill(moments.begin(), moments.end(), 0.0);
+    std::fill(sums.begin(), sums.end(), 0.0);
+    double cpu = CpuSeconds();
+    wall = WallSeconds();
+    marcher.AccumulateMoments<4>(table, warp, moments.data());
+    pass1.push_back(WallSeconds() - wall);
+    cpu1.push_back(CpuSeconds() - cpu);
+    result.Samples = marcher.GetLastSampleCount();
+    cpu = CpuSeconds();
+    wall = WallSeconds();
+    marcher.AccumulateColour<4>(table, warp, moments.data(), apc::MomentSettings<4>(), sums.data());
+    pass2.push_back(WallSeconds() - wall);
+    cpu2.push_back(CpuSeconds() - cpu);
+    result.CacheShare = marcher.GetLastColourCacheShare();
+    result.Pass2Samples = marcher.GetLastSampleCount();
+  }
+  result.ViewSeconds = Median(view);
+  result.Pass1Seconds = Median(pass1);
+  result.Pass2Seconds = Median(pass2);
+  result.Pass1Cpu = Median(cpu1);
+  result.Pass2Cpu = Median(cpu2);
+  result.AllSamples = result.Samples;
+  result.Valid = true;
+  if (!compare)
+  {
+    return result;
+  }
+  int64_t samples = 0;
+  const std::vector<float> stopped = MboitImage(marcher, table, warp, pixels, samples);
+  std::vector<float> exact(pixels * 4, 0.0f);
+  marcher.RenderExact(table, exact.data());
+  result.ErrorVsExact = MaxDifference(stopped, exact);
+  result.ErrorVsExactAll = result.ErrorVsExact;
+  result.StopChange = 0;
+  result.StopChangeShare = 0;
+  result.WorseShare = 0;
+  const double stop = GetStop(marcher);
+  if (SetStop(marcher, std::numeric_limits<double>::infinity()))
+  {
+    const std::vector<float> all = MboitImage(marcher, table, warp, pixels, result.AllSamples);
+    result.StopChange = MaxDifference(stopped, all);
+    result.StopChangeShare = ShareOver(stopped, all, 1.0 / 255);
+    result.ErrorVsExactAll = MaxDifference(all, exact);
+    result.WorseShare = ShareWorse(stopped, all, exact, 1.0 / 255);
+    SetStop(marcher, stop);
+  }
+  return result;
+}
+
+} // namespace apcbench

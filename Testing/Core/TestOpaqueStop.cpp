@@ -1,0 +1,260 @@
+// The MBOIT passes stop a ray once its own absorbance reaches the opaque threshold
+// (VolumeRayMarcher::SetOpaqueAbsorbance). Checked on a thick, nearly opaque block of
+// distorted hexahedra against the exact ordered blend of every sample: samples are skipped,
+// the opacity stays within exp(-threshold) of the exact one, no pixel moves farther from the
+// exact image than 1/255 beyond where marching every sample leaves it, pass 2 takes exactly
+// pass 1's samples whether it replays them or marches again, and the block cut in two meshes
+// (two ranks, interleaved cells) keeps the same bounds.
+#include "apcCellMesh.h"
+#include "apcDepthWarp.h"
+#include "apcRayCamera.h"
+#include "apcResolve.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace
+{
+constexpr int kSize = 48;
+constexpr size_t kPixels = static_cast<size_t>(kSize) * kSize;
+constexpr int kCells = 8; // per side
+
+// Corner points of an n^3 block over [-1,1]^3, interior points moved by up to a tenth of a
+// cell (non-affine hexahedra, as in real meshes), scalars varying along every axis.
+void Block(std::vector<std::array<double, 3>>& points, std::vector<float>& scalars)
+{
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.1, 0.1);
+  const double h = 2.0 / kCells;
+  for (int k = 0; k <= kCells; ++k)
+  {
+    for (int j = 0; j <= kCells; ++j)
+    {
+      for (int i = 0; i <= kCells; ++i)
+      {
+        const bool inner = i > 0 && i < kCells && j > 0 && j < kCells && k > 0 && k < kCells;
+        std::array<double, 3> x = { -1 + i * h, -1 + j * h, -1 + k * h };
+        for (double& c : x)
+        {
+          c += inner ? jitter(rng) * h : 0.0;
+        }
+        points.push_back(x);
+        scalars.push_back(
+          static_cast<float>(0.5 + 0.3 * std::sin(2 * x[0]) * std::cos(3 * x[2]) + 0.15 * x[1]));
+      }
+    }
+  }
+}
+
+// The block's cells, all of them (part < 0) or those of one of two interleaved parts.
+apc::CellMesh BlockMesh(int part)
+{
+  apc::CellMesh mesh;
+  Block(mesh.Points, mesh.PointScalars);
+  auto id = [](int i, int j, int k)
+  { return static_cast<int64_t>((k * (kCells + 1) + j) * (kCells + 1) + i); };
+  for (int k = 0; k < kCells; ++k)
+  {
+    for (int j = 0; j < kCells; ++j)
+    {
+      for (int i = 0; i < kCells; ++i)
+      {
+        if (part >= 0 && (i + j + k) % 2 != part)
+        {
+          continue;
+        }
+        const int64_t ids[8] = { id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k),
+          id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1) };
+        mesh.AddCell(apc::CellShape::Hexahedron, ids);
+      }
+    }
+  }
+  EXPECT_TRUE(mesh.Finalize());
+  return mesh;
+}
+
+// Seen obliquely: rays cross 2-3 units of the block, about 30 absorbance units each.
+apc::RayCamera Camera()
+{
+  return apc::RayCamera(
+    { 1.2, 0.9, 4.0 }, { 0, 0, 0 }, { 0, 1, 0 }, 40.0, false, 1.0, kSize, kSize, 0.1, 20.0);
+}
+
+apc::TransferTable Table()
+{
+  std::vector<std::array<float, 3>> colours = { { 0.1f, 0.2f, 0.9f }, { 0.9f, 0.9f, 0.9f },
+    { 0.9f, 0.1f, 0.1f } };
+  std::vector<double> opacities = { 0.3, 0.6, 0.9 };
+  return apc::TransferTable(0.0, 1.0, colours, opacities, 0.02, 0.1);
+}
+
+struct Frame
+{
+  std::vector<double> Moments = std::vector<double>(kPixels * 5, 0.0);
+  std::vector<double> Sums = std::vector<double>(kPixels * 4, 0.0);
+  int64_t Pass1Samples = 0;
+  int64_t Pass2Samples = 0;
+
+  std::vector<float> Image() const
+  {
+    std::vector<float> rgba(kPixels * 4);
+    apc::ResolveImage(apc::ResolveMode::Renormalised, kPixels, this->Moments.data(), 5,
+      this->Sums.data(), rgba.data());
+    return rgba;
+  }
+};
+
+struct Scene
+{
+  apc::TransferTable TF = Table();
+  apc::RayCamera View = Camera();
+  apc::LogDepthWarp Warp = apc::LogDepthWarp(2.0, 7.5);
+};
+
+// Pass 1 of every mesh, then pass 2 of every mesh with the summed moments (ranks).
+Frame Render(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers)
+{
+  Frame frame;
+  for (auto* marcher : marchers)
+  {
+    marcher->SetView(scene.View, nullptr);
+    marcher->AccumulateMoments<4>(scene.TF, scene.Warp, frame.Moments.data());
+    frame.Pass1Samples += marcher->GetLastSampleCount();
+  }
+  for (auto* marcher : marchers)
+  {
+    marcher->AccumulateColour<4>(
+      scene.TF, scene.Warp, frame.Moments.data(), apc::MomentSettings<4>(), frame.Sums.data());
+    frame.Pass2Samples += marcher->GetLastSampleCount();
+  }
+  return frame;
+}
+
+std::vector<float> Exact(const Scene& scene, apc::VolumeRayMarcher& marcher)
+{
+  std::vector<float> rgba(kPixels * 4, 0.0f);
+  marcher.SetView(scene.View, nullptr);
+  marcher.RenderExact(scene.TF, rgba.data());
+  return rgba;
+}
+
+// What stopping may change: the opacity by at most exp(-threshold) (plus float rounding),
+// and no channel farther from the exact blend than the unstopped image is by more than 1/255.
+void ExpectWithinBound(const std::vector<float>& stopped, const std::vector<float>& unstopped,
+  const std::vector<float>& exact, const char* what)
+{
+  const double opacityBound = std::exp(-apc::VolumeRayMarcher::kDefaultOpaqueAbsorbance) + 1e-6;
+  int covered = 0;
+  for (size_t p = 0; p < kPixels; ++p)
+  {
+    covered += exact[4 * p + 3] > 0.99 ? 1 : 0;
+    ASSERT_NEAR(stopped[4 * p + 3], exact[4 * p + 3], opacityBound) << what << " pixel " << p;
+    for (int c = 0; c < 4; ++c)
+    {
+      const size_t i = 4 * p + c;
+      ASSERT_LE(std::abs(stopped[i] - exact[i]), std::abs(unstopped[i] - exact[i]) + 1.0 / 255)
+        << what << " pixel " << p << " channel " << c;
+    }
+  }
+  EXPECT_GT(covered, static_cast<int>(kPixels / 3)) << "the block should be opaque where seen";
+}
+}
+
+TEST(OpaqueStop, SkipsWhatIsHiddenWithinBound)
+{
+  const Scene scene;
+  const apc::CellMesh mesh = BlockMesh(-1);
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  ASSERT_EQ(marcher.GetOpaqueAbsorbance(), apc::VolumeRayMarcher::kDefaultOpaqueAbsorbance);
+  const Frame stopped = Render(scene, { &marcher });
+  marcher.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
+  const Frame all = Render(scene, { &marcher });
+  const std::vector<float> exact = Exact(scene, marcher);
+  EXPECT_EQ(all.Pass1Samples, marcher.GetLastSampleCount()) << "every sample without the stop";
+  // Rays through the middle cross ~20 absorbance units and stop at ~9.2; rays near the edges
+  // cross less: about half of the samples are left out.
+  EXPECT_GT(all.Pass1Samples, 0);
+  EXPECT_LT(stopped.Pass1Samples, 0.7 * all.Pass1Samples);
+  ExpectWithinBound(stopped.Image(), all.Image(), exact, "one mesh");
+}
+
+TEST(OpaqueStop, PassTwoTakesPassOnesSamples)
+{
+  const Scene scene;
+  const apc::CellMesh mesh = BlockMesh(-1);
+  apc::VolumeRayMarcher cached;
+  cached.SetMesh(&mesh);
+  apc::VolumeRayMarcher marched;
+  marched.SetMesh(&mesh);
+  marched.SetMaxSampleCacheBytes(0); // pass 2 clips and interpolates again
+  const Frame replay = Render(scene, { &cached });
+  const Frame again = Render(scene, { &marched });
+  ASSERT_EQ(cached.GetLastColourCacheShare(), 1.0);
+  ASSERT_EQ(marched.GetLastColourCacheShare(), 0.0);
+  // The same samples in both passes: pass 1's moments are bit for bit the same, and pass 2
+  // marched again stops where pass 1 did (the visible samples it weights are the ones the
+  // cache replays; the cache keeps depths and scalars as floats, hence the tolerance).
+  EXPECT_EQ(replay.Moments, again.Moments);
+  EXPECT_EQ(replay.Pass1Samples, again.Pass2Samples);
+  for (size_t i = 0; i < replay.Sums.size(); ++i)
+  {
+    ASSERT_NEAR(replay.Sums[i], again.Sums[i], 1e-5 * (1 + std::abs(again.Sums[i]))) << i;
+  }
+}
+
+TEST(OpaqueStop, TwoMeshesKeepTheBound)
+{
+  const Scene scene;
+  const apc::CellMesh whole = BlockMesh(-1);
+  const apc::CellMesh even = BlockMesh(0);
+  const apc::CellMesh odd = BlockMesh(1);
+  apc::VolumeRayMarcher a;
+  apc::VolumeRayMarcher b;
+  a.SetMesh(&even);
+  b.SetMesh(&odd);
+  const Frame stopped = Render(scene, { &a, &b });
+  a.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
+  b.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
+  const Frame all = Render(scene, { &a, &b });
+  apc::VolumeRayMarcher one;
+  one.SetMesh(&whole);
+  const std::vector<float> exact = Exact(scene, one);
+  // Each mesh stops on its own absorbance, a part of the ray's: fewer samples are skipped
+  // than with one mesh, but some are.
+  EXPECT_LT(stopped.Pass1Samples, all.Pass1Samples);
+  ExpectWithinBound(stopped.Image(), all.Image(), exact, "two meshes");
+}
+
+TEST(OpaqueStop, HybridMarchesEverySample)
+{
+  // Hybrid's own transmittance is the exact ordered product of a rank's samples: a pass 1
+  // that keeps its own moments takes every sample, and its pass 2 too.
+  const Scene scene;
+  const apc::CellMesh mesh = BlockMesh(-1);
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  marcher.SetView(scene.View, nullptr);
+  std::vector<double> moments(kPixels * 5, 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data(), true);
+  const int64_t hybrid = marcher.GetLastSampleCount();
+  std::vector<double> sums(kPixels * 4, 0.0);
+  marcher.AccumulateColour<4>(
+    scene.TF, scene.Warp, moments.data(), apc::MomentSettings<4>(), sums.data(), true);
+  EXPECT_EQ(marcher.GetLastSampleCount(), hybrid);
+  std::fill(moments.begin(), moments.end(), 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data());
+  const int64_t stopped = marcher.GetLastSampleCount();
+  marcher.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
+  std::fill(moments.begin(), moments.end(), 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data());
+  EXPECT_EQ(hybrid, marcher.GetLastSampleCount());
+  EXPECT_LT(stopped, hybrid);
+}
