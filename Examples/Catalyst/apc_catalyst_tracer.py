@@ -60,6 +60,17 @@ options.ExtractsOutputDirectory = OUTPUT
 label = Text(registrationName="label")
 
 
+def show_walls():
+    context = Show(walls, view, "GeometryRepresentation")
+    context.Representation = "Surface"
+    ColorBy(context, ("CELLS", "patch"))
+    patch = GetColorTransferFunction("patch")
+    patch.RGBPoints = [0.0, 0.30, 0.31, 0.30, 1.0, 0.82, 0.80, 0.76]
+    patch.AutomaticRescaleRangeMode = "Never"
+    patch.RescaleTransferFunction(0.0, 1.0)
+    context.SetScalarBarVisibility(view, False)
+
+
 def show_once():
     """Displays need data to colour by: set up at the first step that brings some."""
     # The representation type named: every rank runs this on its own data, and a rank that
@@ -85,14 +96,10 @@ def show_once():
     bar.Title = "tracer"
     bar.ComponentTitle = ""
 
-    context = Show(walls, view, "GeometryRepresentation")
-    context.Representation = "Surface"
-    ColorBy(context, ("CELLS", "patch"))
-    patch = GetColorTransferFunction("patch")
-    patch.RGBPoints = [0.0, 0.30, 0.31, 0.30, 1.0, 0.82, 0.80, 0.76]
-    patch.AutomaticRescaleRangeMode = "Never"
-    patch.RescaleTransferFunction(0.0, 1.0)
-    context.SetScalarBarVisibility(view, False)
+    # The walls only if the adaptor offers that channel (the same answer on every rank: a
+    # channel handed over has a data type even where it is empty).
+    if walls.GetDataInformation().GetDataClassName() not in (None, "", "vtkDataObject"):
+        show_walls()
 
     text = Show(label, view)
     text.WindowLocation = "Upper Left Corner"

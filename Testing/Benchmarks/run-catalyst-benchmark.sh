@@ -33,8 +33,11 @@ for n in ${APC_INSITU_RANKS:-1 2 4}; do
       "$top/build/bin/apcCatalystMiniApp" \
       --script "$top/Examples/Catalyst/apc_catalyst_tracer.py" --steps "$steps" --every "$every" \
       --size $size --representation "$rep" --output "$work/${tag}_np$n" --csv "$csv" \
-      >"$out/${tag}_np$n.log" 2>&1
-    grep -E "^step|peak memory|apcCatalystMiniApp" "$out/${tag}_np$n.log"
+      >"$work/${tag}_np$n.log" 2>&1 || true
+    # The mini-app's own lines (ParaView's log lines stay in the work folder).
+    grep -E "^step|peak memory|apcCatalystMiniApp|APC stages" "$work/${tag}_np$n.log" \
+      >"$out/${tag}_np$n.log" || true
+    cat "$out/${tag}_np$n.log"
     cp "$(ls "$work/${tag}_np$n"/tracer_*.png | tail -n 1)" "$out/${tag}_np$n.png"
   done
 done
