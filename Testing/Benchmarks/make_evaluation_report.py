@@ -67,13 +67,15 @@ def table(header, rows):
 
 
 def mapper_defaults():
-    """The mapper's defaults, read from the code so the report cannot drift from it."""
-    text = open(os.path.join(TOP, "Rendering", "vtkAPCVolumeMapper.h")).read()
+    """The mapper's defaults (apc::MomentParameters, which the mapper's settings hold), read
+    from the code so the report cannot drift from it; the resolve as the mapper names it."""
+    text = open(os.path.join(TOP, "Rendering", "Core", "apcMomentParameters.h")).read()
     core = open(os.path.join(TOP, "Rendering", "Core", "apcMomentTransmittance.h")).read()
-    moments = int(re.search(r"int NumberOfMoments = (\d+);", text).group(1))
+    moments = int(re.search(r"int Moments = (\d+);", text).group(1))
     beta = float(re.search(r"double kDefaultOverestimation = ([0-9.]+);", core).group(1))
-    resolve = re.search(r"int ResolveMode = (\w+);", text).group(1)
-    return beta, moments, resolve
+    resolve = re.search(r"ResolveMode Resolve = ResolveMode::(\w+);", text).group(1)
+    names = {"Renormalised": "RENORMALISED", "PaperSum": "PAPER_SUM", "Hybrid": "HYBRID"}
+    return beta, moments, names[resolve]
 
 
 class Report:
