@@ -1,9 +1,19 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "apcCompositeFrame.h"
 
+#include "apcFrameEngine.h"
+
+#include "vtkAbstractVolumeMapper.h"
+#include "vtkCommunicator.h"
+#include "vtkFloatArray.h"
 #include "vtkMultiProcessController.h"
+#include "vtkRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkVolume.h"
 
 #include <algorithm>
+#include <string>
+#include <vector>
 
 namespace apc
 {
@@ -17,6 +27,111 @@ ProcessGroup::ProcessGroup(vtkMultiProcessController* controller, int displayPro
     this->Processes = controller->GetNumberOfProcesses();
     this->Rank = controller->GetLocalProcessId();
     this->Display = std::min(displayProcess, this->Processes - 1);
+  }
+}
+
+std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& frame,
+  vtkFloatArray* delegateDepth, FrameRecord& record)
+{
+  const bool composited = frame.Settings.DisplayDepthComposited;
+  std::vector<float> depth(frame.RectPixels(), 1.0f);
+  const ScreenRect& rect = frame.Rect;
+  if (rect.Pixels() == 0)
+  {
+    return depth;
+  }
+  if (group.IsDisplay() || !composited)
+  {
+    // The viewport pixels under the rectangle; an image pixel of a reduced frame takes the
+    // nearest of those it covers (its ray stops at the nearest opaque surface in its
+    // footprint). At full resolution that is the window's depth, unchanged.
+    const int r = frame.Reduction();
+    const int i0 = rect.I0 * r;
+    const int j0 = rect.J0 * r;
+    const int i1 = std::min(frame.ViewWidth, rect.I1 * r);
+    const int j1 = std::min(frame.ViewHeight, rect.J1 * r);
+    std::vector<float> packed(static_cast<size_t>(i1 - i0) * (j1 - j0));
+    if (delegateDepth && group.IsDisplay() && composited &&
+      delegateDepth->GetNumberOfTuples() ==
+        static_cast<vtkIdType>(frame.ViewWidth) * frame.ViewHeight)
+    {
+      const float* z = delegateDepth->GetPointer(0);
+      for (int j = j0; j < j1; ++j)
+      {
+        std::copy_n(z + static_cast<size_t>(j) * frame.ViewWidth + i0, i1 - i0,
+          &packed[static_cast<size_t>(j - j0) * (i1 - i0)]);
+      }
+    }
+    else
+    {
+      frame.Renderer->GetRenderWindow()->GetZbufferData(
+        frame.X0 + i0, frame.Y0 + j0, frame.X0 + i1 - 1, frame.Y0 + j1 - 1, packed.data());
+    }
+    for (int j = j0; j < j1; ++j)
+    {
+      for (int i = i0; i < i1; ++i)
+      {
+        float& d = depth[static_cast<size_t>(j / r - rect.J0) * rect.Width() + (i / r - rect.I0)];
+        d = std::min(d, packed[static_cast<size_t>(j - j0) * (i1 - i0) + (i - i0)]);
+      }
+    }
+  }
+  if (!group.Parallel)
+  {
+    return depth;
+  }
+  if (!composited)
+  {
+    // Each process's framebuffer holds its own opaque geometry only: the composited depth
+    // is the nearest over processes, on every process at once.
+    std::vector<float> nearest(depth.size());
+    group.Controller->AllReduce(
+      depth.data(), nearest.data(), static_cast<vtkIdType>(depth.size()), vtkCommunicator::MIN_OP);
+    record.BytesSent += 4.0 * static_cast<double>(depth.size());
+    record.MessagesSent += 1;
+    return nearest;
+  }
+  std::vector<unsigned char> opaque = group.IsDisplay()
+    ? frame.Tiles.Mark([&](size_t pixel) { return depth[pixel] < 1.0f; })
+    : std::vector<unsigned char>(frame.Tiles.Tiles());
+  group.Controller->Broadcast(opaque.data(), static_cast<vtkIdType>(opaque.size()), group.Display);
+  std::vector<float> packed(frame.Tiles.PixelsIn(opaque));
+  frame.Tiles.Pack(opaque, depth.data(), 1, packed.data());
+  if (!packed.empty())
+  {
+    group.Controller->Broadcast(
+      packed.data(), static_cast<vtkIdType>(packed.size()), group.Display);
+  }
+  frame.Tiles.Unpack(opaque, packed.data(), 1, depth.data());
+  if (group.IsDisplay())
+  {
+    record.BytesSent += static_cast<double>(opaque.size() + 4 * packed.size());
+    record.MessagesSent += packed.empty() ? 1 : 2;
+  }
+  return depth;
+}
+
+void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
+  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth)
+{
+  ImageSetup image;
+  image.Width = frame.Width;
+  image.Height = frame.Height;
+  image.X0 = frame.X0;
+  image.Y0 = frame.Y0;
+  image.Aspect = frame.Aspect();
+  image.SampleFactor = frame.SampleFactor();
+  image.Crop = frame.Rect;
+  for (size_t v = 0; v < volumes.size(); ++v)
+  {
+    frame.Engines[v]->Prepare(
+      frame.Renderer, volumes[v]->GetProperty(), frame.Bounds, depth.data(), image);
+    // The same on every process (global bounds): said once, by the display process.
+    const std::string note = frame.Engines[v]->TakeSpacingNote();
+    if (!note.empty() && group.IsDisplay())
+    {
+      vtkWarningWithObjectMacro(volumes[v]->GetMapper(), << note);
+    }
   }
 }
 

@@ -7,6 +7,7 @@
 #define apcCompositeFrame_h
 
 #include "apcCoveredTiles.h"
+#include "apcFrameSettings.h"
 #include "apcMomentParameters.h"
 #include "apcRaySegments.h"
 #include "apcScreenRect.h"
@@ -17,8 +18,10 @@
 
 #include <vector>
 
+class vtkFloatArray;
 class vtkMultiProcessController;
 class vtkRenderer;
+class vtkVolume;
 
 namespace apc
 {
@@ -49,19 +52,14 @@ struct CompositeFrame
   int ViewHeight = 0;
   int X0 = 0;
   int Y0 = 0;
-  int Reduction = 1;         // viewport pixels per image pixel (1: still frames)
-  double SampleFactor = 1.0; // on the sample distance (1: still frames)
   bool Interactive = false;
+  FrameSettings Settings;                  // as agreed (apcFrameAgreement.h)
   double Bounds[6] = { 0, 0, 0, 0, 0, 0 }; // all processes' cells
   // The pixels whose rays can meet Bounds: the only ones rendered. Every per-pixel buffer of
   // the frame (depth, moments, colour sums, the result) holds Rect's pixels alone, row by
   // row (RectWidth() long), so memory follows the data's footprint, not the view.
   ScreenRect Rect;
   TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the depth share ships
-  // APC mode renders and composites a frame larger than this many pixels band by band (see
-  // MomentBands), so that its buffers are a band's size, not the rectangle's. The agreed
-  // vtkAPCCompositePass::MaxBandPixels; one band unless set.
-  size_t BandPixels = static_cast<size_t>(-1);
   MomentParameters Moments;
   std::vector<FrameEngine*> Engines;
   // The frame's float image is kept (KeepLastImage, or the display process's image file): the
@@ -69,6 +67,13 @@ struct CompositeFrame
   // as soon as the image is resolved.
   bool KeepFloatImages = false;
 
+  // Viewport pixels per image pixel in each direction, and the factor on the sample distance
+  // (1 and 1 for still frames).
+  int Reduction() const { return this->Interactive ? this->Settings.InteractiveImageReduction : 1; }
+  double SampleFactor() const
+  {
+    return this->Interactive ? this->Settings.InteractiveSampleDistanceFactor : 1.0;
+  }
   size_t Pixels() const { return static_cast<size_t>(this->Width) * this->Height; }
   size_t RectPixels() const { return this->Rect.Pixels(); }
   int RectWidth() const { return this->Rect.Pixels() > 0 ? this->Rect.Width() : 0; }
@@ -103,10 +108,25 @@ struct FrameResult
 // bottom to top: the same on every process for the same rectangle.
 std::vector<RowBand> MomentBands(int width, int height, size_t maxPixels);
 
+// Step 2 of vtkAPCCompositePass's frame: the display process's (composited) depth over the
+// screen rectangle, where every ray must stop, on every process: only the tiles where it has
+// opaque geometry travel. If no delegate composited depth (DisplayDepthComposited off), the
+// nearest of every process's own depth. delegateDepth: the delegate's, or null.
+std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& frame,
+  vtkFloatArray* delegateDepth, FrameRecord& record);
+
+// Step 3: every engine of the frame (this process's volumes, in order) prepares its rays over
+// the agreed image, stopping at depth (ShareDepth's). A sample distance capped to the limit of
+// samples per ray is the same on every process: the display process says it, on the mapper.
+void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
+  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth);
+
 // The modes: each runs the frame's stages and collectives on every process and fills
 // result on the display process.
-void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame, bool inDouble,
-  FrameRecord& record, FrameResult& result);
+// APC mode renders and composites a rectangle of more than Settings.MaxBandPixels pixels band by
+// band (see MomentBands), so that its buffers are a band's size, not the rectangle's.
+void RunMomentCompositing(
+  const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result);
 void RunSegmentCompositing(
   const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result);
 

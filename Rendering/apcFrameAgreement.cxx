@@ -14,48 +14,71 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <type_traits>
+#include <vector>
 
 namespace apc
 {
 namespace
 {
-// One MAX allreduce settles everything: minima travel negated.
-namespace slot
+// One MAX allreduce settles everything: each value travels as its maximum and its negated
+// minimum. Values are added and read back in the same order on every process.
+class MaxMin
 {
-enum Slot
-{
-  XMinNegated,
-  XMax,
-  YMinNegated,
-  YMax,
-  ZMinNegated,
-  ZMax,
-  Failed,
-  MaxMoments,
-  MinMomentsNegated,
-  MaxVolumes,
-  MinVolumesNegated,
-  MaxWidth,
-  MinWidthNegated,
-  MaxHeight,
-  MinHeightNegated,
-  ReportPending,
-  Interactive,
-  SampleFactor,
-  Reduction,
-  MaxMode,
-  MinModeNegated,
-  MinBandPixelsNegated,
-  MaxColour,
-  MinColourNegated,
-  MaxOpacity,
-  MinOpacityNegated,
-  MaxRangeLow,
-  MinRangeLowNegated,
-  MaxRangeHigh,
-  MinRangeHighNegated,
-  SlotCount
+public:
+  void Add(double max, double min)
+  {
+    this->Values.push_back(max);
+    this->Values.push_back(-min);
+  }
+  void Add(double value) { this->Add(value, value); }
+
+  void Reduce(const ProcessGroup& group)
+  {
+    std::vector<double> all(this->Values);
+    if (group.Parallel)
+    {
+      group.Controller->AllReduce(this->Values.data(), all.data(),
+        static_cast<vtkIdType>(this->Values.size()), vtkCommunicator::MAX_OP);
+    }
+    this->Values = std::move(all);
+    this->Next = 0;
+  }
+
+  // The next value's maximum and minimum over all processes.
+  std::pair<double, double> Take()
+  {
+    const double max = this->Values[this->Next];
+    const double min = -this->Values[this->Next + 1];
+    this->Next += 2;
+    return { max, min };
+  }
+
+private:
+  std::vector<double> Values;
+  size_t Next = 0;
 };
+
+// A setting's value back from a double: integers saturate (VTK_ID_MAX travels as 2^63).
+template <class T>
+T FromDouble(double value)
+{
+  if constexpr (std::is_same_v<T, bool>)
+  {
+    return value != 0;
+  }
+  else if constexpr (std::is_integral_v<T>)
+  {
+    const double top = static_cast<double>(std::numeric_limits<T>::max());
+    const double bottom = static_cast<double>(std::numeric_limits<T>::lowest());
+    return value >= top ? std::numeric_limits<T>::max()
+      : value <= bottom ? std::numeric_limits<T>::lowest()
+                        : static_cast<T>(value);
+  }
+  else
+  {
+    return static_cast<T>(value);
+  }
 }
 }
 
@@ -100,78 +123,73 @@ void LocalFrame::AddVolume(int moments, const double* bounds, vtkVolumeProperty*
 FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame& local)
 {
   const double inf = std::numeric_limits<double>::infinity();
-  double mine[slot::SlotCount];
+  MaxMin values;
   for (int d = 0; d < 3; ++d)
   {
-    mine[slot::XMinNegated + 2 * d] = -local.Bounds[2 * d];
-    mine[slot::XMax + 2 * d] = local.Bounds[2 * d + 1];
+    values.Add(local.Bounds[2 * d + 1], local.Bounds[2 * d]);
   }
-  mine[slot::Failed] = local.Failed ? 1 : 0;
-  mine[slot::MaxMoments] = local.Volumes > 0 ? local.MaxMoments : 0;
-  mine[slot::MinMomentsNegated] = local.Volumes > 0 ? -local.MinMoments : -inf;
-  mine[slot::MaxVolumes] = local.Volumes;
-  mine[slot::MinVolumesNegated] = -local.Volumes;
-  mine[slot::MaxWidth] = local.Width;
-  mine[slot::MinWidthNegated] = -local.Width;
-  mine[slot::MaxHeight] = local.Height;
-  mine[slot::MinHeightNegated] = -local.Height;
-  mine[slot::ReportPending] = local.ReportPending ? 1 : 0;
-  mine[slot::Interactive] = local.Interactive ? 1 : 0;
-  mine[slot::SampleFactor] = std::max(local.SampleFactor, 1.0);
-  mine[slot::Reduction] = std::max(local.Reduction, 1);
-  // Mode, precision and depth sharing in one number: minimum and maximum must agree.
-  const double mode = 4.0 * local.Mode + (local.InDouble ? 2 : 0) + (local.DepthComposited ? 1 : 0);
-  mine[slot::MaxMode] = mode;
-  mine[slot::MinModeNegated] = -mode;
-  mine[slot::MinBandPixelsNegated] = -std::max(local.BandPixels, 1.0);
-  // A process without volumes has no transfer function to compare: it leaves these slots.
+  values.Add(local.Failed ? 1 : 0);
+  // A process without volumes does not take part in the moments' minimum.
+  values.Add(local.Volumes > 0 ? local.MaxMoments : 0, local.Volumes > 0 ? local.MinMoments : inf);
+  values.Add(local.Volumes);
+  values.Add(local.Width);
+  values.Add(local.Height);
+  values.Add(local.ReportPending ? 1 : 0);
+  values.Add(local.Interactive ? 1 : 0);
+  ForEachAgreed(
+    local.Settings, [&](const char*, const auto& setting, AgreementRule) { values.Add(setting); });
+  // A process without volumes has no transfer function to compare: it adds neutral values.
   const bool some = local.Volumes > 0;
   const TransferSignature& t = local.Transfer;
-  mine[slot::MaxColour] = some ? t.Colour : -inf;
-  mine[slot::MinColourNegated] = some ? -t.Colour : -inf;
-  mine[slot::MaxOpacity] = some ? t.Opacity : -inf;
-  mine[slot::MinOpacityNegated] = some ? -t.Opacity : -inf;
-  mine[slot::MaxRangeLow] = some ? t.Range[0] : -inf;
-  mine[slot::MinRangeLowNegated] = some ? -t.Range[0] : -inf;
-  mine[slot::MaxRangeHigh] = some ? t.Range[1] : -inf;
-  mine[slot::MinRangeHighNegated] = some ? -t.Range[1] : -inf;
-  double all[slot::SlotCount];
-  std::copy(mine, mine + slot::SlotCount, all);
-  if (group.Parallel)
-  {
-    group.Controller->AllReduce(mine, all, slot::SlotCount, vtkCommunicator::MAX_OP);
-  }
+  values.Add(some ? t.Colour : -inf, some ? t.Colour : inf);
+  values.Add(some ? t.Opacity : -inf, some ? t.Opacity : inf);
+  values.Add(some ? t.Range[0] : -inf, some ? t.Range[0] : inf);
+  values.Add(some ? t.Range[1] : -inf, some ? t.Range[1] : inf);
+  values.Reduce(group);
 
   FrameAgreement agreed;
   for (int d = 0; d < 3; ++d)
   {
-    agreed.Bounds[2 * d] = -all[slot::XMinNegated + 2 * d];
-    agreed.Bounds[2 * d + 1] = all[slot::XMax + 2 * d];
+    const auto extent = values.Take();
+    agreed.Bounds[2 * d] = extent.second;
+    agreed.Bounds[2 * d + 1] = extent.first;
   }
-  agreed.AnyFailed = all[slot::Failed] > 0;
-  agreed.MaxMoments = static_cast<int>(all[slot::MaxMoments]);
-  agreed.MinMoments = static_cast<int>(-all[slot::MinMomentsNegated]);
-  agreed.MaxVolumes = static_cast<int>(all[slot::MaxVolumes]);
-  agreed.MinVolumes = static_cast<int>(-all[slot::MinVolumesNegated]);
-  agreed.SizesDiffer = all[slot::MaxWidth] != -all[slot::MinWidthNegated] ||
-    all[slot::MaxHeight] != -all[slot::MinHeightNegated];
-  agreed.ModesDiffer = all[slot::MaxMode] != -all[slot::MinModeNegated];
-  agreed.AnyReportPending = all[slot::ReportPending] > 0;
-  agreed.Interactive = all[slot::Interactive] > 0;
-  if (agreed.Interactive)
+  agreed.AnyFailed = values.Take().first > 0;
+  const auto moments = values.Take();
+  agreed.MaxMoments = static_cast<int>(moments.first);
+  agreed.MinMoments = static_cast<int>(moments.second);
+  const auto volumes = values.Take();
+  agreed.MaxVolumes = static_cast<int>(volumes.first);
+  agreed.MinVolumes = static_cast<int>(volumes.second);
+  const auto width = values.Take();
+  const auto height = values.Take();
+  agreed.SizesDiffer = width.first != width.second || height.first != height.second;
+  agreed.AnyReportPending = values.Take().first > 0;
+  agreed.Interactive = values.Take().first > 0;
+  ForEachAgreed(agreed.Settings,
+    [&](const char* name, auto& setting, AgreementRule rule)
+    {
+      using T = std::decay_t<decltype(setting)>;
+      const auto range = values.Take();
+      if (rule == AgreementRule::Same && range.first != range.second &&
+        agreed.SettingDiffers.empty())
+      {
+        agreed.SettingDiffers = name;
+      }
+      setting = FromDouble<T>(rule == AgreementRule::Smallest ? range.second : range.first);
+    });
+  const auto colour = values.Take();
+  const auto opacity = values.Take();
+  const auto low = values.Take();
+  const auto high = values.Take();
+  if (agreed.MaxVolumes > 0)
   {
-    agreed.SampleFactor = all[slot::SampleFactor];
-    agreed.Reduction = static_cast<int>(all[slot::Reduction]);
-  }
-  agreed.BandPixels = -all[slot::MinBandPixelsNegated];
-  if (all[slot::MaxVolumes] > 0)
-  {
-    agreed.ColourDiffers = all[slot::MaxColour] != -all[slot::MinColourNegated];
-    agreed.OpacityDiffers = all[slot::MaxOpacity] != -all[slot::MinOpacityNegated];
-    agreed.RangeLow[0] = -all[slot::MinRangeLowNegated];
-    agreed.RangeLow[1] = all[slot::MaxRangeLow];
-    agreed.RangeHigh[0] = -all[slot::MinRangeHighNegated];
-    agreed.RangeHigh[1] = all[slot::MaxRangeHigh];
+    agreed.ColourDiffers = colour.first != colour.second;
+    agreed.OpacityDiffers = opacity.first != opacity.second;
+    agreed.RangeLow[0] = low.second;
+    agreed.RangeLow[1] = low.first;
+    agreed.RangeHigh[0] = high.second;
+    agreed.RangeHigh[1] = high.first;
   }
   agreed.Width = local.Width;
   agreed.Height = local.Height;
@@ -198,10 +216,9 @@ std::string FrameAgreement::Problem() const
   {
     return "the processes' viewports differ in size";
   }
-  if (this->ModesDiffer)
+  if (!this->SettingDiffers.empty())
   {
-    return "the processes' compositing settings (CompositeMode, CompositeInDouble, "
-           "DisplayDepthComposited) differ";
+    return "the processes' " + this->SettingDiffers + " settings differ";
   }
   if (this->MinMoments != this->MaxMoments)
   {

@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What every process must agree on before a frame's collectives, settled in one small
 // allreduce: the union of the data bounds (depth warp, sample spacing, screen rectangle),
-// failures, the number of visible APC volumes and of moments, the viewport size, the
-// compositing mode, the band size, and whether the frame is interactive and how much cheaper
-// it is then. A
-// process that cannot render, has no volume while others have, or disagrees on a size makes
-// every process skip the frame instead of waiting forever in a later collective.
+// failures, the number of visible APC volumes and of moments, the viewport size, whether the
+// frame is interactive, and the pass's settings (apcFrameSettings.h). A process that cannot
+// render, has no volume while others have, or disagrees on a size or a setting makes every
+// process skip the frame instead of waiting forever in a later collective.
 #ifndef apcFrameAgreement_h
 #define apcFrameAgreement_h
+
+#include "apcFrameSettings.h"
 
 #include <string>
 #include <vector>
@@ -38,15 +39,10 @@ struct LocalFrame
   int MaxMoments = 0;
   int Width = 0;
   int Height = 0;
-  bool ReportPending = false;  // an input report to say (apcInputReport.h)
-  bool Interactive = false;    // this process's window asks for a fast frame
-  double SampleFactor = 1.0;   // interactive frames: factor on the sample distance (>= 1)
-  int Reduction = 1;           // interactive frames: image reduction (>= 1)
-  int Mode = 0;                // the pass's CompositeMode and wire precision: each mode runs
-  bool InDouble = false;       // different collectives, so one process's odd setting would hang
-  bool DepthComposited = true; // the pass's DisplayDepthComposited (depth broadcast or MIN)
-  double BandPixels = 1;       // the pass's MaxBandPixels
-  TransferSignature Transfer;  // of the visible volumes (combined)
+  bool ReportPending = false; // an input report to say (apcInputReport.h)
+  bool Interactive = false;   // this process's window asks for a fast frame
+  FrameSettings Settings;     // the pass's
+  TransferSignature Transfer; // of the visible volumes (combined)
 
   LocalFrame();
   // One visible APC volume: its number of moments, if it has cells their bounds, and its
@@ -64,16 +60,15 @@ struct FrameAgreement
   int MinMoments = 0;
   int MaxMoments = 0;
   bool SizesDiffer = false;
-  bool ModesDiffer = false; // CompositeMode, CompositeInDouble or DisplayDepthComposited
   int Width = 0;
   int Height = 0;
   bool AnyReportPending = false; // then every process calls ShareInputReports
-  // Interactive if any process's window says so; then the largest factors any process asks
-  // for apply (the same settings everywhere in ParaView, where they come from one proxy).
+  // Interactive if any process's window says so.
   bool Interactive = false;
-  double SampleFactor = 1.0; // 1 for still frames
-  int Reduction = 1;         // 1 for still frames
-  double BandPixels = 1;     // the smallest MaxBandPixels of any process: the bands of a frame
+  // The settings by their rules (ForEachAgreed); SettingDiffers names the first setting that
+  // must be the same everywhere but is not (empty if none).
+  FrameSettings Settings;
+  std::string SettingDiffers;
   // Transfer functions: the frame is rendered anyway (each process maps its own cells with
   // its own), but the picture mixes mappings, which the display process says.
   bool ColourDiffers = false;

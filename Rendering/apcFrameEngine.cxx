@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "apcFrameEngine.h"
 
-#include "vtkAPCVolumeMapper.h"
+#include "vtkAbstractMapper.h"
 #include "vtkCamera.h"
 #include "vtkCellArray.h"
 #include "vtkDataArray.h"
@@ -11,7 +11,7 @@
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 #include "vtkUnstructuredGridBase.h"
-#include "vtkVolume.h"
+#include "vtkVolumeProperty.h"
 
 #include "apcCellMeshFromVTK.h"
 #include "apcDepthWarp.h"
@@ -93,46 +93,94 @@ unsigned long long GeometryKey(vtkUnstructuredGridBase* input)
 FrameEngine::FrameEngine() = default;
 FrameEngine::~FrameEngine() = default;
 
-//------------------------------------------------------------------------------
-bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
+namespace
 {
-  vtkUnstructuredGridBase* input = mapper->GetInput();
+// vtkAbstractVolumeMapper::GetScalarModeAsString's names, for the message.
+const char* ScalarModeName(int mode)
+{
+  switch (mode)
+  {
+    case VTK_SCALAR_MODE_USE_CELL_DATA:
+      return "UseCellData";
+    case VTK_SCALAR_MODE_USE_POINT_DATA:
+      return "UsePointData";
+    case VTK_SCALAR_MODE_USE_POINT_FIELD_DATA:
+      return "UsePointFieldData";
+    case VTK_SCALAR_MODE_USE_CELL_FIELD_DATA:
+      return "UseCellFieldData";
+    default:
+      return "Default";
+  }
+}
+
+// The data a mesh is made of: the arrays of points, cells and ghosts with their modification
+// times. ParaView hands the mapper a new shallow copy of the same piece after a display
+// property's change: a new data set, but the same arrays, and no new data.
+std::string DataKey(vtkUnstructuredGridBase* input)
+{
+  std::ostringstream key;
+  auto add = [&key](vtkObject* object)
+  { key << object << ' ' << (object ? object->GetMTime() : 0) << ' '; };
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  if (!grid)
+  {
+    add(input); // another kind of unstructured grid: the data set itself
+    return key.str();
+  }
+  add(grid->GetPoints() ? grid->GetPoints()->GetData() : nullptr);
+  add(grid->GetCells());
+  add(grid->GetCellTypesArray());
+  add(grid->GetFaces());
+  add(grid->GetCellGhostArray());
+  return key.str();
+}
+}
+
+//------------------------------------------------------------------------------
+bool FrameEngine::UpdateInput(vtkUnstructuredGridBase* input, vtkObject* reporter)
+{
   if (!input || input->GetNumberOfCells() == 0)
   {
     // An empty piece renders nothing, silently: in parallel that is a normal rank.
     this->Mesh = CellMesh();
     this->Mesh.Finalize();
     this->MeshValid = true;
-    this->MeshScalarKey.clear();
+    this->MeshKey.clear();
     this->MeshGeometryKey = 0;
     this->Report = InputReport();
     this->ReportPending = false;
     return true;
   }
+  const ScalarChoice& choice = this->Settings.Scalars;
   int cellFlag = 0;
-  vtkDataArray* scalars = vtkAbstractMapper::GetScalars(input, mapper->GetScalarMode(),
-    mapper->GetArrayAccessMode(), mapper->GetArrayId(), mapper->GetArrayName(), cellFlag);
+  vtkDataArray* scalars = vtkAbstractMapper::GetScalars(input, choice.ScalarMode,
+    choice.ArrayAccessMode, choice.ArrayId, choice.ArrayName.c_str(), cellFlag);
   if (!scalars)
   {
-    vtkErrorWithObjectMacro(mapper,
+    vtkErrorWithObjectMacro(reporter,
       "The input has no scalars to render (ScalarMode "
-        << mapper->GetScalarModeAsString() << ", array "
-        << (mapper->GetArrayName() ? mapper->GetArrayName() : "<none>") << ").");
+        << ScalarModeName(choice.ScalarMode) << ", array "
+        << (choice.ArrayName.empty() ? "<none>" : choice.ArrayName.c_str()) << ").");
     this->MeshValid = false;
     return false;
   }
   ScalarSelection selection;
   selection.Array = scalars;
   selection.CellData = cellFlag == 1;
-  selection.VectorMode = mapper->GetVectorMode();
-  selection.VectorComponent = mapper->GetVectorComponent();
-  // Rebuild the ray marcher's mesh only when the data or the scalar selection changed.
+  selection.VectorMode = choice.VectorMode;
+  selection.VectorComponent = choice.VectorComponent;
+  // Rebuild the ray marcher's mesh (and say its report again) only when the data or the scalar
+  // selection changed.
   std::ostringstream selectionKey;
   selectionKey << cellFlag << ' ' << selection.VectorMode << ' ' << selection.VectorComponent;
   std::ostringstream key;
-  key << scalars << ' ' << scalars->GetMTime() << ' ' << selectionKey.str();
-  if (this->MeshValid && this->MeshInputTime >= input->GetMTime() &&
-    this->MeshScalarKey == key.str())
+  key << DataKey(input) << ' ' << scalars << ' ' << scalars->GetMTime() << ' '
+      << selectionKey.str();
+  // The same data set modified (Modified() after editing values in place) is a change too.
+  const bool modified = input == this->MeshData && input->GetMTime() > this->MeshDataTime;
+  this->MeshData = input;
+  this->MeshDataTime = input->GetMTime();
+  if (this->MeshValid && this->MeshKey == key.str() && !modified)
   {
     return true;
   }
@@ -156,12 +204,11 @@ bool FrameEngine::UpdateInput(vtkAPCVolumeMapper* mapper)
   if (!this->MeshValid)
   {
     // The input cannot be rendered at all: said at once, by every process it happens on.
-    this->Report.Emit(mapper);
-    vtkErrorWithObjectMacro(mapper, << error);
+    this->Report.Emit(reporter);
+    vtkErrorWithObjectMacro(reporter, << error);
     this->Report = InputReport();
   }
-  this->MeshInputTime = input->GetMTime();
-  this->MeshScalarKey = key.str();
+  this->MeshKey = key.str();
   this->MeshSelectionKey = selectionKey.str();
   this->MeshGeometryKey = this->MeshValid ? geometry : 0;
   this->Clock.Lap("mesh");
@@ -189,15 +236,16 @@ bool FrameEngine::GetLocalBounds(double bounds[6]) const
 }
 
 //------------------------------------------------------------------------------
-void FrameEngine::BeginFrame()
+void FrameEngine::BeginFrame(const VolumeSettings& settings)
 {
+  this->Settings = settings;
   this->Clock.Restart();
   this->Ready = false;
 }
 
 //------------------------------------------------------------------------------
-bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
-  const double* globalBounds, const float* depthBuffer, const ImageSetup& image)
+bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const double* globalBounds,
+  const float* depthBuffer, const ImageSetup& image)
 {
   this->Ready = false;
   this->Crop = image.Crop.value_or(ScreenRect{ 0, 0, image.Width, image.Height });
@@ -224,13 +272,14 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   const double diagonal = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
     (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
     (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
-  this->Spacing = image.SampleFactor *
-    (mapper->GetSampleDistance() > 0 ? mapper->GetSampleDistance() : diagonal / 256.0);
+  const double distance = this->Settings.SampleDistance;
+  this->Spacing = image.SampleFactor * (distance > 0 ? distance : diagonal / 256.0);
   if (!(this->Spacing > 0))
   {
     return false; // a mesh with no extent
   }
-  this->Table = TransferTableFromVTK(vol->GetProperty(), this->Spacing);
+  this->CapSpacing(distance, diagonal);
+  this->Table = TransferTableFromVTK(property, this->Spacing);
   this->Camera.reset(new RayCamera(RayCameraFromVTK(ren, image.Width, image.Height, image.Aspect)
                                      ->Cropped(this->Crop.I0, this->Crop.J0, width, height)));
   double clip[2];
@@ -259,9 +308,9 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
       rayEnds[p] = static_cast<float>(this->Camera->DistanceFromDepth(i, j, depthBuffer[p]));
     }
   }
-  this->Marcher.SetNumberOfThreads(mapper->GetNumberOfThreads());
-  this->Marcher.SetLatticeJitter(mapper->GetLatticeJitter());
-  this->Marcher.SetMaxSampleCacheBytes(static_cast<size_t>(mapper->GetSampleCacheSize()) << 20);
+  this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
+  this->Marcher.SetLatticeJitter(this->Settings.LatticeJitter);
+  this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
   this->Marcher.SetMesh(&this->Mesh);
   depth = std::vector<float>();
   this->Marcher.SetView(*this->Camera, std::move(rayEnds));
@@ -269,6 +318,37 @@ bool FrameEngine::Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolum
   this->Ready = true;
   this->Clock.Lap("setup");
   return true;
+}
+
+//------------------------------------------------------------------------------
+void FrameEngine::CapSpacing(double distance, double diagonal)
+{
+  const double finest = diagonal / kMaxSamplesPerRay;
+  if (this->Spacing >= finest)
+  {
+    return;
+  }
+  // Said once per setting and data extent, not every frame (nor again when an interactive
+  // frame's coarser lattice happens to stay under the limit).
+  if (distance != this->CappedDistance || diagonal != this->CappedDiagonal)
+  {
+    std::ostringstream note;
+    note << "Sample Distance " << distance << " would take up to "
+         << static_cast<long long>(diagonal / this->Spacing)
+         << " samples along a ray through the data (its bounding-box diagonal is " << diagonal
+         << "); the limit is " << static_cast<long long>(kMaxSamplesPerRay) << ", so " << finest
+         << " is used. Raise Sample Distance to at least " << finest
+         << " (0 picks the diagonal / 256).";
+    this->SpacingNote = note.str();
+    this->CappedDistance = distance;
+    this->CappedDiagonal = diagonal;
+  }
+  this->Spacing = finest;
+}
+
+std::string FrameEngine::TakeSpacingNote()
+{
+  return std::exchange(this->SpacingNote, std::string());
 }
 
 //------------------------------------------------------------------------------

@@ -19,6 +19,7 @@
 #include "apcScreenRect.h"
 #include "apcStageClock.h"
 #include "apcVolumeRayMarcher.h"
+#include "apcVolumeSettings.h"
 
 #include "vtkType.h"
 
@@ -28,9 +29,10 @@
 #include <string>
 #include <vector>
 
-class vtkAPCVolumeMapper;
+class vtkObject;
 class vtkRenderer;
-class vtkVolume;
+class vtkUnstructuredGridBase;
+class vtkVolumeProperty;
 
 namespace apc
 {
@@ -64,14 +66,20 @@ public:
   ~FrameEngine();
 
   /**
-   * Copies mapper's input for the ray marcher if it or its scalar selection changed. When
-   * only the scalars changed (a new time step of the same mesh: the same points, cells and
-   * ghost flags, by content, even in new arrays), only they and the per-cell scalar ranges are
-   * refreshed: no cell conversion, shape checks or face planes again. False, with an error on
-   * mapper, if the input is unusable (cells but no scalars, a broken mesh); an empty or
-   * missing input is usable and renders nothing.
+   * Starts a frame with the volume's settings (read once from its mapper at the VTK boundary,
+   * vtkAPCVolumeMapper::GetVolumeSettings): the stage clock and a not-yet-prepared state.
    */
-  bool UpdateInput(vtkAPCVolumeMapper* mapper);
+  void BeginFrame(const VolumeSettings& settings);
+
+  /**
+   * After BeginFrame, copies input for the ray marcher if it or the settings' scalar selection
+   * changed. When only the scalars changed (a new time step of the same mesh: the same points,
+   * cells and ghost flags, by content, even in new arrays), only they and the per-cell scalar
+   * ranges are refreshed: no cell conversion, shape checks or face planes again. False, with an
+   * error on reporter (the mapper), if the input is unusable (cells but no scalars, a broken mesh);
+   * an empty or missing input is usable and renders nothing.
+   */
+  bool UpdateInput(vtkUnstructuredGridBase* input, vtkObject* reporter);
 
   /**
    * What the conversion of the current input found (skipped or transparent cells, see
@@ -91,19 +99,16 @@ public:
   bool GetLocalBounds(double bounds[6]) const;
   int64_t GetNumberOfCells() const { return this->Mesh.GetNumberOfCells(); }
 
-  /// Starts a frame: the stage clock and a not-yet-prepared state.
-  void BeginFrame();
-
   /**
-   * After UpdateInput (once per frame), samples the transfer function and sets up the rays of ren's
-   * viewport. globalBounds (xmin..zmax of all processes' cells) fix the depth warp and the default
-   * sample spacing so that every process uses the same ones; null uses this process's cells.
-   * depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays;
+   * After UpdateInput (once per frame), samples property's transfer functions and sets up the rays
+   * of ren's viewport. globalBounds (xmin..zmax of all processes' cells) fix the depth warp and the
+   * default sample spacing so that every process uses the same ones; null uses this process's
+   * cells. depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays;
    * null reads ren's window. image is what to render (ImageSetup::FullQuality(ren) by the
    * mapper; the pass's agreed image). False if there is nothing this process can render.
    */
-  bool Prepare(vtkAPCVolumeMapper* mapper, vtkRenderer* ren, vtkVolume* vol,
-    const double* globalBounds, const float* depthBuffer, const ImageSetup& image);
+  bool Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const double* globalBounds,
+    const float* depthBuffer, const ImageSetup& image);
 
   int GetWidth() const { return this->Crop.Pixels() > 0 ? this->Crop.Width() : 0; }
   int GetHeight() const { return this->Crop.Pixels() > 0 ? this->Crop.Height() : 0; }
@@ -114,6 +119,15 @@ public:
   /// The rendered pixels in the image (GetWidth x GetHeight of them).
   const ScreenRect& GetCrop() const { return this->Crop; }
   double GetSampleDistance() const { return this->Spacing; }
+  /**
+   * The most samples a ray takes through the data (along its bounding-box diagonal; the
+   * default sample distance takes 256): a finer sample distance is raised to diagonal / this,
+   * so that a mistyped setting cannot freeze a render for minutes. Prepare then leaves a note
+   * saying what to change, once per setting and data extent: TakeSpacingNote hands it over
+   * (empty if none) for the caller to say (the pass: on the display process only).
+   */
+  static constexpr double kMaxSamplesPerRay = 16384;
+  std::string TakeSpacingNote();
   /// Lattice samples taken since Prepare by pass 1 (all its bands), or by the exact or
   /// segment stage.
   int64_t GetSampleCount() const { return this->Samples; }
@@ -132,12 +146,16 @@ public:
 
 private:
   FrameEngine(const FrameEngine&) = delete;
+  // Raises Spacing to the limit of kMaxSamplesPerRay (distance: the setting; 0 automatic).
+  void CapSpacing(double distance, double diagonal);
   FrameEngine& operator=(const FrameEngine&) = delete;
 
+  VolumeSettings Settings; // this frame's
   CellMesh Mesh;
   bool MeshValid = false;
-  vtkMTimeType MeshInputTime = 0;
-  std::string MeshScalarKey;
+  std::string MeshKey;            // what the mesh was made of (data arrays, scalar selection)
+  const void* MeshData = nullptr; // the data set last seen (compared, never dereferenced)
+  vtkMTimeType MeshDataTime = 0;
   std::string MeshSelectionKey;           // the scalar selection without the array's identity
   unsigned long long MeshGeometryKey = 0; // a hash of points, cells and ghost flags; 0 if none
   std::vector<long long> MeshSources;     // the input cell of every mesh cell
@@ -152,6 +170,9 @@ private:
   int Y0 = 0;
   ScreenRect Crop;
   double Spacing = 0.0;
+  std::string SpacingNote;
+  double CappedDistance = -1; // the setting and extent last capped (said once)
+  double CappedDiagonal = -1;
   std::unique_ptr<TransferTable> Table;
   std::unique_ptr<RayCamera> Camera;
   std::unique_ptr<LogDepthWarp> Warp;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "apcImageOutput.h"
 
+#include "vtkAPCEXRWriter.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
 #include "vtkFloatArray.h"
@@ -17,6 +18,7 @@
 #include "vtkShaderProgram.h"
 #include "vtkSmartPointer.h"
 #include "vtkTextureObject.h"
+#include "vtkXMLImageDataWriter.h"
 #include "vtk_glew.h"
 
 #include <algorithm>
@@ -149,6 +151,27 @@ void StoreFloatImages(
   sampleCount->SetName("SampleCount");
   sampleCount->InsertNextValue(static_cast<double>(images.SampleCount));
   image->GetFieldData()->AddArray(sampleCount);
+}
+
+//------------------------------------------------------------------------------
+void WriteFloatImages(vtkImageData* image, const char* fileName)
+{
+  const std::string name = fileName;
+  if (name.size() > 4 && name.compare(name.size() - 4, 4, ".exr") == 0)
+  {
+    vtkNew<vtkAPCEXRWriter> writer;
+    writer->SetFileName(name.c_str());
+    writer->SetInputData(image);
+    writer->Write();
+  }
+  else
+  {
+    vtkNew<vtkXMLImageDataWriter> writer;
+    writer->SetFileName(name.c_str());
+    writer->SetInputData(image);
+    writer->SetDataModeToBinary(); // Debian's ParaView rejects appended-mode XML
+    writer->Write();
+  }
 }
 
 } // namespace apc

@@ -44,6 +44,12 @@ struct FloatImages
 void StoreFloatImages(
   vtkImageData* image, int width, int height, const ScreenRect& rect, const FloatImages& images);
 
+/**
+ * Writes StoreFloatImages' image to a file: OpenEXR if its name ends in ".exr", else VTK XML
+ * image data (binary, readable everywhere).
+ */
+void WriteFloatImages(vtkImageData* image, const char* fileName);
+
 } // namespace apc
 
 #endif

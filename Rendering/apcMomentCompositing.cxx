@@ -165,8 +165,9 @@ std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGri
 // agreement, the moments' allreduce, pass 2 and the colour sums' reduce; the display process
 // resolves the band into result at its rows.
 void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
-  bool inDouble, FrameRecord& record, FrameResult& result)
+  FrameRecord& record, FrameResult& result)
 {
+  const bool inDouble = frame.Settings.CompositeInDouble;
   const MomentParameters& parameters = frame.Moments;
   const int stride = parameters.Moments + 1;
   const int width = frame.RectWidth();
@@ -267,8 +268,8 @@ std::vector<RowBand> MomentBands(int width, int height, size_t maxPixels)
   return bands;
 }
 
-void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame, bool inDouble,
-  FrameRecord& record, FrameResult& result)
+void RunMomentCompositing(
+  const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result)
 {
   record.Pixels = 0;
   if (group.IsDisplay())
@@ -282,9 +283,10 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     }
   }
   // The same bands on every process: they follow from the agreed rectangle and band size.
-  for (const RowBand& band : MomentBands(frame.RectWidth(), frame.RectHeight(), frame.BandPixels))
+  const size_t bandPixels = static_cast<size_t>(frame.Settings.MaxBandPixels);
+  for (const RowBand& band : MomentBands(frame.RectWidth(), frame.RectHeight(), bandPixels))
   {
-    CompositeBand(group, frame, band, inDouble, record, result);
+    CompositeBand(group, frame, band, record, result);
   }
 }
 

@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAPCCompositePass.h"
 
-#include "vtkAPCEXRWriter.h"
 #include "vtkAPCVolumeMapper.h"
 #include "vtkCommunicator.h"
 #include "vtkFloatArray.h"
@@ -15,25 +14,37 @@
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkVolume.h"
-#include "vtkXMLImageDataWriter.h"
 
 #include "apcAutoMode.h"
 #include "apcCompositeFrame.h"
 #include "apcFrameAgreement.h"
 #include "apcFrameEngine.h"
+#include "apcFrameSettings.h"
 #include "apcImageOutput.h"
 #include "apcInputReport.h"
+#include "apcSettingChecks.h"
+#include "apcVolumeSettings.h"
 
 #include <algorithm>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
 
 vtkStandardNewMacro(vtkAPCCompositePass);
 
+// A volume the pass renders, with the engine that runs its frames (the pass's own: the mapper
+// gives its settings, vtkAPCVolumeMapper::GetVolumeSettings, and its input, nothing else).
+struct VolumeEntry
+{
+  vtkSmartPointer<vtkVolume> Volume;
+  std::unique_ptr<apc::FrameEngine> Engine;
+};
+
 struct vtkAPCCompositePass::Internals
 {
-  std::vector<vtkSmartPointer<vtkVolume>> Volumes;
+  apc::FrameSettings Settings; // this process's; every frame agrees on them first
+  std::vector<VolumeEntry> Volumes;
   apc::FrameRecord Record;
   int LastMode = -1;
   int LastReduction = 0;
@@ -66,9 +77,10 @@ void vtkAPCCompositePass::SetController(vtkMultiProcessController* controller)
 void vtkAPCCompositePass::AddVolume(vtkVolume* volume)
 {
   auto& v = this->Internal->Volumes;
-  if (volume && std::find(v.begin(), v.end(), volume) == v.end())
+  if (volume &&
+    std::none_of(v.begin(), v.end(), [volume](const VolumeEntry& e) { return e.Volume == volume; }))
   {
-    v.emplace_back(volume);
+    v.push_back({ volume, std::make_unique<apc::FrameEngine>() });
     this->Modified();
   }
 }
@@ -76,7 +88,8 @@ void vtkAPCCompositePass::AddVolume(vtkVolume* volume)
 void vtkAPCCompositePass::RemoveVolume(vtkVolume* volume)
 {
   auto& v = this->Internal->Volumes;
-  const auto it = std::find(v.begin(), v.end(), volume);
+  const auto it =
+    std::find_if(v.begin(), v.end(), [volume](const VolumeEntry& e) { return e.Volume == volume; });
   if (it != v.end())
   {
     v.erase(it);
@@ -100,6 +113,60 @@ int vtkAPCCompositePass::GetNumberOfVolumes() const
   return static_cast<int>(this->Internal->Volumes.size());
 }
 
+//------------------------------------------------------------------------------
+namespace
+{
+// A setting's setter: the value as given (checked by the caller), Modified() on a change.
+template <class T>
+void Assign(vtkObject* self, T& setting, T value)
+{
+  if (setting != value)
+  {
+    setting = value;
+    self->Modified();
+  }
+}
+}
+
+// The settings every process agrees on live in Internal->Settings: their setters and getters,
+// each setter checking its value where it enters.
+#define APC_FRAME_SETTING(Name, Type, checked)                                                     \
+  void vtkAPCCompositePass::Set##Name(Type value)                                                  \
+  {                                                                                                \
+    Assign(this, this->Internal->Settings.Name, checked);                                          \
+  }                                                                                                \
+  Type vtkAPCCompositePass::Get##Name() const                                                      \
+  {                                                                                                \
+    return this->Internal->Settings.Name;                                                          \
+  }
+
+APC_FRAME_SETTING(DisplayDepthComposited, bool, value)
+APC_FRAME_SETTING(CompositeInDouble, bool, value)
+APC_FRAME_SETTING(MaxBandPixels, vtkIdType,
+  apc::CheckedSetting<vtkIdType>(this, "MaxBandPixels", value, 1, VTK_ID_MAX))
+APC_FRAME_SETTING(CompositeMode, int,
+  apc::CheckedSetting(
+    this, "CompositeMode", value, int(APC), int(AUTO), "0 APC, 1 SEGMENTS, 2 LOCAL_EXACT, 3 AUTO"))
+APC_FRAME_SETTING(InteractiveSampleDistanceFactor, double,
+  apc::CheckedSetting(this, "InteractiveSampleDistanceFactor", value, 1.0,
+    apc::FrameSettings::MaxSampleDistanceFactor, "1 switches it off"))
+APC_FRAME_SETTING(InteractiveImageReduction, int,
+  apc::CheckedSetting(this, "InteractiveImageReduction", value, 1,
+    apc::FrameSettings::MaxImageReduction, "1 switches it off"))
+#undef APC_FRAME_SETTING
+
+void vtkAPCCompositePass::SetDisplayProcess(int process)
+{
+  Assign(this, this->DisplayProcess,
+    apc::CheckedSetting(this, "DisplayProcess", process, 0, VTK_INT_MAX));
+}
+
+void vtkAPCCompositePass::SetVerbosity(int verbosity)
+{
+  Assign(this, this->Verbosity, apc::CheckedSetting(this, "Verbosity", verbosity, 0, 1));
+}
+
+//------------------------------------------------------------------------------
 double vtkAPCCompositePass::GetLastStageSeconds(const char* stage) const
 {
   return this->Internal->Record.Clock.Get(stage);
@@ -118,6 +185,25 @@ vtkIdType vtkAPCCompositePass::GetLastMessagesSent() const
 vtkIdType vtkAPCCompositePass::GetLastSegmentCount() const
 {
   return static_cast<vtkIdType>(this->Internal->Record.Segments.Segments);
+}
+
+vtkAPCCompositePass::Timings vtkAPCCompositePass::GetLastTimings() const
+{
+  const apc::FrameRecord& record = this->Internal->Record;
+  const apc::StageClock& clock = record.Clock;
+  Timings t;
+  // The stages by their names (the other names are no stage: zero, set below).
+  ForEachTiming(t, [&clock](const char* name, double& field) { field = clock.Get(name); });
+  t.Total = clock.Get(nullptr);
+  t.BytesSent = record.BytesSent;
+  t.MessagesSent = static_cast<double>(record.MessagesSent);
+  t.CompositedPixels = static_cast<double>(record.Pixels);
+  t.CoveredPixels = static_cast<double>(record.CoveredPixels);
+  t.Mode = this->Internal->LastMode;
+  t.ImageReduction = this->Internal->LastReduction;
+  t.AverageSegmentsPerPixel = record.Segments.Average();
+  t.MaxSegmentsPerPixel = static_cast<double>(record.Segments.MaxPerPixel);
+  return t;
 }
 
 vtkIdType vtkAPCCompositePass::GetLastNonEmptyPixels() const
@@ -183,33 +269,32 @@ vtkImageData* vtkAPCCompositePass::GetLastImage()
 //------------------------------------------------------------------------------
 namespace
 {
-// Step 1 of a frame: this process's visible APC volumes and its side of the agreement, then
-// the agreement itself. False if the frame is skipped on every process (failures reported).
-bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
-  const std::vector<vtkSmartPointer<vtkVolume>>& volumes, vtkRenderer* ren,
-  apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible, apc::FrameRecord& record,
-  bool& transferWarned)
+// This process's visible APC volumes: their engines begin the frame with the volumes' settings
+// (read once, at the VTK boundary) and take their inputs; their side of the agreement goes into
+// local. Returns the first visible volume's mapper (it says the input reports), or null.
+vtkAPCVolumeMapper* CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& local,
+  apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible,
+  std::vector<vtkAPCVolumeMapper*>& mappers, apc::InputReport& reports, std::ostringstream& problem)
 {
-  apc::LocalFrame local;
-  std::ostringstream problem;
-  std::vector<vtkAPCVolumeMapper*> mappers;
-  apc::InputReport reports; // said once for all processes when any has news
-  for (const auto& volume : volumes)
+  vtkAPCVolumeMapper* first = nullptr;
+  for (const VolumeEntry& entry : volumes)
   {
-    if (!volume->GetVisibility())
+    if (!entry.Volume->GetVisibility())
     {
       continue;
     }
-    auto* mapper = vtkAPCVolumeMapper::SafeDownCast(volume->GetMapper());
+    auto* mapper = vtkAPCVolumeMapper::SafeDownCast(entry.Volume->GetMapper());
     if (!mapper)
     {
       problem << "a volume without a vtkAPCVolumeMapper; ";
       local.Failed = true;
       continue;
     }
-    apc::FrameEngine* engine = mapper->GetFrameEngine();
-    engine->BeginFrame();
-    if (!engine->UpdateInput(mapper))
+    // The engine reads no mapper: it gets the volume's settings and input.
+    const apc::VolumeSettings volumeSettings = mapper->GetVolumeSettings();
+    apc::FrameEngine* engine = entry.Engine.get();
+    engine->BeginFrame(volumeSettings);
+    if (!engine->UpdateInput(mapper->GetInput(), mapper))
     {
       problem << "unusable input (see the mapper's error); ";
       local.Failed = true;
@@ -217,11 +302,36 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
     local.ReportPending = engine->TakeNewInputReport() || local.ReportPending;
     reports.Add(engine->GetInputReport());
     double bounds[6];
-    local.AddVolume(mapper->GetNumberOfMoments(), engine->GetLocalBounds(bounds) ? bounds : nullptr,
-      volume->GetProperty());
+    local.AddVolume(volumeSettings.Moments.Moments,
+      engine->GetLocalBounds(bounds) ? bounds : nullptr, entry.Volume->GetProperty());
+    if (!first)
+    {
+      // The frame's moment settings: the first volume's beta, bias and resolve.
+      frame.Moments = volumeSettings.Moments;
+      first = mapper;
+    }
     mappers.push_back(mapper);
-    visible.push_back(volume);
+    visible.push_back(entry.Volume);
+    frame.Engines.push_back(engine);
   }
+  return first;
+}
+
+// Step 1 of a frame: this process's visible APC volumes and its side of the agreement, then
+// the agreement itself. False if the frame is skipped on every process (failures reported).
+bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
+  const std::vector<VolumeEntry>& volumes, const apc::FrameSettings& settings, vtkRenderer* ren,
+  apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible, apc::FrameRecord& record,
+  bool& transferWarned)
+{
+  apc::LocalFrame local;
+  local.Settings = settings;
+  std::ostringstream problem;
+  apc::InputReport reports; // said once for all processes when any has news
+  std::vector<vtkAPCVolumeMapper*> mappers;
+  vtkAPCVolumeMapper* first =
+    CollectVolumes(volumes, local, frame, visible, mappers, reports, problem);
+  vtkObject* reporter = first ? static_cast<vtkObject*>(first) : self;
   // The screen rectangle and every image buffer derive from the viewport: sizes that differ
   // between processes would make their collectives disagree in length.
   ren->GetTiledSizeAndOrigin(&local.Width, &local.Height, &frame.X0, &frame.Y0);
@@ -230,17 +340,10 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   // agreed, so no process renders a different lattice or image size than the others.
   vtkRenderWindow* window = ren->GetRenderWindow();
   local.Interactive = window && window->GetDesiredUpdateRate() >= 1.0;
-  local.SampleFactor = self->GetInteractiveSampleDistanceFactor();
-  local.Reduction = self->GetInteractiveImageReduction();
-  local.Mode = self->GetCompositeMode();
-  local.InDouble = self->GetCompositeInDouble();
-  local.DepthComposited = self->GetDisplayDepthComposited();
-  local.BandPixels = static_cast<double>(self->GetMaxBandPixels());
   const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
   if (agreed.AnyReportPending)
   {
-    apc::ShareInputReports(group, reports,
-      mappers.empty() ? static_cast<vtkObject*>(self) : static_cast<vtkObject*>(mappers.front()));
+    apc::ShareInputReports(group, reports, reporter);
   }
   apc::WarnOnceIfTransferFunctionsDiffer(self, group, agreed, mappers, transferWarned);
   record.Clock.Lap("agree");
@@ -270,108 +373,19 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.ViewWidth = agreed.Width;
   frame.ViewHeight = agreed.Height;
   frame.Interactive = agreed.Interactive;
-  frame.Reduction = agreed.Reduction;
-  frame.SampleFactor = agreed.SampleFactor;
-  frame.BandPixels = static_cast<size_t>(agreed.BandPixels);
-  frame.Width = (agreed.Width + frame.Reduction - 1) / frame.Reduction;
-  frame.Height = (agreed.Height + frame.Reduction - 1) / frame.Reduction;
+  frame.Settings = agreed.Settings;
+  const int reduction = frame.Reduction();
+  frame.Width = (agreed.Width + reduction - 1) / reduction;
+  frame.Height = (agreed.Height + reduction - 1) / reduction;
   frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height, frame.Aspect());
   const apc::ScreenRect& r = frame.Rect;
   frame.Tiles =
     r.Pixels() > 0 ? apc::TileGrid(r.Width(), 0, 0, r.Width(), r.Height()) : apc::TileGrid();
-  // The frame's moment settings: the agreed number, the first volume's beta, bias and resolve.
-  frame.Moments = mappers.front()->GetMomentParameters();
   frame.Moments.Moments = agreed.MaxMoments;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
-  for (vtkAPCVolumeMapper* mapper : mappers)
-  {
-    frame.Engines.push_back(mapper->GetFrameEngine());
-  }
   return true;
 }
 
-// Step 2: the display process's (composited) depth over the screen rectangle, where every
-// ray must stop, on every process: only the tiles where it has opaque geometry travel. If no
-// delegate composited depth (composited false), the nearest of every process's own depth.
-std::vector<float> ShareDepth(const apc::ProcessGroup& group, const apc::CompositeFrame& frame,
-  bool composited, vtkFloatArray* delegateDepth, apc::FrameRecord& record)
-{
-  std::vector<float> depth(frame.RectPixels(), 1.0f);
-  const apc::ScreenRect& rect = frame.Rect;
-  if (rect.Pixels() == 0)
-  {
-    return depth;
-  }
-  if (group.IsDisplay() || !composited)
-  {
-    // The viewport pixels under the rectangle; an image pixel of a reduced frame takes the
-    // nearest of those it covers (its ray stops at the nearest opaque surface in its
-    // footprint). At full resolution that is the window's depth, unchanged.
-    const int r = frame.Reduction;
-    const int i0 = rect.I0 * r;
-    const int j0 = rect.J0 * r;
-    const int i1 = std::min(frame.ViewWidth, rect.I1 * r);
-    const int j1 = std::min(frame.ViewHeight, rect.J1 * r);
-    std::vector<float> packed(static_cast<size_t>(i1 - i0) * (j1 - j0));
-    if (delegateDepth && group.IsDisplay() && composited &&
-      delegateDepth->GetNumberOfTuples() ==
-        static_cast<vtkIdType>(frame.ViewWidth) * frame.ViewHeight)
-    {
-      const float* z = delegateDepth->GetPointer(0);
-      for (int j = j0; j < j1; ++j)
-      {
-        std::copy_n(z + static_cast<size_t>(j) * frame.ViewWidth + i0, i1 - i0,
-          &packed[static_cast<size_t>(j - j0) * (i1 - i0)]);
-      }
-    }
-    else
-    {
-      frame.Renderer->GetRenderWindow()->GetZbufferData(
-        frame.X0 + i0, frame.Y0 + j0, frame.X0 + i1 - 1, frame.Y0 + j1 - 1, packed.data());
-    }
-    for (int j = j0; j < j1; ++j)
-    {
-      for (int i = i0; i < i1; ++i)
-      {
-        float& d = depth[static_cast<size_t>(j / r - rect.J0) * rect.Width() + (i / r - rect.I0)];
-        d = std::min(d, packed[static_cast<size_t>(j - j0) * (i1 - i0) + (i - i0)]);
-      }
-    }
-  }
-  if (!group.Parallel)
-  {
-    return depth;
-  }
-  if (!composited)
-  {
-    // Each process's framebuffer holds its own opaque geometry only: the composited depth
-    // is the nearest over processes, on every process at once.
-    std::vector<float> nearest(depth.size());
-    group.Controller->AllReduce(
-      depth.data(), nearest.data(), static_cast<vtkIdType>(depth.size()), vtkCommunicator::MIN_OP);
-    record.BytesSent += 4.0 * static_cast<double>(depth.size());
-    record.MessagesSent += 1;
-    return nearest;
-  }
-  std::vector<unsigned char> opaque = group.IsDisplay()
-    ? frame.Tiles.Mark([&](size_t pixel) { return depth[pixel] < 1.0f; })
-    : std::vector<unsigned char>(frame.Tiles.Tiles());
-  group.Controller->Broadcast(opaque.data(), static_cast<vtkIdType>(opaque.size()), group.Display);
-  std::vector<float> packed(frame.Tiles.PixelsIn(opaque));
-  frame.Tiles.Pack(opaque, depth.data(), 1, packed.data());
-  if (!packed.empty())
-  {
-    group.Controller->Broadcast(
-      packed.data(), static_cast<vtkIdType>(packed.size()), group.Display);
-  }
-  frame.Tiles.Unpack(opaque, packed.data(), 1, depth.data());
-  if (group.IsDisplay())
-  {
-    record.BytesSent += static_cast<double>(opaque.size() + 4 * packed.size());
-    record.MessagesSent += packed.empty() ? 1 : 2;
-  }
-  return depth;
-}
 }
 
 //------------------------------------------------------------------------------
@@ -396,41 +410,28 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   const apc::ProcessGroup group(this->Controller, this->DisplayProcess);
   apc::CompositeFrame frame;
   std::vector<vtkVolume*> volumes;
-  if (!AgreeOnFrame(this, group, internal.Volumes, s->GetRenderer(), frame, volumes,
-        internal.Record, internal.TransferWarned))
+  if (!AgreeOnFrame(this, group, internal.Volumes, internal.Settings, s->GetRenderer(), frame,
+        volumes, internal.Record, internal.TransferWarned))
   {
     return;
   }
   internal.Record.Pixels = static_cast<vtkIdType>(frame.Rect.Pixels()); // APC: fewer
   frame.KeepFloatImages =
     this->KeepLastImage || (group.IsDisplay() && this->ImageFileName && *this->ImageFileName);
-  internal.LastReduction = frame.Reduction;
+  internal.LastReduction = frame.Reduction();
   internal.LastInteractive = frame.Interactive;
-  std::vector<float> depth =
-    ShareDepth(group, frame, this->DisplayDepthComposited, internal.DelegateDepth, internal.Record);
+  std::vector<float> depth = apc::ShareDepth(group, frame, internal.DelegateDepth, internal.Record);
   internal.DelegateDepth = nullptr;
   internal.Record.Clock.Lap("depth");
-  apc::ImageSetup image;
-  image.Width = frame.Width;
-  image.Height = frame.Height;
-  image.X0 = frame.X0;
-  image.Y0 = frame.Y0;
-  image.Aspect = frame.Aspect();
-  image.SampleFactor = frame.SampleFactor;
-  image.Crop = frame.Rect;
-  for (size_t v = 0; v < volumes.size(); ++v)
-  {
-    auto* mapper = static_cast<vtkAPCVolumeMapper*>(volumes[v]->GetMapper());
-    frame.Engines[v]->Prepare(
-      mapper, frame.Renderer, volumes[v], frame.Bounds, depth.data(), image);
-  }
+  apc::PrepareEngines(group, frame, volumes, depth);
   depth = std::vector<float>(); // the engines hold their rays' ends
 
-  int mode = this->CompositeMode;
+  int mode = frame.Settings.CompositeMode;
   if (mode == AUTO)
   {
-    const double bytesPerPixel = this->CompositeInDouble ? 8.0 * (frame.Moments.Moments + 5)
-                                                         : 1 + 4.0 * (frame.Moments.Moments + 5);
+    const double bytesPerPixel = frame.Settings.CompositeInDouble
+      ? 8.0 * (frame.Moments.Moments + 5)
+      : 1 + 4.0 * (frame.Moments.Moments + 5);
     mode = internal.Auto.Choose(group.Processes, bytesPerPixel) == apc::AutoMode::Moments
       ? APC
       : SEGMENTS;
@@ -451,9 +452,9 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       apc::RunSegmentCompositing(group, frame, internal.Record, result);
       break;
     default:
-      apc::RunMomentCompositing(group, frame, this->CompositeInDouble, internal.Record, result);
+      apc::RunMomentCompositing(group, frame, internal.Record, result);
   }
-  if (this->CompositeMode == AUTO)
+  if (frame.Settings.CompositeMode == AUTO)
   {
     this->RecordForAuto(group);
   }
@@ -500,7 +501,7 @@ void vtkAPCCompositePass::FinishFrame(
       }
       apc::StoreFloatImages(internal.Image, frame.Width, frame.Height, rect, images);
     }
-    if (frame.Reduction == 1)
+    if (frame.Reduction() == 1)
     {
       apc::BlendIntoWindow(frame.Renderer, frame.X0 + rect.I0, frame.Y0 + rect.J0, rect.Width(),
         rect.Height(), rect.Width(), rect.Height(), result.RGBA.data());
@@ -530,12 +531,12 @@ void vtkAPCCompositePass::FinishFrame(
   }
   const char* names[] = { "APC frame (", "APC segments frame (", "APC local exact frame (" };
   std::ostringstream line;
-  line << (this->CompositeMode == AUTO ? "Auto: " : "") << names[internal.LastMode]
+  line << (frame.Settings.CompositeMode == AUTO ? "Auto: " : "") << names[internal.LastMode]
        << group.Processes << " processes, " << frame.Rect.Pixels() << " pixels composited";
   if (frame.Interactive)
   {
-    line << ", interactive: image reduction " << frame.Reduction << ", sample distance x"
-         << frame.SampleFactor;
+    line << ", interactive: image reduction " << frame.Reduction() << ", sample distance x"
+         << frame.SampleFactor();
   }
   line << "):";
   for (const auto& entry : internal.Record.Clock.Stages())
@@ -555,26 +556,9 @@ void vtkAPCCompositePass::FinishFrame(
 //------------------------------------------------------------------------------
 void vtkAPCCompositePass::WriteImage()
 {
-  if (!this->ImageFileName || !*this->ImageFileName)
+  if (this->ImageFileName && *this->ImageFileName)
   {
-    return;
-  }
-  const std::string name = this->ImageFileName;
-  const bool exr = name.size() > 4 && name.compare(name.size() - 4, 4, ".exr") == 0;
-  if (exr)
-  {
-    vtkNew<vtkAPCEXRWriter> writer;
-    writer->SetFileName(name.c_str());
-    writer->SetInputData(this->Internal->Image);
-    writer->Write();
-  }
-  else
-  {
-    vtkNew<vtkXMLImageDataWriter> writer;
-    writer->SetFileName(name.c_str());
-    writer->SetInputData(this->Internal->Image);
-    writer->SetDataModeToBinary(); // Debian's ParaView rejects appended-mode XML
-    writer->Write();
+    apc::WriteFloatImages(this->Internal->Image, this->ImageFileName);
   }
 }
 
@@ -585,16 +569,17 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Controller: " << this->Controller << "\n";
   os << indent << "Volumes: " << this->Internal->Volumes.size() << "\n";
   os << indent << "DisplayProcess: " << this->DisplayProcess << "\n";
-  os << indent << "DisplayDepthComposited: " << this->DisplayDepthComposited << "\n";
-  os << indent << "CompositeInDouble: " << this->CompositeInDouble << "\n";
-  os << indent << "MaxBandPixels: " << this->MaxBandPixels << "\n";
+  const apc::FrameSettings& settings = this->Internal->Settings;
+  os << indent << "DisplayDepthComposited: " << settings.DisplayDepthComposited << "\n";
+  os << indent << "CompositeInDouble: " << settings.CompositeInDouble << "\n";
+  os << indent << "MaxBandPixels: " << settings.MaxBandPixels << "\n";
   os << indent << "KeepLastImage: " << this->KeepLastImage << "\n";
   const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
-  os << indent << "CompositeMode: " << modes[this->CompositeMode] << "\n";
+  os << indent << "CompositeMode: " << modes[settings.CompositeMode] << "\n";
   os << indent << "Verbosity: " << this->Verbosity << "\n";
-  os << indent << "InteractiveSampleDistanceFactor: " << this->InteractiveSampleDistanceFactor
+  os << indent << "InteractiveSampleDistanceFactor: " << settings.InteractiveSampleDistanceFactor
      << "\n";
-  os << indent << "InteractiveImageReduction: " << this->InteractiveImageReduction << "\n";
+  os << indent << "InteractiveImageReduction: " << settings.InteractiveImageReduction << "\n";
   os << indent << "ImageFileName: " << (this->ImageFileName ? this->ImageFileName : "(none)")
      << "\n";
 }

@@ -108,7 +108,7 @@ public:
   /**
    * The process that shows the image (IceT's root). Default 0.
    */
-  vtkSetClampMacro(DisplayProcess, int, 0, VTK_INT_MAX);
+  void SetDisplayProcess(int process);
   vtkGetMacro(DisplayProcess, int);
   ///@}
 
@@ -138,8 +138,8 @@ public:
    * processes' depths itself (one MIN allreduce of the screen rectangle). Must be the same
    * on every process; apcPassInstaller sets it before every ParaView render.
    */
-  vtkSetMacro(DisplayDepthComposited, bool);
-  vtkGetMacro(DisplayDepthComposited, bool);
+  void SetDisplayDepthComposited(bool composited);
+  bool GetDisplayDepthComposited() const;
   vtkBooleanMacro(DisplayDepthComposited, bool);
   ///@}
 
@@ -149,8 +149,8 @@ public:
    * fixed-point moments and float colour sums, half the bytes; each process still sums its
    * own samples in double).
    */
-  vtkSetMacro(CompositeInDouble, bool);
-  vtkGetMacro(CompositeInDouble, bool);
+  void SetCompositeInDouble(bool inDouble);
+  bool GetCompositeInDouble() const;
   vtkBooleanMacro(CompositeInDouble, bool);
   ///@}
 
@@ -165,8 +165,8 @@ public:
    * the order in which MPI adds float colour sums). The smallest setting of any process
    * applies.
    */
-  vtkSetClampMacro(MaxBandPixels, vtkIdType, 1, VTK_ID_MAX);
-  vtkGetMacro(MaxBandPixels, vtkIdType);
+  void SetMaxBandPixels(vtkIdType pixels);
+  vtkIdType GetMaxBandPixels() const;
   ///@}
 
   enum CompositeModeType
@@ -195,8 +195,8 @@ public:
   /**
    * How the processes' volumes are combined: APC (default), SEGMENTS, LOCAL_EXACT or AUTO.
    */
-  vtkSetClampMacro(CompositeMode, int, APC, AUTO);
-  vtkGetMacro(CompositeMode, int);
+  void SetCompositeMode(int mode);
+  int GetCompositeMode() const;
   ///@}
 
   ///@{
@@ -209,10 +209,10 @@ public:
    * the same decision: the flag and the factors are part of the frame's agreement (interactive
    * if any process's window is; the largest factors). Still frames are never reduced.
    */
-  vtkSetClampMacro(InteractiveSampleDistanceFactor, double, 1.0, 16.0);
-  vtkGetMacro(InteractiveSampleDistanceFactor, double);
-  vtkSetClampMacro(InteractiveImageReduction, int, 1, 16);
-  vtkGetMacro(InteractiveImageReduction, int);
+  void SetInteractiveSampleDistanceFactor(double factor);
+  double GetInteractiveSampleDistanceFactor() const;
+  void SetInteractiveImageReduction(int reduction);
+  int GetInteractiveImageReduction() const;
   ///@}
 
   /**
@@ -237,7 +237,7 @@ public:
    * 0: silent; 1: the display process prints the stage timings and bytes of every frame
    * (every mode).
    */
-  vtkSetClampMacro(Verbosity, int, 0, 1);
+  void SetVerbosity(int verbosity);
   vtkGetMacro(Verbosity, int);
   ///@}
 
@@ -278,6 +278,79 @@ public:
   double GetLastAverageSegmentsPerPixel() const;
   vtkIdType GetLastMaxSegmentsPerPixel() const;
   ///@}
+
+  /**
+   * Everything the GetLast*() methods above say about the last frame on this process, as named
+   * fields: seconds of each stage (zero for the stages the mode did not run) and of the whole
+   * frame, the counts, the mode that ran and the image reduction. What vtkAPCVolumeRepresentation
+   * publishes to ParaView, by these names (ForEachTiming), and apcparaview.last_timings()
+   * returns as a dict. Counts are doubles so that the fields travel as one array.
+   */
+  struct Timings
+  {
+    double Agree = 0;
+    double Depth = 0;
+    double Pass1 = 0;
+    double Tiles = 0; // where a process waits for the slowest pass 1
+    double Allreduce = 0;
+    double Pass2 = 0;
+    double Reduce = 0;
+    double Resolve = 0;
+    double Segments = 0;
+    double Exchange = 0;
+    double BlendSegments = 0;
+    double Gather = 0;
+    double Statistics = 0;
+    double Exact = 0;
+    double Auto = 0;
+    double Blend = 0;
+    double Total = 0; // all the stages above
+    double BytesSent = 0;
+    double MessagesSent = 0;
+    double CompositedPixels = 0;
+    double CoveredPixels = 0;
+    double Mode = -1; // GetLastCompositeMode: what ran (AUTO's choice); -1 if skipped
+    double ImageReduction = 0;
+    double AverageSegmentsPerPixel = 0;
+    double MaxSegmentsPerPixel = 0;
+  };
+  Timings GetLastTimings() const;
+
+  /**
+   * Calls f(name, field) for every field of timings, in declaration order; the names of the
+   * stages are GetLastStageSeconds' ("blend_segments"), the others in the same style
+   * ("bytes_sent", "image_reduction", ...).
+   */
+  template <class T, class F>
+  static void ForEachTiming(T& timings, F&& f) // T: Timings or const Timings
+  {
+    f("agree", timings.Agree);
+    f("depth", timings.Depth);
+    f("pass1", timings.Pass1);
+    f("tiles", timings.Tiles);
+    f("allreduce", timings.Allreduce);
+    f("pass2", timings.Pass2);
+    f("reduce", timings.Reduce);
+    f("resolve", timings.Resolve);
+    f("segments", timings.Segments);
+    f("exchange", timings.Exchange);
+    f("blend_segments", timings.BlendSegments);
+    f("gather", timings.Gather);
+    f("statistics", timings.Statistics);
+    f("exact", timings.Exact);
+    f("auto", timings.Auto);
+    f("blend", timings.Blend);
+    f("total", timings.Total);
+    f("bytes_sent", timings.BytesSent);
+    f("messages_sent", timings.MessagesSent);
+    f("composited_pixels", timings.CompositedPixels);
+    f("covered_pixels", timings.CoveredPixels);
+    f("mode", timings.Mode);
+    f("image_reduction", timings.ImageReduction);
+    f("average_segments_per_pixel", timings.AverageSegmentsPerPixel);
+    f("max_segments_per_pixel", timings.MaxSegmentsPerPixel);
+  }
+  static constexpr int NumberOfTimings = 25;
 
   ///@{
   /**
@@ -327,17 +400,14 @@ protected:
   vtkAPCCompositePass();
   ~vtkAPCCompositePass() override;
 
+  // The settings every process must agree on (CompositeMode, CompositeInDouble,
+  // DisplayDepthComposited, MaxBandPixels, the interactive ones) live in one value,
+  // apc::FrameSettings, in Internal; these are the display process's own.
   vtkMultiProcessController* Controller = nullptr;
   int DisplayProcess = 0;
-  bool DisplayDepthComposited = true;
-  bool CompositeInDouble = false;
   bool KeepLastImage = false;
-  vtkIdType MaxBandPixels = vtkIdType(1) << 21;
-  int CompositeMode = APC;
   int Verbosity = 0;
   char* ImageFileName = nullptr;
-  double InteractiveSampleDistanceFactor = 2.0;
-  int InteractiveImageReduction = 4;
 
 private:
   vtkAPCCompositePass(const vtkAPCCompositePass&) = delete;

@@ -11,13 +11,18 @@
 #include "apcImageOutput.h"
 #include "apcMomentParameters.h"
 #include "apcResolve.h"
+#include "apcSettingChecks.h"
+#include "apcVolumeSettings.h"
 
+#include <algorithm>
+#include <string>
 #include <vector>
 
 vtkStandardNewMacro(vtkAPCVolumeMapper);
 
 struct vtkAPCVolumeMapper::Internals
 {
+  apc::VolumeSettings Settings; // every property of the mapper, with its default
   apc::FrameEngine Engine;
   vtkNew<vtkImageData> Image;
   // Kept from frame to frame: fresh buffers of this size (~80 MB at 1024^2) cost more in
@@ -28,46 +33,190 @@ struct vtkAPCVolumeMapper::Internals
   std::vector<int> Segments;
 };
 
+namespace
+{
+// A property's setter: the value as given (checked by the caller), Modified() on a change.
+template <class T>
+void Assign(vtkObject* self, T& setting, T value)
+{
+  if (setting != value)
+  {
+    setting = value;
+    self->Modified();
+  }
+}
+}
+
 //------------------------------------------------------------------------------
 vtkAPCVolumeMapper::vtkAPCVolumeMapper()
-  : Overestimation(apc::kDefaultOverestimation)
-  , MomentBias(apc::kUseDefaultMomentBias)
-  , Internal(new Internals)
+  : Internal(new Internals)
 {
 }
 
 vtkAPCVolumeMapper::~vtkAPCVolumeMapper() = default;
 
 //------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::SetMode(int mode)
+{
+  Assign(this, this->Internal->Settings.Exact,
+    apc::CheckedSetting(this, "Mode", mode, int(EXACT), int(MBOIT), "0 EXACT, 1 MBOIT") == EXACT);
+}
+
+int vtkAPCVolumeMapper::GetMode() const
+{
+  return this->Internal->Settings.Exact ? EXACT : MBOIT;
+}
+
 void vtkAPCVolumeMapper::SetNumberOfMoments(int n)
 {
   const int valid = n <= 4 ? 4 : (n <= 6 ? 6 : 8);
-  if (valid != n)
+  if (!apc::IsSupportedMoments(n))
   {
-    vtkWarningMacro("NumberOfMoments must be 4, 6 or 8; using " << valid << " for " << n << ".");
+    vtkWarningMacro(
+      "NumberOfMoments must be 4, 6 or 8; " << n << " was given, " << valid << " is used.");
   }
-  if (valid != this->NumberOfMoments)
+  Assign(this, this->Internal->Settings.Moments.Moments, valid);
+}
+
+int vtkAPCVolumeMapper::GetNumberOfMoments() const
+{
+  return this->Internal->Settings.Moments.Moments;
+}
+
+void vtkAPCVolumeMapper::SetOverestimation(double beta)
+{
+  Assign(this, this->Internal->Settings.Moments.Overestimation,
+    apc::CheckedSetting(this, "Overestimation", beta, 0.0, 1.0));
+}
+
+double vtkAPCVolumeMapper::GetOverestimation() const
+{
+  return this->Internal->Settings.Moments.Overestimation;
+}
+
+void vtkAPCVolumeMapper::SetMomentBias(double bias)
+{
+  Assign(this, this->Internal->Settings.Moments.Bias,
+    apc::CheckedSetting(
+      this, "MomentBias", bias, -1.0, 1.0, "negative: the published constant for the moments"));
+}
+
+double vtkAPCVolumeMapper::GetMomentBias() const
+{
+  return this->Internal->Settings.Moments.Bias;
+}
+
+void vtkAPCVolumeMapper::SetResolveMode(int mode)
+{
+  const int clamped = apc::CheckedSetting(this, "ResolveMode", mode, int(RENORMALISED), int(HYBRID),
+    "0 RENORMALISED, 1 PAPER_SUM, 2 HYBRID");
+  Assign(this, this->Internal->Settings.Moments.Resolve,
+    clamped == PAPER_SUM  ? apc::ResolveMode::PaperSum
+      : clamped == HYBRID ? apc::ResolveMode::Hybrid
+                          : apc::ResolveMode::Renormalised);
+}
+
+int vtkAPCVolumeMapper::GetResolveMode() const
+{
+  switch (this->Internal->Settings.Moments.Resolve)
   {
-    this->NumberOfMoments = valid;
-    this->Modified();
+    case apc::ResolveMode::PaperSum:
+      return PAPER_SUM;
+    case apc::ResolveMode::Hybrid:
+      return HYBRID;
+    default:
+      return RENORMALISED;
   }
 }
 
-apc::MomentParameters vtkAPCVolumeMapper::GetMomentParameters() const
+void vtkAPCVolumeMapper::SetSampleDistance(double distance)
 {
-  apc::MomentParameters parameters;
-  parameters.Moments = this->NumberOfMoments;
-  parameters.Overestimation = this->Overestimation;
-  parameters.Bias = this->MomentBias;
-  parameters.Resolve = this->ResolveMode == PAPER_SUM ? apc::ResolveMode::PaperSum
-    : this->ResolveMode == HYBRID                     ? apc::ResolveMode::Hybrid
-                                                      : apc::ResolveMode::Renormalised;
-  return parameters;
+  Assign(this, this->Internal->Settings.SampleDistance,
+    apc::CheckedSetting(this, "SampleDistance", distance, 0.0, VTK_DOUBLE_MAX,
+      "0 picks the data's bounding-box diagonal / 256"));
 }
 
-apc::FrameEngine* vtkAPCVolumeMapper::GetFrameEngine()
+double vtkAPCVolumeMapper::GetSampleDistance() const
 {
-  return &this->Internal->Engine;
+  return this->Internal->Settings.SampleDistance;
+}
+
+void vtkAPCVolumeMapper::SetLatticeJitter(bool jitter)
+{
+  Assign(this, this->Internal->Settings.LatticeJitter, jitter);
+}
+
+bool vtkAPCVolumeMapper::GetLatticeJitter() const
+{
+  return this->Internal->Settings.LatticeJitter;
+}
+
+void vtkAPCVolumeMapper::SetSampleCacheSize(int megabytes)
+{
+  Assign(this, this->Internal->Settings.SampleCacheMiB,
+    apc::CheckedSetting(
+      this, "SampleCacheSize", megabytes, 0, VTK_INT_MAX, "MiB per process; 0 turns it off"));
+}
+
+int vtkAPCVolumeMapper::GetSampleCacheSize() const
+{
+  return this->Internal->Settings.SampleCacheMiB;
+}
+
+void vtkAPCVolumeMapper::SetNumberOfThreads(int threads)
+{
+  Assign(this, this->Internal->Settings.NumberOfThreads,
+    apc::CheckedSetting(this, "NumberOfThreads", threads, 0, 1024, "0 lets TBB decide"));
+}
+
+int vtkAPCVolumeMapper::GetNumberOfThreads() const
+{
+  return this->Internal->Settings.NumberOfThreads;
+}
+
+void vtkAPCVolumeMapper::SetComputeSegmentCount(bool compute)
+{
+  Assign(this, this->Internal->Settings.ComputeSegmentCount, compute);
+}
+
+bool vtkAPCVolumeMapper::GetComputeSegmentCount() const
+{
+  return this->Internal->Settings.ComputeSegmentCount;
+}
+
+void vtkAPCVolumeMapper::SetVectorMode(int mode)
+{
+  Assign(this, this->Internal->Settings.Scalars.VectorMode,
+    apc::CheckedSetting(this, "VectorMode", mode, int(vtkScalarsToColors::MAGNITUDE),
+      int(vtkScalarsToColors::RGBCOLORS), "0 MAGNITUDE, 1 COMPONENT, 2 RGBCOLORS"));
+}
+
+int vtkAPCVolumeMapper::GetVectorMode() const
+{
+  return this->Internal->Settings.Scalars.VectorMode;
+}
+
+void vtkAPCVolumeMapper::SetVectorComponent(int component)
+{
+  Assign(this, this->Internal->Settings.Scalars.VectorComponent, component);
+}
+
+int vtkAPCVolumeMapper::GetVectorComponent() const
+{
+  return this->Internal->Settings.Scalars.VectorComponent;
+}
+
+apc::VolumeSettings vtkAPCVolumeMapper::GetVolumeSettings() const
+{
+  apc::VolumeSettings settings = this->Internal->Settings;
+  // vtkAbstractMapper's getters are not const.
+  auto* self = const_cast<vtkAPCVolumeMapper*>(this);
+  apc::ScalarChoice& scalars = settings.Scalars;
+  scalars.ScalarMode = self->GetScalarMode();
+  scalars.ArrayAccessMode = self->GetArrayAccessMode();
+  scalars.ArrayId = self->GetArrayId();
+  scalars.ArrayName = self->GetArrayName() ? self->GetArrayName() : "";
+  return settings;
 }
 
 //------------------------------------------------------------------------------
@@ -81,6 +230,11 @@ double vtkAPCVolumeMapper::GetLastSampleDistance() const
   return this->Internal->Engine.GetSampleDistance();
 }
 
+vtkIdType vtkAPCVolumeMapper::GetLastRenderedPixels() const
+{
+  return static_cast<vtkIdType>(this->Internal->Engine.GetPixels());
+}
+
 double vtkAPCVolumeMapper::GetLastStageSeconds(const char* stage) const
 {
   return this->Internal->Engine.GetClock().Get(stage);
@@ -90,8 +244,9 @@ double vtkAPCVolumeMapper::GetLastStageSeconds(const char* stage) const
 void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
 {
   apc::FrameEngine& engine = this->Internal->Engine;
-  engine.BeginFrame();
-  const bool usable = engine.UpdateInput(this);
+  const apc::VolumeSettings settings = this->GetVolumeSettings();
+  engine.BeginFrame(settings);
+  const bool usable = engine.UpdateInput(this->GetInput(), this);
   if (engine.TakeNewInputReport())
   {
     engine.GetInputReport().Emit(this);
@@ -104,11 +259,16 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     image.Crop = apc::ScreenRectOf(ren, bounds, image.Width, image.Height);
   }
-  if (!usable || !engine.Prepare(this, ren, vol, nullptr, nullptr, image) ||
+  if (!usable || !engine.Prepare(ren, vol->GetProperty(), nullptr, nullptr, image) ||
     engine.GetNumberOfCells() == 0)
   {
     this->Internal->Image->Initialize();
     return;
+  }
+  const std::string note = engine.TakeSpacingNote();
+  if (!note.empty())
+  {
+    vtkWarningMacro(<< note);
   }
   const size_t pixels = engine.GetPixels();
   std::vector<float>& rgba = this->Internal->RGBA;
@@ -119,8 +279,8 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   moments.clear();
   colourSums.clear();
   segments.clear();
-  const apc::MomentParameters parameters = this->GetMomentParameters();
-  if (this->Mode == EXACT)
+  const apc::MomentParameters& parameters = settings.Moments;
+  if (settings.Exact)
   {
     engine.RenderExact(rgba.data());
   }
@@ -134,7 +294,7 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
       colourSums.data(), rgba.data());
     engine.GetClock().Lap("resolve");
   }
-  if (this->ComputeSegmentCount)
+  if (settings.ComputeSegmentCount)
   {
     segments.assign(pixels, 0);
     engine.CountSegments(segments.data());
@@ -157,20 +317,22 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
 void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "Mode: " << (this->Mode == EXACT ? "EXACT" : "MBOIT") << "\n";
-  os << indent << "NumberOfMoments: " << this->NumberOfMoments << "\n";
-  os << indent << "Overestimation: " << this->Overestimation << "\n";
-  os << indent << "MomentBias: " << this->MomentBias << "\n";
+  const apc::VolumeSettings& settings = this->Internal->Settings;
+  os << indent << "Mode: " << (settings.Exact ? "EXACT" : "MBOIT") << "\n";
+  os << indent << "NumberOfMoments: " << settings.Moments.Moments << "\n";
+  os << indent << "Overestimation: " << settings.Moments.Overestimation << "\n";
+  os << indent << "MomentBias: " << settings.Moments.Bias << "\n";
+  const int resolve = this->GetResolveMode();
   os << indent << "ResolveMode: "
-     << (this->ResolveMode == PAPER_SUM   ? "PAPER_SUM"
-            : this->ResolveMode == HYBRID ? "HYBRID"
-                                          : "RENORMALISED")
+     << (resolve == PAPER_SUM   ? "PAPER_SUM"
+            : resolve == HYBRID ? "HYBRID"
+                                : "RENORMALISED")
      << "\n";
-  os << indent << "SampleDistance: " << this->SampleDistance << "\n";
-  os << indent << "LatticeJitter: " << this->LatticeJitter << "\n";
-  os << indent << "SampleCacheSize: " << this->SampleCacheSize << " MiB\n";
-  os << indent << "NumberOfThreads: " << this->NumberOfThreads << "\n";
-  os << indent << "ComputeSegmentCount: " << this->ComputeSegmentCount << "\n";
-  os << indent << "VectorMode: " << this->VectorMode << "\n";
-  os << indent << "VectorComponent: " << this->VectorComponent << "\n";
+  os << indent << "SampleDistance: " << settings.SampleDistance << "\n";
+  os << indent << "LatticeJitter: " << settings.LatticeJitter << "\n";
+  os << indent << "SampleCacheSize: " << settings.SampleCacheMiB << " MiB\n";
+  os << indent << "NumberOfThreads: " << settings.NumberOfThreads << "\n";
+  os << indent << "ComputeSegmentCount: " << settings.ComputeSegmentCount << "\n";
+  os << indent << "VectorMode: " << settings.Scalars.VectorMode << "\n";
+  os << indent << "VectorComponent: " << settings.Scalars.VectorComponent << "\n";
 }

@@ -55,8 +55,7 @@ class vtkImageData;
 class vtkUnstructuredGridBase;
 namespace apc
 {
-class FrameEngine;
-struct MomentParameters;
+struct VolumeSettings;
 }
 
 class APCRENDERING_EXPORT vtkAPCVolumeMapper : public vtkUnstructuredGridVolumeMapper
@@ -93,8 +92,8 @@ public:
   /**
    * EXACT (front-to-back blending, the reference) or MBOIT (default).
    */
-  vtkSetClampMacro(Mode, int, EXACT, MBOIT);
-  vtkGetMacro(Mode, int);
+  void SetMode(int mode);
+  int GetMode() const;
   ///@}
 
   ///@{
@@ -105,7 +104,7 @@ public:
    * bytes per pixel and rank, and close-up translucent shells lose (see the issue 5 note).
    */
   void SetNumberOfMoments(int n);
-  vtkGetMacro(NumberOfMoments, int);
+  int GetNumberOfMoments() const;
   ///@}
 
   ///@{
@@ -113,8 +112,8 @@ public:
    * MBOIT overestimation beta in [0,1] (default 0.3, apc::kDefaultOverestimation, as the APC
    * paper; 0.5 suits opaque slab-like data better, docs/evaluation.md).
    */
-  vtkSetClampMacro(Overestimation, double, 0.0, 1.0);
-  vtkGetMacro(Overestimation, double);
+  void SetOverestimation(double beta);
+  double GetOverestimation() const;
   ///@}
 
   ///@{
@@ -122,8 +121,8 @@ public:
    * MBOIT moment bias epsilon in [0,1]; a negative value (default) uses the published constant
    * for the number of moments (5e-7, 5e-6, 5e-5 for 4, 6, 8).
    */
-  vtkSetClampMacro(MomentBias, double, -1.0, 1.0);
-  vtkGetMacro(MomentBias, double);
+  void SetMomentBias(double bias);
+  double GetMomentBias() const;
   ///@}
 
   ///@{
@@ -131,8 +130,8 @@ public:
    * How MBOIT weights and turns the colour sums into a pixel: RENORMALISED (default),
    * PAPER_SUM or HYBRID (own samples exact, other processes' by moments).
    */
-  vtkSetClampMacro(ResolveMode, int, RENORMALISED, HYBRID);
-  vtkGetMacro(ResolveMode, int);
+  void SetResolveMode(int mode);
+  int GetResolveMode() const;
   ///@}
 
   ///@{
@@ -140,8 +139,8 @@ public:
    * World distance between samples along a ray. 0 (default) picks the input's bounding-box
    * diagonal / 256.
    */
-  vtkSetClampMacro(SampleDistance, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(SampleDistance, double);
+  void SetSampleDistance(double distance);
+  double GetSampleDistance() const;
   ///@}
 
   ///@{
@@ -152,8 +151,8 @@ public:
    * The offset depends only on the pixel: every rank still samples the same points. Off by
    * default (see the README for the measurement).
    */
-  vtkSetMacro(LatticeJitter, bool);
-  vtkGetMacro(LatticeJitter, bool);
+  void SetLatticeJitter(bool jitter);
+  bool GetLatticeJitter() const;
   vtkBooleanMacro(LatticeJitter, bool);
   ///@}
 
@@ -164,16 +163,16 @@ public:
    * the second pass from 1.2 s to 0.02 s at 512^2). The screen tiles beyond it are marched
    * again. 0 turns the cache off. Default 1024. Lowering it frees the memory held.
    */
-  vtkSetClampMacro(SampleCacheSize, int, 0, VTK_INT_MAX);
-  vtkGetMacro(SampleCacheSize, int);
+  void SetSampleCacheSize(int megabytes);
+  int GetSampleCacheSize() const;
   ///@}
 
   ///@{
   /**
    * TBB threads for ray marching; 0 (default) lets TBB decide.
    */
-  vtkSetClampMacro(NumberOfThreads, int, 0, 1024);
-  vtkGetMacro(NumberOfThreads, int);
+  void SetNumberOfThreads(int threads);
+  int GetNumberOfThreads() const;
   ///@}
 
   ///@{
@@ -181,8 +180,8 @@ public:
    * Also compute the per-pixel number of disjoint ray segments through the cells (the
    * APC paper's heatmap) into GetLastImage()'s "SegmentCount" array. Off by default.
    */
-  vtkSetMacro(ComputeSegmentCount, bool);
-  vtkGetMacro(ComputeSegmentCount, bool);
+  void SetComputeSegmentCount(bool compute);
+  bool GetComputeSegmentCount() const;
   vtkBooleanMacro(ComputeSegmentCount, bool);
   ///@}
 
@@ -194,10 +193,10 @@ public:
    * array's components with a warning) or RGBCOLORS (not supported: the magnitude, with a
    * warning). Single-component arrays render their value whatever the mode.
    */
-  vtkSetClampMacro(VectorMode, int, vtkScalarsToColors::MAGNITUDE, vtkScalarsToColors::RGBCOLORS);
-  vtkGetMacro(VectorMode, int);
-  vtkSetMacro(VectorComponent, int);
-  vtkGetMacro(VectorComponent, int);
+  void SetVectorMode(int mode);
+  int GetVectorMode() const;
+  void SetVectorComponent(int component);
+  int GetVectorComponent() const;
   ///@}
 
   ///@{
@@ -227,34 +226,20 @@ public:
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
 
   /**
-   * The MBOIT settings (NumberOfMoments, Overestimation, MomentBias, ResolveMode) as the one
-   * value the frame stages take.
+   * The pixels the last frame rendered: the data's screen rectangle, not the whole view.
    */
-  apc::MomentParameters GetMomentParameters() const;
+  vtkIdType GetLastRenderedPixels() const;
 
   /**
-   * @internal The frame engine that runs this mapper's frame stage by stage
-   * (apcFrameEngine.h): vtkAPCCompositePass puts its collectives between the stages. Not
-   * for applications.
+   * All of this mapper's settings as one value, with the scalar selection of its
+   * vtkAbstractMapper base: what vtkAPCCompositePass reads once per frame and hands to the
+   * frame engine (apcVolumeSettings.h). Not for applications, which use the setters above.
    */
-  apc::FrameEngine* GetFrameEngine();
+  apc::VolumeSettings GetVolumeSettings() const;
 
 protected:
   vtkAPCVolumeMapper();
   ~vtkAPCVolumeMapper() override;
-
-  int Mode = MBOIT;
-  int NumberOfMoments = 4;
-  double Overestimation; // apc::kDefaultOverestimation, set by the constructor
-  double MomentBias;     // apc::kUseDefaultMomentBias
-  int ResolveMode = RENORMALISED;
-  double SampleDistance = 0.0;
-  bool LatticeJitter = false;
-  int SampleCacheSize = 1024;
-  int NumberOfThreads = 0;
-  bool ComputeSegmentCount = false;
-  int VectorMode = vtkScalarsToColors::MAGNITUDE;
-  int VectorComponent = 0;
 
 private:
   vtkAPCVolumeMapper(const vtkAPCVolumeMapper&) = delete;

@@ -121,11 +121,16 @@ def print_timings():
         return
     display = GetDisplayProperties(mesh, view)
     display.UpdatePropertyInformation()
-    t = display.GetProperty("APCLastTimings").GetData()
-    names = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend",
-             "total"]
+    # Named fields (the same reading as apcparaview.last_timings, which a Catalyst script
+    # may not have on its path): never slots by position.
+    names = display.GetProperty("APCLastTimingNames").GetData()
+    if isinstance(names, (list, tuple)):
+        names = " ".join(names)
+    t = dict(zip(names.split(), display.GetProperty("APCLastTimings").GetData()))
+    stages = ["agree", "depth", "pass1", "tiles", "allreduce", "pass2", "reduce", "resolve",
+              "blend"]
     print("APC stages of the last frame: " + ", ".join(
-        "%s %.3f s" % (n, v) for n, v in zip(names, t[:9])), flush=True)
+        "%s %.3f s" % (n, t[n]) for n in stages + ["total"] if n in t), flush=True)
 
 
 def catalyst_execute(info):

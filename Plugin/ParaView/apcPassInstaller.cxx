@@ -20,8 +20,11 @@
 #include "vtkWeakPointer.h"
 #include "vtk_glew.h"
 
+#include <algorithm>
 #include <map>
-#include <set>
+#include <sstream>
+#include <utility>
+#include <vector>
 
 namespace apc
 {
@@ -46,7 +49,10 @@ struct Installation
   vtkWeakPointer<vtkPVRenderView> View;
   vtkSmartPointer<vtkAPCCompositePass> Pass;
   vtkSmartPointer<vtkImageProcessingPass> Previous;
-  std::set<const void*> Users;
+  // The representations whose volumes the pass renders and the settings they ask for, in the
+  // order they were first shown: the first one's are the view's.
+  std::vector<std::pair<const void*, ViewRequest>> Users;
+  std::string ConflictSaid; // the differences last warned about, so that they are said once
   vtkSmartPointer<vtkCallbackCommand> BeforeRender;
   unsigned long BeforeRenderTag = 0;
   vtkSmartPointer<vtkCallbackCommand> AfterIceT;
@@ -156,9 +162,68 @@ void AfterIceT(vtkObject* caller, unsigned long, void* clientData, void* callDat
     pass->SetDelegateDepth(depth);
   }
 }
+
+// The view's settings onto its pass: the first representation's request; the others' differing
+// requests are said once (until they change).
+void ApplyRequests(Installation& installation)
+{
+  const ViewRequest& governing = installation.Users.front().second;
+  std::string differences;
+  for (const auto& user : installation.Users)
+  {
+    const std::string d = governing.Differences(user.second);
+    if (!d.empty() && differences.find(d) == std::string::npos)
+    {
+      differences += (differences.empty() ? "" : ", ") + d;
+    }
+  }
+  // Every rank asks the same (ParaView sets the properties everywhere): the display rank says it.
+  if (SaysMessages() && !differences.empty() && differences != installation.ConflictSaid)
+  {
+    vtkLog(WARNING,
+      "The APC volumes of one view ask for different view settings ("
+        << differences
+        << "). They are the view's, not each volume's: the view uses those of the APC volume "
+           "shown first. Set them alike on every APC volume of the view.");
+  }
+  installation.ConflictSaid = differences;
+  vtkAPCCompositePass* pass = installation.Pass;
+  pass->SetCompositeMode(governing.Frame.CompositeMode);
+  pass->SetMaxBandPixels(governing.Frame.MaxBandPixels);
+  pass->SetInteractiveSampleDistanceFactor(governing.Frame.InteractiveSampleDistanceFactor);
+  pass->SetInteractiveImageReduction(governing.Frame.InteractiveImageReduction);
+  pass->SetCompositeInDouble(governing.Frame.CompositeInDouble);
+  pass->SetVerbosity(governing.Verbosity);
+  pass->SetImageFileName(governing.ImageFileName.c_str());
+}
 }
 
-vtkAPCCompositePass* AttachVolume(vtkPVRenderView* view, const void* user, vtkVolume* volume)
+std::string ViewRequest::Differences(const ViewRequest& other) const
+{
+  std::ostringstream names;
+  const char* separator = "";
+  auto differ = [&](bool different, const char* name)
+  {
+    if (different)
+    {
+      names << separator << name;
+      separator = ", ";
+    }
+  };
+  differ(this->Frame.CompositeMode != other.Frame.CompositeMode, "APC Mode");
+  differ(this->Frame.MaxBandPixels != other.Frame.MaxBandPixels, "Band Size");
+  differ(this->Frame.InteractiveSampleDistanceFactor != other.Frame.InteractiveSampleDistanceFactor,
+    "Interactive Sample Distance Factor");
+  differ(this->Frame.InteractiveImageReduction != other.Frame.InteractiveImageReduction,
+    "Interactive Image Reduction");
+  differ(this->Frame.CompositeInDouble != other.Frame.CompositeInDouble, "Composite In Double");
+  differ(this->Verbosity != other.Verbosity, "Compositing Verbosity");
+  differ(this->ImageFileName != other.ImageFileName, "Float Image File");
+  return names.str();
+}
+
+vtkAPCCompositePass* AttachVolume(
+  vtkPVRenderView* view, const void* user, vtkVolume* volume, const ViewRequest& request)
 {
   if (!view || !RendersHere())
   {
@@ -200,8 +265,19 @@ vtkAPCCompositePass* AttachVolume(vtkPVRenderView* view, const void* user, vtkVo
     installation.Pass->AddObserver(
       vtkAPCCompositePass::DelegateRenderedEvent, installation.AfterIceT);
   }
-  installation.Users.insert(user);
+  auto& users = installation.Users;
+  const auto found = std::find_if(
+    users.begin(), users.end(), [user](const auto& entry) { return entry.first == user; });
+  if (found == users.end())
+  {
+    users.emplace_back(user, request);
+  }
+  else
+  {
+    found->second = request;
+  }
   installation.Pass->AddVolume(volume);
+  ApplyRequests(installation);
   return installation.Pass;
 }
 
@@ -211,8 +287,12 @@ void DetachVolume(const void* user, vtkVolume* volume)
   for (auto it = installations.begin(); it != installations.end();)
   {
     Installation& installation = it->second;
-    if (installation.Users.erase(user))
+    auto& users = installation.Users;
+    const auto found = std::find_if(
+      users.begin(), users.end(), [user](const auto& entry) { return entry.first == user; });
+    if (found != users.end())
     {
+      users.erase(found);
       installation.Pass->RemoveVolume(volume);
       if (installation.Users.empty())
       {
@@ -233,16 +313,24 @@ void DetachVolume(const void* user, vtkVolume* volume)
         it = installations.erase(it);
         continue;
       }
+      ApplyRequests(installation); // the next one shown may now be first
     }
     ++it;
   }
+}
+
+bool SaysMessages()
+{
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  return RendersHere() && (!controller || controller->GetLocalProcessId() == 0);
 }
 
 vtkAPCCompositePass* FindPass(const void* user)
 {
   for (const auto& entry : Installations())
   {
-    if (entry.second.Users.count(user))
+    const auto& users = entry.second.Users;
+    if (std::any_of(users.begin(), users.end(), [user](const auto& u) { return u.first == user; }))
     {
       return entry.second.Pass;
     }

@@ -5,6 +5,7 @@
 #include "vtkAPCVolumeMapper.h"
 
 #include "apcPassInstaller.h"
+#include "apcSettingChecks.h"
 
 #include "vtkAlgorithmOutput.h"
 #include "vtkAppendFilter.h"
@@ -27,10 +28,34 @@
 
 vtkStandardNewMacro(vtkAPCVolumeRepresentation);
 
+namespace
+{
+// When data last changed: a composite's own time or any leaf's.
+vtkMTimeType DataTime(vtkDataObject* data)
+{
+  vtkMTimeType time = data ? data->GetMTime() : 0;
+  if (auto* composite = vtkCompositeDataSet::SafeDownCast(data))
+  {
+    vtkSmartPointer<vtkCompositeDataIterator> it;
+    it.TakeReference(composite->NewIterator());
+    for (it->InitTraversal(); !it->IsDoneWithTraversal(); it->GoToNextItem())
+    {
+      time = std::max(time, it->GetCurrentDataObject()->GetMTime());
+    }
+  }
+  return time;
+}
+
+// The Band Size property's range (APCRepresentation.xml says the same).
+constexpr double kMinBandMegapixels = 0.01;
+constexpr double kMaxBandMegapixels = 1024.0;
+}
+
 //------------------------------------------------------------------------------
 vtkAPCVolumeRepresentation::vtkAPCVolumeRepresentation()
   : Mapper(vtkSmartPointer<vtkAPCVolumeMapper>::New())
   , LocalPiece(vtkSmartPointer<vtkUnstructuredGrid>::New())
+  , ViewRequest(new apc::ViewRequest)
 {
   this->APCVolume = vtkSmartPointer<vtkVolume>::New();
   this->APCVolume->SetMapper(this->Mapper);
@@ -62,10 +87,19 @@ int vtkAPCVolumeRepresentation::RequestData(
 {
   // This rank's cells, as one grid: composite inputs (OpenFOAM, Exodus readers) have their
   // unstructured leaves appended here, locally; nothing crosses ranks.
-  this->LocalPiece = vtkSmartPointer<vtkUnstructuredGrid>::New();
   vtkDataObject* input = inputVector[0]->GetNumberOfInformationObjects()
     ? vtkDataObject::GetData(inputVector[0], 0)
     : nullptr;
+  // A display property's change re-executes this (MarkModified) with the same data: the piece
+  // is kept, so that the mapper sees no new data (its input warnings follow data changes only).
+  const vtkMTimeType inputTime = DataTime(input);
+  if (input && input == this->PieceSource && inputTime == this->PieceSourceTime)
+  {
+    return this->Superclass::RequestData(request, inputVector, outputVector);
+  }
+  this->PieceSource = input;
+  this->PieceSourceTime = inputTime;
+  this->LocalPiece = vtkSmartPointer<vtkUnstructuredGrid>::New();
   vtkNew<vtkAppendFilter> append;
   if (auto* grid = vtkUnstructuredGridBase::SafeDownCast(input))
   {
@@ -120,30 +154,41 @@ int vtkAPCVolumeRepresentation::ProcessViewRequest(
   {
     vtkDataObject* piece = vtkPVView::GetDeliveredPiece(inInfo, this);
     this->Mapper->SetInputDataObject(piece ? piece : this->LocalPiece.Get());
-    this->UpdateMapperArray();
+    if (!this->UpdateMapperArray())
+    {
+      // Solid Color: no array to render. Nothing is drawn (on every rank alike: they share the
+      // setting), and that is said once until an array is chosen.
+      this->Attach(false);
+      if (!this->SaidNoArray && apc::SaysMessages())
+      {
+        vtkWarningMacro("APC Volume renders the values of an array: choose one in Coloring "
+                        "(Solid Color has none). Nothing is drawn until then.");
+      }
+      this->SaidNoArray = true;
+      return 1;
+    }
+    this->SaidNoArray = false;
     this->Attach(true);
   }
   return 1;
 }
 
 //------------------------------------------------------------------------------
-void vtkAPCVolumeRepresentation::UpdateMapperArray()
+bool vtkAPCVolumeRepresentation::UpdateMapperArray()
 {
   vtkInformation* info = this->GetInputArrayInformation(0);
-  if (info && info->Has(vtkDataObject::FIELD_ASSOCIATION()) &&
-    info->Has(vtkDataObject::FIELD_NAME()))
+  const char* name = info && info->Has(vtkDataObject::FIELD_ASSOCIATION())
+    ? info->Get(vtkDataObject::FIELD_NAME())
+    : nullptr;
+  if (!name || !*name)
   {
-    this->Mapper->SelectScalarArray(info->Get(vtkDataObject::FIELD_NAME()));
-    this->Mapper->SetScalarMode(
-      info->Get(vtkDataObject::FIELD_ASSOCIATION()) == vtkDataObject::FIELD_ASSOCIATION_CELLS
-        ? VTK_SCALAR_MODE_USE_CELL_FIELD_DATA
-        : VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
+    return false; // Solid Color
   }
-  else
-  {
-    this->Mapper->SelectScalarArray(static_cast<const char*>(nullptr));
-    this->Mapper->SetScalarMode(VTK_SCALAR_MODE_DEFAULT);
-  }
+  this->Mapper->SelectScalarArray(name);
+  this->Mapper->SetScalarMode(
+    info->Get(vtkDataObject::FIELD_ASSOCIATION()) == vtkDataObject::FIELD_ASSOCIATION_CELLS
+      ? VTK_SCALAR_MODE_USE_CELL_FIELD_DATA
+      : VTK_SCALAR_MODE_USE_POINT_FIELD_DATA);
   // Which values of a vector are rendered: the colour map's vector mode and component (what
   // ColorBy(display, ('POINTS', 'v', 'X')) sets), as ParaView's own volume representations
   // hand them to their mappers; with dependent components (Map Scalars off, or Multi
@@ -153,6 +198,7 @@ void vtkAPCVolumeRepresentation::UpdateMapperArray()
   this->Mapper->SetVectorMode(
     independent && colours ? colours->GetVectorMode() : vtkScalarsToColors::COMPONENT);
   this->Mapper->SetVectorComponent(independent && colours ? colours->GetVectorComponent() : 0);
+  return true;
 }
 
 //------------------------------------------------------------------------------
@@ -163,16 +209,7 @@ void vtkAPCVolumeRepresentation::Attach(bool attach)
     apc::DetachVolume(this, this->APCVolume);
     return;
   }
-  if (vtkAPCCompositePass* pass = apc::AttachVolume(this->View, this, this->APCVolume))
-  {
-    pass->SetCompositeMode(this->Mode);
-    pass->SetVerbosity(this->Verbosity);
-    pass->SetImageFileName(this->ImageFileName.c_str());
-    pass->SetInteractiveSampleDistanceFactor(this->InteractiveSampleDistanceFactor);
-    pass->SetInteractiveImageReduction(this->InteractiveImageReduction);
-    pass->SetMaxBandPixels(
-      static_cast<vtkIdType>(std::max(1.0, std::ldexp(this->BandMegapixels, 20))));
-  }
+  apc::AttachVolume(this->View, this, this->APCVolume, *this->ViewRequest);
 }
 
 //------------------------------------------------------------------------------
@@ -236,96 +273,122 @@ void vtkAPCVolumeRepresentation::SetResolveMode(int mode)
   this->MarkModified();
 }
 
+// The view settings enter here: checked once (the pass then gets valid values), kept for the
+// view's pass (apcPassInstaller.h).
 void vtkAPCVolumeRepresentation::SetMode(int mode)
 {
-  // The pass clamps it, where it is used: this only passes it on.
-  if (this->Mode != mode)
+  mode = apc::CheckedSetting(this, "APC Mode", mode, 0, 3,
+    "0 APC, 1 Exact (segments), "
+    "2 Local exact, 3 Auto");
+  if (this->ViewRequest->Frame.CompositeMode != mode)
   {
-    this->Mode = mode;
+    this->ViewRequest->Frame.CompositeMode = mode;
     this->MarkModified();
   }
 }
 
+int vtkAPCVolumeRepresentation::GetMode() const
+{
+  return this->ViewRequest->Frame.CompositeMode;
+}
+
 void vtkAPCVolumeRepresentation::SetImageFileName(const char* name)
 {
-  this->ImageFileName = name ? name : "";
+  this->ViewRequest->ImageFileName = name ? name : "";
   this->MarkModified();
+}
+
+const char* vtkAPCVolumeRepresentation::GetImageFileName() const
+{
+  return this->ViewRequest->ImageFileName.c_str();
 }
 
 void vtkAPCVolumeRepresentation::SetInteractiveSampleDistanceFactor(double factor)
 {
-  // The pass clamps and agrees on it: this only passes it on.
-  this->InteractiveSampleDistanceFactor = factor;
+  this->ViewRequest->Frame.InteractiveSampleDistanceFactor =
+    apc::CheckedSetting(this, "Interactive Sample Distance Factor", factor, 1.0,
+      apc::FrameSettings::MaxSampleDistanceFactor, "1 switches it off");
   this->MarkModified();
+}
+
+double vtkAPCVolumeRepresentation::GetInteractiveSampleDistanceFactor() const
+{
+  return this->ViewRequest->Frame.InteractiveSampleDistanceFactor;
 }
 
 void vtkAPCVolumeRepresentation::SetInteractiveImageReduction(int reduction)
 {
-  this->InteractiveImageReduction = reduction;
+  this->ViewRequest->Frame.InteractiveImageReduction =
+    apc::CheckedSetting(this, "Interactive Image Reduction", reduction, 1,
+      apc::FrameSettings::MaxImageReduction, "1 switches it off");
   this->MarkModified();
+}
+
+int vtkAPCVolumeRepresentation::GetInteractiveImageReduction() const
+{
+  return this->ViewRequest->Frame.InteractiveImageReduction;
 }
 
 void vtkAPCVolumeRepresentation::SetBandMegapixels(double megapixels)
 {
-  this->BandMegapixels = megapixels;
+  megapixels = apc::CheckedSetting(this, "Band Size (megapixels)", megapixels, kMinBandMegapixels,
+    kMaxBandMegapixels, "units of 2^20 pixels");
+  this->ViewRequest->Frame.MaxBandPixels = static_cast<vtkIdType>(std::ldexp(megapixels, 20));
   this->MarkModified();
+}
+
+double vtkAPCVolumeRepresentation::GetBandMegapixels() const
+{
+  return std::ldexp(static_cast<double>(this->ViewRequest->Frame.MaxBandPixels), -20);
 }
 
 void vtkAPCVolumeRepresentation::SetVerbosity(int verbosity)
 {
-  this->Verbosity = verbosity;
+  this->ViewRequest->Verbosity =
+    apc::CheckedSetting(this, "Compositing Verbosity", verbosity, 0, 1);
   this->MarkModified();
+}
+
+int vtkAPCVolumeRepresentation::GetVerbosity() const
+{
+  return this->ViewRequest->Verbosity;
 }
 
 //------------------------------------------------------------------------------
 double* vtkAPCVolumeRepresentation::GetLastTimings()
 {
-  std::fill(this->LastTimings, this->LastTimings + 15, 0.0);
-  this->LastTimings[11] = -1;
-  if (const vtkAPCCompositePass* pass = apc::FindPass(this))
-  {
-    const char* stages[] = { "agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve",
-      "blend" };
-    for (int s = 0; s < 8; ++s)
-    {
-      this->LastTimings[s] = pass->GetLastStageSeconds(stages[s]);
-    }
-    this->LastTimings[8] = pass->GetLastStageSeconds(nullptr);
-    this->LastTimings[9] = pass->GetLastBytesSent();
-    this->LastTimings[10] = static_cast<double>(pass->GetLastCompositedPixels());
-    this->LastTimings[11] = pass->GetLastCompositeMode();
-    this->LastTimings[12] = static_cast<double>(pass->GetLastCoveredPixels());
-    this->LastTimings[13] = pass->GetLastStageSeconds("tiles");
-    this->LastTimings[14] = pass->GetLastImageReduction();
-  }
+  static_assert(sizeof(this->LastTimings) / sizeof(double) == vtkAPCCompositePass::NumberOfTimings,
+    "one value per field of vtkAPCCompositePass::Timings (and VTK_SIZEHINT in the header)");
+  const vtkAPCCompositePass* pass = apc::FindPass(this);
+  const vtkAPCCompositePass::Timings timings =
+    pass ? pass->GetLastTimings() : vtkAPCCompositePass::Timings();
+  int field = 0;
+  vtkAPCCompositePass::ForEachTiming(
+    timings, [&](const char*, double value) { this->LastTimings[field++] = value; });
   return this->LastTimings;
 }
 
-double* vtkAPCVolumeRepresentation::GetLastSegmentStatistics()
+const char* vtkAPCVolumeRepresentation::GetLastTimingNames()
 {
-  std::fill(this->LastSegmentStatistics, this->LastSegmentStatistics + 7, 0.0);
-  if (const vtkAPCCompositePass* pass = apc::FindPass(this))
-  {
-    const char* stages[] = { "segments", "exchange", "blend_segments", "gather" };
-    for (int s = 0; s < 4; ++s)
-    {
-      this->LastSegmentStatistics[s] = pass->GetLastStageSeconds(stages[s]);
-    }
-    this->LastSegmentStatistics[4] = static_cast<double>(pass->GetLastMessagesSent());
-    this->LastSegmentStatistics[5] = pass->GetLastAverageSegmentsPerPixel();
-    this->LastSegmentStatistics[6] = static_cast<double>(pass->GetLastMaxSegmentsPerPixel());
-  }
-  return this->LastSegmentStatistics;
+  this->LastTimingNames.clear();
+  const vtkAPCCompositePass::Timings timings;
+  vtkAPCCompositePass::ForEachTiming(timings,
+    [&](const char* name, double)
+    { this->LastTimingNames += (this->LastTimingNames.empty() ? "" : " ") + std::string(name); });
+  return this->LastTimingNames.c_str();
 }
 
 //------------------------------------------------------------------------------
 void vtkAPCVolumeRepresentation::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "Mode: " << this->Mode << " (vtkAPCCompositePass::CompositeModeType)\n";
-  os << indent << "Verbosity: " << this->Verbosity << "\n";
-  os << indent << "InteractiveSampleDistanceFactor: " << this->InteractiveSampleDistanceFactor
+  const apc::ViewRequest& request = *this->ViewRequest;
+  os << indent << "Mode: " << request.Frame.CompositeMode
+     << " (vtkAPCCompositePass::CompositeModeType)\n";
+  os << indent << "Verbosity: " << request.Verbosity << "\n";
+  os << indent
+     << "InteractiveSampleDistanceFactor: " << request.Frame.InteractiveSampleDistanceFactor
      << "\n";
-  os << indent << "InteractiveImageReduction: " << this->InteractiveImageReduction << "\n";
-  os << indent << "BandMegapixels: " << this->BandMegapixels << "\n";
+  os << indent << "InteractiveImageReduction: " << request.Frame.InteractiveImageReduction << "\n";
+  os << indent << "BandMegapixels: " << this->GetBandMegapixels() << "\n";
 }

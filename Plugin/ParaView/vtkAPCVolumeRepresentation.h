@@ -34,12 +34,17 @@
 #include "vtkWeakPointer.h"   // for ivars
 #include "vtkWrappingHints.h" // for VTK_SIZEHINT
 
+#include <memory> // for std::unique_ptr
 #include <string> // for ivars
 
 class vtkAPCVolumeMapper;
 class vtkPVRenderView;
 class vtkUnstructuredGrid;
 class vtkVolume;
+namespace apc
+{
+struct ViewRequest;
+}
 
 class APCPARAVIEW_EXPORT vtkAPCVolumeRepresentation : public vtkVolumeRepresentation
 {
@@ -64,6 +69,12 @@ public:
   void SetResolveMode(int mode);
   ///@}
 
+  /**
+   * The settings below are the view's (its vtkAPCCompositePass's), not this volume's: every
+   * APC volume of a view asks for them, the view follows the one shown first, and a volume
+   * asking for something else is told so, once (apcPassInstaller.h).
+   */
+
   ///@{
   /**
    * How the ranks' volumes are combined, vtkAPCCompositePass::CompositeModeType: APC (0,
@@ -73,7 +84,7 @@ public:
    * whichever moves fewer bytes.
    */
   void SetMode(int mode);
-  vtkGetMacro(Mode, int);
+  int GetMode() const;
   ///@}
 
   ///@{
@@ -81,33 +92,33 @@ public:
    * Compositing verbosity: 1 prints every frame's stage timings and bytes on the display rank.
    */
   void SetVerbosity(int verbosity);
-  vtkGetMacro(Verbosity, int);
+  int GetVerbosity() const;
   ///@}
 
   ///@{
   /**
    * Interactive frames (while the camera moves), vtkAPCCompositePass's settings: the factor on
-   * the sample distance and the image reduction; 1 switches either off. Defaults 2 and 4
-   * (measured: README, Performance).
+   * the sample distance and the image reduction; 1 switches either off.
    */
   void SetInteractiveSampleDistanceFactor(double factor);
-  vtkGetMacro(InteractiveSampleDistanceFactor, double);
+  double GetInteractiveSampleDistanceFactor() const;
   void SetInteractiveImageReduction(int reduction);
-  vtkGetMacro(InteractiveImageReduction, int);
+  int GetInteractiveImageReduction() const;
   ///@}
 
   ///@{
   /**
-   * vtkAPCCompositePass's MaxBandPixels in units of 2^20 pixels (default 2): a larger screen
-   * rectangle is rendered and composited band by band, with one band's buffers.
+   * vtkAPCCompositePass's MaxBandPixels in units of 2^20 pixels: a larger screen rectangle is
+   * rendered and composited band by band, with one band's buffers.
    */
   void SetBandMegapixels(double megapixels);
-  vtkGetMacro(BandMegapixels, double);
+  double GetBandMegapixels() const;
   ///@}
 
   /**
-   * Does nothing: the panel's "Refresh Timings" button calls it, and the panel then pulls the
-   * information properties (GetLastTimings) from the display rank.
+   * Nothing to do here (every frame keeps its timings): the panel's "Refresh Timings" button
+   * pushes it, and vtkSMAPCVolumeRepresentationProxy then pulls GetLastTimings from the
+   * display rank, which fills "Last Timings".
    */
   void RefreshTimings() {}
 
@@ -117,21 +128,20 @@ public:
    * default) writes nothing.
    */
   void SetImageFileName(const char* name);
+  const char* GetImageFileName() const;
   ///@}
 
   /**
-   * The last frame's stage timings on this rank, in seconds: agree, depth, pass1, allreduce,
-   * pass2, reduce, resolve, blend, total; then the bytes this rank sent, the composited
-   * pixels, the mode that ran (vtkAPCCompositePass::GetLastCompositeMode: what Auto chose),
-   * the covered pixels, the seconds of the "tiles" stage and the image reduction the frame
-   * ran with (1 still, InteractiveImageReduction interactive, 0 skipped): 15 values.
+   * The last frame on this rank, vtkAPCCompositePass::Timings' fields in their order (all zero
+   * but mode -1 before a frame): what the "APCLastTimings" information property holds. Read
+   * them by name, with GetLastTimingNames (apcparaview.last_timings in Python), never by
+   * position: fields are added as the pass measures more.
    */
-  double* GetLastTimings() VTK_SIZEHINT(15);
+  double* GetLastTimings() VTK_SIZEHINT(25);
   /**
-   * The last SEGMENTS frame on this rank: seconds of segments, exchange, blend_segments and
-   * gather; messages sent; average and maximum segments per non-empty pixel (all ranks).
+   * The names of GetLastTimings' values, in their order, separated by spaces.
    */
-  double* GetLastSegmentStatistics() VTK_SIZEHINT(7);
+  const char* GetLastTimingNames();
 
   vtkAPCVolumeMapper* GetMapper();
 
@@ -144,21 +154,20 @@ protected:
   bool AddToView(vtkView* view) override;
   bool RemoveFromView(vtkView* view) override;
 
-  void UpdateMapperArray();
+  // Hands the chosen array to the mapper; false if there is none (Solid Color).
+  bool UpdateMapperArray();
   void Attach(bool attach);
 
   vtkSmartPointer<vtkAPCVolumeMapper> Mapper;
   vtkSmartPointer<vtkUnstructuredGrid> LocalPiece;
+  vtkWeakPointer<vtkDataObject> PieceSource; // the input LocalPiece was made of, and when
+  vtkMTimeType PieceSourceTime = 0;
   vtkSmartPointer<vtkVolume> APCVolume; // what the pass renders; never a prop of the renderer
   vtkWeakPointer<vtkPVRenderView> View;
-  int Mode = 0;
-  int Verbosity = 0;
-  std::string ImageFileName;
-  double InteractiveSampleDistanceFactor = 2.0;
-  int InteractiveImageReduction = 4;
-  double BandMegapixels = 2.0;
-  double LastTimings[15] = {};
-  double LastSegmentStatistics[7] = {};
+  std::unique_ptr<apc::ViewRequest> ViewRequest; // the view settings above, for the pass
+  bool SaidNoArray = false; // that Solid Color draws nothing, until an array is chosen
+  double LastTimings[25] = {};
+  std::string LastTimingNames;
 
 private:
   vtkAPCVolumeRepresentation(const vtkAPCVolumeRepresentation&) = delete;

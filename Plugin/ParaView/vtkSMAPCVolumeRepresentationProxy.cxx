@@ -1,13 +1,32 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkSMAPCVolumeRepresentationProxy.h"
 
+#include "vtkCommand.h"
 #include "vtkObjectFactory.h"
 #include "vtkPVSession.h"
+
+#include <cstring>
 
 vtkStandardNewMacro(vtkSMAPCVolumeRepresentationProxy);
 
 //------------------------------------------------------------------------------
-vtkSMAPCVolumeRepresentationProxy::vtkSMAPCVolumeRepresentationProxy() = default;
+vtkSMAPCVolumeRepresentationProxy::vtkSMAPCVolumeRepresentationProxy()
+{
+  // The panel's "Refresh Timings" button pushes APCRefreshTimings (the server side has
+  // nothing to do: every frame keeps its timings); what the user asks for is the information
+  // properties pulled from where the frame was rendered, which the panel then shows.
+  this->AddObserver(
+    vtkCommand::UpdatePropertyEvent, this, &vtkSMAPCVolumeRepresentationProxy::OnPropertyUpdated);
+}
+
+void vtkSMAPCVolumeRepresentationProxy::OnPropertyUpdated(vtkObject*, unsigned long, void* name)
+{
+  if (name && strcmp(static_cast<const char*>(name), "APCRefreshTimings") == 0)
+  {
+    this->UpdatePropertyInformation();
+  }
+}
+
 vtkSMAPCVolumeRepresentationProxy::~vtkSMAPCVolumeRepresentationProxy() = default;
 
 //------------------------------------------------------------------------------

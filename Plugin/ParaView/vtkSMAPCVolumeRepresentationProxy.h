@@ -8,8 +8,10 @@
  * proxy's information from the client whenever the proxy has an object there, but in a
  * client-server session the client's object never renders: the vtkAPCCompositePass, and so
  * every timing, lives on the render server, whose root is the display rank. This proxy pulls
- * its information properties (APCLastTimings, APCLastSegmentStatistics) from the render
- * server's root instead; in builtin sessions and pvbatch that is the local process, as before.
+ * its information properties (APCLastTimings, APCLastTimingNames) from the render server's
+ * root instead; in builtin sessions and pvbatch that is the local process. Pushing
+ * APCRefreshTimings (the panel's "Refresh Timings" button) pulls them, so that the panel shows
+ * the last frame's timings.
  */
 #ifndef vtkSMAPCVolumeRepresentationProxy_h
 #define vtkSMAPCVolumeRepresentationProxy_h
@@ -29,6 +31,9 @@ protected:
   ~vtkSMAPCVolumeRepresentationProxy() override;
 
   void UpdatePropertyInformationInternal(vtkSMProperty* prop = nullptr) override;
+
+  // After "Refresh Timings" (APCRefreshTimings) was pushed: pulls the timings.
+  void OnPropertyUpdated(vtkObject* caller, unsigned long event, void* name);
 
 private:
   vtkSMAPCVolumeRepresentationProxy(const vtkSMAPCVolumeRepresentationProxy&) = delete;

@@ -73,15 +73,14 @@ def main(args):
     view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = camera
     view.CameraViewAngle = 30
 
-    names = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend",
-             "total"]
     for frame in range(args.frames):
         Render(view)
-        display.UpdatePropertyInformation()
-        t = display.GetProperty("APCLastTimings").GetData()
+        t = apcparaview.last_timings(display)
+        # Every stage that ran: they add up to the total.
         print("frame %d on the display rank: " % frame + ", ".join(
-            "%s %.3f s" % (n, v) for n, v in zip(names, t[:9])) +
-            "; %.1f MB sent by the display rank, %d pixels composited" % (t[9] / 1e6, t[10]))
+            "%s %.3f s" % stage for stage in apcparaview.stage_seconds(t)) +
+            ", total %.3f s; %.1f MB sent by the display rank, %d pixels composited"
+            % (t["total"], t["bytes_sent"] / 1e6, t["composited_pixels"]))
     SaveScreenshot(png, view, ImageResolution=args.size)
     after = apcparaview.rank_summaries(data)
     moved = [a["cells"] != b["cells"] for a, b in zip(summaries, after)]

@@ -54,3 +54,33 @@ def rank_summaries(proxy, port=0):
         summaries.append({"rank": rank, "cells": cells, "points": info.GetNumberOfPoints(),
                           "bounds": bounds})
     return summaries
+
+
+def last_timings(display):
+    """The last frame of an "APC Volume" display on the display rank, as a dict by name:
+    seconds of each stage ("agree", "depth", "pass1", "tiles", "allreduce", "pass2", "reduce",
+    "resolve", "segments", "exchange", "blend_segments", "gather", "exact", "blend", ...) and
+    "total", and "bytes_sent", "messages_sent", "composited_pixels", "covered_pixels", "mode"
+    (0 APC, 1 Exact (segments), 2 Local exact: what Auto chose; -1 skipped), "image_reduction"
+    (1 still, more while interacting, 0 skipped), "average_segments_per_pixel" and
+    "max_segments_per_pixel". Pulled from where the frame was rendered (the render server's
+    root when connected)."""
+    display.UpdatePropertyInformation()
+    names = display.GetProperty("APCLastTimingNames").GetData()
+    if isinstance(names, (list, tuple)):
+        names = " ".join(names)
+    values = display.GetProperty("APCLastTimings").GetData()
+    names = names.split()
+    if len(names) != len(values):
+        raise RuntimeError("APCLastTimings holds %d values for %d names: plugin and script "
+                           "disagree" % (len(values), len(names)))
+    return dict(zip(names, values))
+
+
+def stage_seconds(timings):
+    """The stages of last_timings() that ran (nonzero), in the pass's order, without the
+    total: they add up to timings["total"]."""
+    stages = ["agree", "depth", "pass1", "tiles", "allreduce", "pass2", "reduce", "resolve",
+              "segments", "exchange", "blend_segments", "gather", "statistics", "exact", "auto",
+              "blend"]
+    return [(s, timings[s]) for s in stages if timings.get(s, 0) > 0]

@@ -8,6 +8,8 @@
 #include "apcMomentTransmittance.h"
 #include "apcResolve.h"
 
+#include <stdexcept>
+#include <string>
 #include <type_traits>
 
 namespace apc
@@ -31,19 +33,29 @@ struct MomentParameters
   }
 };
 
-// Calls f(std::integral_constant<int, N>{}) for the supported N equal to moments (4 for any
-// other value: the caller has checked it) and returns its result.
+// Whether moments is a supported number of power moments: 4, 6 or 8.
+constexpr bool IsSupportedMoments(int moments)
+{
+  return moments == 4 || moments == 6 || moments == 8;
+}
+
+// Calls f(std::integral_constant<int, N>{}) for the supported N equal to moments and returns
+// its result. Where the number enters (vtkAPCVolumeMapper::SetNumberOfMoments) it is checked;
+// any other value here is a bug, never silently replaced by another number.
 template <class F>
 decltype(auto) DispatchMoments(int moments, F&& f)
 {
   switch (moments)
   {
+    case 4:
+      return f(std::integral_constant<int, 4>{});
     case 6:
       return f(std::integral_constant<int, 6>{});
     case 8:
       return f(std::integral_constant<int, 8>{});
     default:
-      return f(std::integral_constant<int, 4>{});
+      throw std::invalid_argument(
+        "apc::DispatchMoments: unsupported number of moments " + std::to_string(moments));
   }
 }
 

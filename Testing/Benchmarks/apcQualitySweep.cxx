@@ -61,6 +61,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -289,6 +290,7 @@ SplitFrame RenderSplit(const apctest::Scene& scene,
   const std::vector<float> farDepth(static_cast<size_t>(kSize) * kSize, 1.0f);
   std::vector<vtkSmartPointer<vtkAPCVolumeMapper>> mappers;
   std::vector<vtkSmartPointer<vtkVolume>> volumes;
+  std::vector<std::unique_ptr<apc::FrameEngine>> engines; // one per piece, as the pass keeps
   for (const auto& piece : pieces)
   {
     auto mapper = vtkSmartPointer<vtkAPCVolumeMapper>::New();
@@ -300,27 +302,28 @@ SplitFrame RenderSplit(const apctest::Scene& scene,
     auto volume = vtkSmartPointer<vtkVolume>::New();
     volume->SetMapper(mapper);
     volume->SetProperty(property);
-    apc::FrameEngine* engine = mapper->GetFrameEngine();
-    engine->BeginFrame();
-    if (!engine->UpdateInput(mapper) ||
-      !engine->Prepare(mapper, renderer, volume, bounds, farDepth.data(), image))
+    auto engine = std::make_unique<apc::FrameEngine>();
+    engine->BeginFrame(mapper->GetVolumeSettings());
+    if (!engine->UpdateInput(mapper->GetInput(), mapper) ||
+      !engine->Prepare(renderer, property, bounds, farDepth.data(), image))
     {
       std::cerr << "error: a piece of " << scene.Name << " cannot be rendered\n";
       std::exit(3);
     }
     mappers.push_back(mapper);
     volumes.push_back(volume);
+    engines.push_back(std::move(engine));
   }
-  const apc::MomentParameters parameters = mappers.front()->GetMomentParameters();
+  const apc::MomentParameters parameters = mappers.front()->GetVolumeSettings().Moments;
   const size_t pixels = static_cast<size_t>(kSize) * kSize;
   const int stride = parameters.Moments + 1;
   using Clock = std::chrono::steady_clock;
   SplitFrame frame;
   std::vector<double> global(pixels * stride, 0.0);
   auto start = Clock::now();
-  for (auto& mapper : mappers)
+  for (auto& engine : engines)
   {
-    mapper->GetFrameEngine()->RenderMoments(parameters, global.data());
+    engine->RenderMoments(parameters, global.data());
   }
   frame.Pass1Seconds = std::chrono::duration<double>(Clock::now() - start).count();
   std::vector<double> colour;
@@ -331,9 +334,9 @@ SplitFrame RenderSplit(const apctest::Scene& scene,
     colour.assign(pixels * 4, 0.0);
     start = Clock::now();
     const double cpu = ProcessCPUSeconds();
-    for (auto& mapper : mappers)
+    for (auto& engine : engines)
     {
-      mapper->GetFrameEngine()->RenderColour(parameters, global.data(), colour.data());
+      engine->RenderColour(parameters, global.data(), colour.data());
     }
     frame.Pass2CPUSeconds = std::min(frame.Pass2CPUSeconds, ProcessCPUSeconds() - cpu);
     frame.Pass2Seconds =

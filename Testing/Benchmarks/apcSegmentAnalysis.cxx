@@ -137,13 +137,13 @@ public:
     for (size_t r = 0; r < pieces.size(); ++r)
     {
       mapper->SetInputData(pieces[r]);
-      apc::FrameEngine* engine = mapper->GetFrameEngine();
-      engine->BeginFrame();
-      if (engine->UpdateInput(mapper) &&
-        engine->Prepare(mapper, this->Renderer, volume, bounds, depth.data(),
+      apc::FrameEngine engine;
+      engine.BeginFrame(mapper->GetVolumeSettings());
+      if (engine.UpdateInput(mapper->GetInput(), mapper) &&
+        engine.Prepare(this->Renderer, volume->GetProperty(), bounds, depth.data(),
           apc::ImageSetup::FullQuality(this->Renderer)))
       {
-        engine->RenderSegments(images[r]);
+        engine.RenderSegments(images[r]);
       }
       if (images[r].Width != this->Width || images[r].Height != this->Height)
       {

@@ -75,10 +75,9 @@ def main():
     covered = 0
     seconds = 0.0
     if args.case == "apc":
-        display.UpdatePropertyInformation()
-        timings = display.GetProperty("APCLastTimings").GetData()
-        covered = int(timings[12])
-        seconds = timings[8]
+        timings = apcparaview.last_timings(display)
+        covered = int(timings["covered_pixels"])
+        seconds = timings["total"]
     print("APC-FOOTPRINT covered %d view %d" % (covered, args.size[0] * args.size[1]),
           flush=True)
     # The last frame's total on the display rank (the mesh was converted in the first).

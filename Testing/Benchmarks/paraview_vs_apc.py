@@ -79,9 +79,6 @@ RAMP = [LO, 0, 0.5, 0, HI, 1, 0.5, 0]
 CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
               CameraViewUp=[0, 0, 1], CameraViewAngle=30, CameraParallelProjection=0)
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
-# APCLastTimings: STAGES, total, bytes, pixels composited, mode ran, covered pixels, tiles,
-# image reduction.
-TIMINGS = 15
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s"] +
@@ -277,9 +274,7 @@ def main(args):
             Render(view)
             seconds = time.perf_counter() - start
             if apc:
-                display.UpdatePropertyInformation()
-                timings.append(list(display.GetProperty("APCLastTimings").GetData()) +
-                               list(display.GetProperty("APCLastSegmentStatistics").GetData()))
+                timings.append(apcparaview.last_timings(display))
             return seconds
 
         first = frame()
@@ -301,36 +296,37 @@ def main(args):
             # Auto may change mode between frames: the later frames' modes are listed and the
             # stage columns are those of the last frame's mode.
             modes = {0: "APC", 1: "segments", 2: "local exact"}
-            ran = [modes.get(int(t[11]), "none") for t in timings[1:]]
+            ran = [modes.get(int(t["mode"]), "none") for t in timings[1:]]
             row["mode_ran"] = "/".join(sorted(set(ran)))
-            segments = int(timings[-1][11]) == 1
-            same = [t for t in timings[1:] if int(t[11]) == int(timings[-1][11])]
-            for i, s in enumerate(STAGES):
+            segments = int(timings[-1]["mode"]) == 1
+            same = [t for t in timings[1:] if int(t["mode"]) == int(timings[-1]["mode"])]
+            for s in STAGES:
                 if not segments or s in ("agree", "depth", "blend"):
-                    row[s + "_s"] = "%.4f" % statistics.median(t[i] for t in same)
+                    row[s + "_s"] = "%.4f" % statistics.median(t[s] for t in same)
             if segments:
-                for i, s in enumerate(SEGMENT_STAGES):
-                    row[s + "_s"] = "%.4f" % statistics.median(t[TIMINGS + i] for t in same)
-                row["avg_segments_per_pixel"] = "%.4f" % timings[-1][TIMINGS + 5]
-                row["max_segments_per_pixel"] = "%d" % timings[-1][TIMINGS + 6]
+                for s in SEGMENT_STAGES:
+                    row[s + "_s"] = "%.4f" % statistics.median(t[s] for t in same)
+                row["avg_segments_per_pixel"] = "%.4f" % timings[-1]["average_segments_per_pixel"]
+                row["max_segments_per_pixel"] = "%d" % timings[-1]["max_segments_per_pixel"]
             else:
-                row["tiles_s"] = "%.4f" % statistics.median(t[13] for t in same)
-                covered = statistics.median(t[12] for t in same)
+                row["tiles_s"] = "%.4f" % statistics.median(t["tiles"] for t in same)
+                covered = statistics.median(t["covered_pixels"] for t in same)
                 row["covered_pixels"] = "%d" % covered
                 if covered > 0:
                     row["bytes_per_covered_pixel"] = "%.2f" % (
-                        statistics.median(t[9] for t in same) / covered)
-            row["messages_display_rank"] = "%d" % timings[-1][TIMINGS + 4]
-            row["bytes_display_rank"] = "%d" % statistics.median(t[9] for t in same)
-            row["pixels_composited"] = "%d" % statistics.median(t[10] for t in same)
+                        statistics.median(t["bytes_sent"] for t in same) / covered)
+            row["messages_display_rank"] = "%d" % timings[-1]["messages_sent"]
+            row["bytes_display_rank"] = "%d" % statistics.median(t["bytes_sent"] for t in same)
+            row["pixels_composited"] = "%d" % statistics.median(
+                t["composited_pixels"] for t in same)
             row["cells_per_rank_before"] = "/".join(str(s["cells"]) for s in before)
             after = apcparaview.rank_summaries(reader)
             row["cells_per_rank_after"] = "/".join(str(s["cells"]) for s in after)
             notes.insert(0, "sample distance %.3g m%s; stage times are medians of the later "
                             "frames (pass total %.3f s; first frame's total %.3f s)"
                          % (spacing or diagonal / 256, " (default 0 = diagonal/256)"
-                            if not spacing else "", statistics.median(t[8] for t in timings[1:]),
-                            timings[0][8]))
+                            if not spacing else "", statistics.median(t["total"] for t in timings[1:]),
+                            timings[0]["total"]))
             notes.append("cells unchanged by rendering" if after == before
                          else "CELLS MOVED by rendering")
         else:

@@ -3,7 +3,6 @@
 #ifndef apcTestRender_h
 #define apcTestRender_h
 
-#include "apcFrameEngine.h"
 #include "apcTestScenes.h"
 #include "vtkAPCVolumeMapper.h"
 
@@ -58,7 +57,7 @@ inline Frame ReadFrame(vtkRenderWindow* window, vtkAPCVolumeMapper* mapper, cons
   frame.Width = view.Width;
   frame.Height = view.Height;
   frame.SampleDistance = mapper->GetLastSampleDistance();
-  frame.RenderedPixels = static_cast<int>(mapper->GetFrameEngine()->GetPixels());
+  frame.RenderedPixels = static_cast<int>(mapper->GetLastRenderedPixels());
   vtkImageData* image = mapper->GetLastImage();
   auto copy = [image](const char* name, auto& out)
   {

@@ -115,13 +115,14 @@ TEST(ScalarRefresh, TheEngineConvertsOnlyWhenTheMeshChanges)
   vtkNew<vtkAPCVolumeMapper> mapper;
   mapper->SetScalarModeToUsePointFieldData();
   mapper->SelectScalarArray("f");
-  apc::FrameEngine* engine = mapper->GetFrameEngine();
+  // The engine as vtkAPCCompositePass drives it: the mapper's settings, then its input.
+  apc::FrameEngine engine;
   auto step = [&](vtkUnstructuredGrid* grid)
   {
     mapper->SetInputData(grid);
-    EXPECT_TRUE(engine->UpdateInput(mapper));
-    return std::make_pair(
-      engine->GetNumberOfMeshConversions(), engine->GetNumberOfScalarRefreshes());
+    engine.BeginFrame(mapper->GetVolumeSettings());
+    EXPECT_TRUE(engine.UpdateInput(mapper->GetInput(), mapper));
+    return std::make_pair(engine.GetNumberOfMeshConversions(), engine.GetNumberOfScalarRefreshes());
   };
   EXPECT_EQ(step(NextStep(block, 1)), std::make_pair(int64_t{ 1 }, int64_t{ 0 }));
   // New arrays, same points and cells: only the scalars.

@@ -2,8 +2,9 @@
 --script=gui_apc.py` (user steps: plugin, APC Puzzle Source, APC Volume, colour by an
 array, rotate with the mouse, release, screenshots) and checks its results:
 
-- while the mouse drags, the client sees an interactive frame (APCLastTimings[14] = the image
-  reduction) and after release a still one (1), with non-zero stage times;
+- "Refresh Timings" fills "Last Timings" with the last frame's timings;
+- while the mouse drags, the client sees an interactive frame (the "image_reduction" timing
+  = the image reduction) and after release a still one (1), with non-zero stage times;
 - the GUI's still screenshot equals pvbatch's screenshot of the same scene;
 - its screenshot at twice the view size (tiles) equals pvbatch's single render at that size
   and the GUI's own single render at that size.
@@ -70,11 +71,16 @@ try:
         # the screenshots below are the judges of size.)
         print("ViewSize property during the script:", result["view_size"])
         fast, still = result["timings_interactive"], result["timings_still"]
-        check(fast[14] == result["interactive_image_reduction"] > 1 and fast[8] > 0,
+        check(fast["image_reduction"] == result["interactive_image_reduction"] > 1
+              and fast["total"] > 0,
               "while dragging, the client sees an interactive frame (reduction %g, total %.3f s)"
-              % (fast[14], fast[8]))
-        check(still[14] == 1 and still[8] > 0 and still[2] > 0,
-              "after release, a still frame (reduction %g, total %.3f s)" % (still[14], still[8]))
+              % (fast["image_reduction"], fast["total"]))
+        check(still["image_reduction"] == 1 and still["total"] > 0 and still["pass1"] > 0,
+              "after release, a still frame (reduction %g, total %.3f s)"
+              % (still["image_reduction"], still["total"]))
+        before, after = result["timings_before_refresh"], result["timings_after_refresh"]
+        check(after == result["timings_pulled"] and after != before,
+              "Refresh Timings fills Last Timings with the last frame's timings")
         compare(os.path.join(workdir, "gui_still.png"), reference_png,
                 "GUI screenshot vs pvbatch screenshot")
         compare(os.path.join(workdir, "gui_tiled.png"), reference_2x_png,

@@ -58,7 +58,7 @@ parser.add_argument("--interactive", help="folder: interactive renders (camera m
                     "reduced, the next still render is bit-identical to the one before, and "
                     "the interactive picture reads as the still one (SSIM)")
 parser.add_argument("--client-timings", action="store_true",
-                    help="APCLastTimings must reach this client (total > 0): client-server")
+                    help="the timings must reach this client (total > 0): client-server")
 parser.add_argument("--tiled", help="folder: a screenshot at twice the view size (ParaView "
                     "renders it in tiles) must equal one render of a view of that size")
 args = parser.parse_args()
@@ -148,11 +148,11 @@ def check_interactive(view, display, check):
         if step == 3:
             display.APCImageFile = fast
         view.SMProxy.InteractiveRender()
-    display.UpdatePropertyInformation()
-    t = display.GetProperty("APCLastTimings").GetData()
+    t = apcparaview.last_timings(display)
     reduction = display.APCInteractiveImageReduction
-    check(t[14] == reduction, "the interactive frame ran with image reduction %d (got %g)"
-          % (reduction, t[14]))
+    check(t["image_reduction"] == reduction,
+          "the interactive frame ran with image reduction %d (got %g)"
+          % (reduction, t["image_reduction"]))
     dims, _ = float_rgba(fast)
     expected = [(n + reduction - 1) // reduction for n in args.size]
     check(list(dims[:2]) == expected, "interactive float image %s, expected %s" % (dims[:2], expected))
@@ -164,8 +164,8 @@ def check_interactive(view, display, check):
     display.APCImageFile = still_after
     Render(view)
     display.APCImageFile = ""
-    display.UpdatePropertyInformation()
-    check(display.GetProperty("APCLastTimings").GetData()[14] == 1, "the still frame is full size")
+    check(apcparaview.last_timings(display)["image_reduction"] == 1,
+          "the still frame is full size")
     (_, a), (_, b) = float_rgba(still), float_rgba(still_after)
     check(a.shape == b.shape and bool(numpy.array_equal(a, b)),
           "the still frame after interaction is bit-identical to the one before")
@@ -311,18 +311,16 @@ def main():
     if args.interactive:
         check_interactive(view, display, check)
 
-    display.UpdatePropertyInformation()
-    t = display.GetProperty("APCLastTimings").GetData()
-    names = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend", "total"]
+    t = apcparaview.last_timings(display)
     print("APC timings on the display rank: " + ", ".join(
-        "%s %.4f s" % (n, v) for n, v in zip(names, t[:9])) +
-        ", bytes sent %.0f, pixels composited %.0f, mode ran %d (0 APC, 1 segments)"
-        % (t[9], t[10], t[11]))
+        "%s %.4f s" % stage for stage in apcparaview.stage_seconds(t)) +
+        ", total %.4f s, bytes sent %.0f, pixels composited %.0f, mode ran %d (0 APC, "
+        "1 segments)" % (t["total"], t["bytes_sent"], t["composited_pixels"], t["mode"]))
     if args.client_timings:
         # The pass runs on the render server; these values were pulled from its display rank.
-        check(len(t) == 15 and t[8] > 0 and t[2] > 0 and t[14] == 1,
+        check(t["total"] > 0 and t["pass1"] > 0 and t["image_reduction"] == 1,
               "the client sees the display rank's timings (total %.4f s, image reduction %g)"
-              % (t[8], t[14] if len(t) > 14 else -1))
+              % (t["total"], t["image_reduction"]))
 
     after = apcparaview.rank_summaries(scene_source)
     check([s["cells"] for s in after] == [s["cells"] for s in before],

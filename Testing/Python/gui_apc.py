@@ -4,7 +4,7 @@ Loads the plugin on the client and the server, opens the APC Puzzle Source, pick
 colours by Spheres, rotates the camera with the mouse (interactor events on the view's render
 window interactor: ParaView renders those frames as interactive renders), releases it (a still
 render), saves a screenshot at twice the view size (rendered in tiles) and one of a view of
-that size, and writes the client-side APCLastTimings after an interactive and a still frame.
+that size, and writes the client-side timings (apcparaview.last_timings) after an interactive and a still frame.
 Everything goes to $APC_GUI_OUT; the launcher judges. The same scene as apc_scene.py --scene
 puzzle (its pvbatch screenshots are the references).
 """
@@ -57,8 +57,7 @@ try:
         interactor.SetEventInformation(cx + 5 * k, cy, 0, 0)
         interactor.MouseMoveEvent()
     # Still dragging: the last frame was an interactive one.
-    display.UpdatePropertyInformation()
-    result["timings_interactive"] = list(display.GetProperty("APCLastTimings").GetData())
+    result["timings_interactive"] = apcparaview.last_timings(display)
     result["interactive_image_reduction"] = display.APCInteractiveImageReduction
     for k in range(3, -1, -1):
         interactor.SetEventInformation(cx + 5 * k, cy, 0, 0)
@@ -70,8 +69,7 @@ try:
     view.CameraViewUp = [0, 1, 0]
     view.CameraFocalPoint = [0, 0, 0]
     Render(view)
-    display.UpdatePropertyInformation()
-    result["timings_still"] = list(display.GetProperty("APCLastTimings").GetData())
+    result["timings_still"] = apcparaview.last_timings(display)
 
     result["view_size"] = list(view.ViewSize)  # the preview size, once the GUI applied it
     SaveScreenshot(os.path.join(out, "gui_still.png"), view, ImageResolution=[160, 120])
@@ -80,6 +78,14 @@ try:
     Render(view)
     SaveScreenshot(os.path.join(out, "gui_single.png"), view, ImageResolution=[320, 240])
     layout.PreviewMode = [160, 120]
+
+    # The panel's "Refresh Timings" button pushes APCRefreshTimings; "Last Timings" (the
+    # property the panel shows) must then hold the last frame's timings, with no other call.
+    Render(view)
+    result["timings_before_refresh"] = list(display.GetProperty("APCLastTimings").GetData())
+    display.SMProxy.InvokeCommand("APCRefreshTimings")
+    result["timings_after_refresh"] = list(display.GetProperty("APCLastTimings").GetData())
+    result["timings_pulled"] = list(apcparaview.last_timings(display).values())
 except Exception:
     result["errors"].append(traceback.format_exc())
 with open(os.path.join(out, "gui_result.json"), "w") as f:

@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// One APC volume's settings as one value. vtkAPCVolumeMapper stores its properties in it (so
+// each default is written once, below) and hands a copy to the frame engine at the start of a
+// frame, together with the scalar selection its vtkAbstractMapper base holds: the engine reads
+// nothing back from the mapper. Internal to APC's rendering module.
+#ifndef apcVolumeSettings_h
+#define apcVolumeSettings_h
+
+#include "apcMomentParameters.h"
+
+#include <cstddef>
+#include <string>
+
+namespace apc
+{
+
+// What the input renders: vtkAbstractMapper's scalar selection, read from the mapper each
+// frame (VTK's defaults apply, not these), and which values of a vector.
+struct ScalarChoice
+{
+  int ScalarMode = 0; // VTK_SCALAR_MODE_*
+  int ArrayAccessMode = 0;
+  int ArrayId = -1;
+  std::string ArrayName;
+  int VectorMode = 0; // vtkScalarsToColors::MAGNITUDE
+  int VectorComponent = 0;
+};
+
+struct VolumeSettings
+{
+  ScalarChoice Scalars;
+  bool Exact = false;          // vtkAPCVolumeMapper::EXACT; MBOIT otherwise
+  MomentParameters Moments;    // MBOIT's number of moments, beta, bias and resolve
+  double SampleDistance = 0.0; // world units; 0: the bounding-box diagonal / 256
+  bool LatticeJitter = false;
+  int SampleCacheMiB = 1024;
+  int NumberOfThreads = 0; // 0: TBB decides
+  bool ComputeSegmentCount = false;
+
+  size_t SampleCacheBytes() const { return static_cast<size_t>(this->SampleCacheMiB) << 20; }
+};
+
+} // namespace apc
+
+#endif
