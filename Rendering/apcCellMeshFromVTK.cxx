@@ -157,45 +157,22 @@ int AddTetrahedra(
 }
 }
 
-//------------------------------------------------------------------------------
-bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scalars, CellMesh& mesh,
-  InputReport& report, std::string& error, std::vector<long long>* sources)
+namespace
 {
-  std::vector<long long> unused;
-  std::vector<long long>& origin = sources ? *sources : unused;
-  origin.clear();
-  mesh = CellMesh();
-  report = InputReport();
-  error.clear();
-  if (!input || !scalars.Array)
-  {
-    error = "no input grid or no scalars";
-    return false;
-  }
-  const ScalarReader value(scalars, report);
-  const vtkIdType numPoints = input->GetNumberOfPoints();
-  mesh.Points.resize(numPoints);
-  for (vtkIdType p = 0; p < numPoints; ++p)
-  {
-    input->GetPoint(p, mesh.Points[p].data());
-  }
-  if (!scalars.CellData)
-  {
-    mesh.PointScalars.resize(numPoints);
-    for (vtkIdType p = 0; p < numPoints; ++p)
-    {
-      mesh.PointScalars[p] = value(p);
-    }
-  }
-
+// The cells APC takes as they are (and polyhedra, by VTK's own triangulation) into mesh, with
+// each one's input cell in origin; the cells vtkDataSetTriangleFilter must cut go to
+// forTheFilter. Returns the polyhedra left without a tetrahedron with volume.
+int64_t ConvertCells(vtkUnstructuredGridBase* input, const ScalarSelection& scalars,
+  const ScalarReader& value, CellMesh& mesh, InputReport& report, std::vector<long long>& origin,
+  std::vector<vtkIdType>& forTheFilter)
+{
+  int64_t flatDecomposed = 0;
   vtkUnsignedCharArray* ghosts = input->GetCellGhostArray();
   const unsigned char skipMask =
     vtkDataSetAttributes::DUPLICATECELL | vtkDataSetAttributes::HIDDENCELL;
   vtkNew<vtkIdList> cellPoints;
   vtkNew<vtkGenericCell> cell;
   vtkNew<vtkPoints> tetPoints;
-  std::vector<vtkIdType> forTheFilter;
-  int64_t flatDecomposed = 0;
   const vtkIdType numCells = input->GetNumberOfCells();
   for (vtkIdType c = 0; c < numCells; ++c)
   {
@@ -244,47 +221,91 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scal
       report.AddUnsupported(type);
     }
   }
+  return flatDecomposed;
+}
 
+// The filter itself, on just the cells in forTheFilter over the input's points: the same
+// tetrahedra as ParaView's Volume renders, point ids unchanged. A cell array carries each
+// tetrahedron's source cell. Returns the cells left without a tetrahedron with volume.
+int64_t TriangulateWithTheFilter(vtkUnstructuredGridBase* input, const ScalarSelection& scalars,
+  const ScalarReader& value, const std::vector<vtkIdType>& forTheFilter, CellMesh& mesh,
+  std::vector<long long>& origin)
+{
+  vtkNew<vtkIdList> cellPoints;
+  vtkNew<vtkUnstructuredGrid> cells;
+  cells->SetPoints(input->GetPoints());
+  cells->AllocateEstimate(static_cast<vtkIdType>(forTheFilter.size()), 27);
+  vtkNew<vtkIdTypeArray> source;
+  source->SetName("APCSourceCell");
+  for (vtkIdType c : forTheFilter)
+  {
+    input->GetCellPoints(c, cellPoints);
+    cells->InsertNextCell(input->GetCellType(c), cellPoints);
+    source->InsertNextValue(c);
+  }
+  cells->GetCellData()->AddArray(source);
+  vtkNew<vtkDataSetTriangleFilter> triangulate;
+  triangulate->TetrahedraOnlyOn();
+  triangulate->SetInputData(cells);
+  triangulate->Update();
+  vtkUnstructuredGrid* tets = triangulate->GetOutput();
+  auto* sourceCells = vtkIdTypeArray::SafeDownCast(tets->GetCellData()->GetArray("APCSourceCell"));
+  std::vector<int> kept(forTheFilter.size(), 0);
+  for (vtkIdType t = 0; sourceCells && t < tets->GetNumberOfCells(); ++t)
+  {
+    vtkIdType count;
+    const vtkIdType* ids;
+    tets->GetCellPoints(t, count, ids);
+    const vtkIdType c = sourceCells->GetValue(t);
+    if (tets->GetCellType(t) == VTK_TETRA && count == 4)
+    {
+      const auto at = std::lower_bound(forTheFilter.begin(), forTheFilter.end(), c);
+      const int added =
+        AddTetrahedra(mesh, ids, 4, scalars.CellData, scalars.CellData ? value(c) : 0.f);
+      kept[at - forTheFilter.begin()] += added;
+      origin.insert(origin.end(), added, c);
+    }
+  }
+  return std::count(kept.begin(), kept.end(), 0);
+}
+}
+
+//------------------------------------------------------------------------------
+bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scalars, CellMesh& mesh,
+  InputReport& report, std::string& error, std::vector<long long>* sources)
+{
+  std::vector<long long> unused;
+  std::vector<long long>& origin = sources ? *sources : unused;
+  origin.clear();
+  mesh = CellMesh();
+  report = InputReport();
+  error.clear();
+  if (!input || !scalars.Array)
+  {
+    error = "no input grid or no scalars";
+    return false;
+  }
+  const ScalarReader value(scalars, report);
+  const vtkIdType numPoints = input->GetNumberOfPoints();
+  mesh.Points.resize(numPoints);
+  for (vtkIdType p = 0; p < numPoints; ++p)
+  {
+    input->GetPoint(p, mesh.Points[p].data());
+  }
+  if (!scalars.CellData)
+  {
+    mesh.PointScalars.resize(numPoints);
+    for (vtkIdType p = 0; p < numPoints; ++p)
+    {
+      mesh.PointScalars[p] = value(p);
+    }
+  }
+
+  std::vector<vtkIdType> forTheFilter;
+  int64_t flatDecomposed = ConvertCells(input, scalars, value, mesh, report, origin, forTheFilter);
   if (!forTheFilter.empty())
   {
-    // The filter itself, on just these cells over the input's points: the same tetrahedra
-    // as ParaView's Volume renders, point ids unchanged. A cell array carries each
-    // tetrahedron's source cell.
-    vtkNew<vtkUnstructuredGrid> cells;
-    cells->SetPoints(input->GetPoints());
-    cells->AllocateEstimate(static_cast<vtkIdType>(forTheFilter.size()), 27);
-    vtkNew<vtkIdTypeArray> source;
-    source->SetName("APCSourceCell");
-    for (vtkIdType c : forTheFilter)
-    {
-      input->GetCellPoints(c, cellPoints);
-      cells->InsertNextCell(input->GetCellType(c), cellPoints);
-      source->InsertNextValue(c);
-    }
-    cells->GetCellData()->AddArray(source);
-    vtkNew<vtkDataSetTriangleFilter> triangulate;
-    triangulate->TetrahedraOnlyOn();
-    triangulate->SetInputData(cells);
-    triangulate->Update();
-    vtkUnstructuredGrid* tets = triangulate->GetOutput();
-    auto* sources = vtkIdTypeArray::SafeDownCast(tets->GetCellData()->GetArray("APCSourceCell"));
-    std::vector<int> kept(forTheFilter.size(), 0);
-    for (vtkIdType t = 0; sources && t < tets->GetNumberOfCells(); ++t)
-    {
-      vtkIdType count;
-      const vtkIdType* ids;
-      tets->GetCellPoints(t, count, ids);
-      const vtkIdType c = sources->GetValue(t);
-      if (tets->GetCellType(t) == VTK_TETRA && count == 4)
-      {
-        const auto at = std::lower_bound(forTheFilter.begin(), forTheFilter.end(), c);
-        const int added =
-          AddTetrahedra(mesh, ids, 4, scalars.CellData, scalars.CellData ? value(c) : 0.f);
-        kept[at - forTheFilter.begin()] += added;
-        origin.insert(origin.end(), added, c);
-      }
-    }
-    flatDecomposed += std::count(kept.begin(), kept.end(), 0);
+    flatDecomposed += TriangulateWithTheFilter(input, scalars, value, forTheFilter, mesh, origin);
   }
 
   const bool usable = mesh.Finalize(&error);

@@ -348,9 +348,7 @@ void WindTracer::MatchAcrossPieces()
     {
       continue;
     }
-    const std::int64_t local = this->FaceCell[f];
-    const auto it = std::upper_bound(this->LocalStart.begin(), this->LocalStart.end(), local);
-    vtkUnstructuredGrid* grid = this->Grids[it - this->LocalStart.begin() - 1];
+    vtkUnstructuredGrid* grid = this->GridOfFace(f);
     std::array<std::array<float, 3>, 4> corners{};
     int count = 0;
     for (; count < 4 && this->FacePoints[f][count] >= 0; ++count)
@@ -361,7 +359,7 @@ void WindTracer::MatchAcrossPieces()
         static_cast<float>(x[2]) };
     }
     std::sort(corners.begin(), corners.begin() + count);
-    Face face{ {}, this->GlobalOf(local) };
+    Face face{ {}, this->GlobalOf(this->FaceCell[f]) };
     for (int i = 0; i < count; ++i)
     {
       std::copy(corners[i].begin(), corners[i].end(), face.Key.begin() + 3 * i);
@@ -452,12 +450,17 @@ void WindTracer::Exchange(std::vector<double>& values)
     this->RecvDispls.data(), MPI_DOUBLE, this->Comm);
 }
 
+vtkUnstructuredGrid* WindTracer::GridOfFace(std::int64_t face) const
+{
+  const std::int64_t local = this->FaceCell[face];
+  const auto it = std::upper_bound(this->LocalStart.begin(), this->LocalStart.end(), local);
+  return this->Grids[it - this->LocalStart.begin() - 1];
+}
+
 bool WindTracer::OnInlet(std::int64_t face) const
 {
   const auto& ids = this->FacePoints[face];
-  const std::int64_t local = this->FaceCell[face];
-  const auto it = std::upper_bound(this->LocalStart.begin(), this->LocalStart.end(), local);
-  vtkUnstructuredGrid* grid = this->Grids[it - this->LocalStart.begin() - 1];
+  vtkUnstructuredGrid* grid = this->GridOfFace(face);
   for (int i = 0; i < 4 && ids[i] >= 0; ++i)
   {
     if (std::abs(grid->GetPoint(ids[i])[0] - this->Bounds[0]) > PlaneTolerance)

@@ -101,6 +101,8 @@ private:
   std::int64_t LocalOf(std::int64_t global) const; // -1 if another rank owns it
   std::int64_t SlotOf(std::int64_t global) const;  // local cell, or C's halo slot
   bool OnInlet(std::int64_t face) const;
+  // The owned piece's grid that holds a boundary face's corners (FacePoints index into it).
+  vtkUnstructuredGrid* GridOfFace(std::int64_t face) const;
 
   MPI_Comm Comm = MPI_COMM_NULL;
   int Rank = 0;

@@ -36,9 +36,7 @@ void WindTracer::BuildWalls()
     {
       continue;
     }
-    const std::int64_t local = this->FaceCell[f];
-    const auto it = std::upper_bound(this->LocalStart.begin(), this->LocalStart.end(), local);
-    vtkUnstructuredGrid* grid = this->Grids[it - this->LocalStart.begin() - 1];
+    vtkUnstructuredGrid* grid = this->GridOfFace(f);
     bool side[6] = { true, true, true, true, true, true };
     vtkIdType ids[4];
     int count = 0;

@@ -161,136 +161,6 @@ void CoefficientSizes(const double c[8][3], double& linear, double& nonlinear)
 
 } // namespace
 
-const std::array<std::array<double, 3>, 8>& ReferenceCorners(CellShape shape)
-{
-  switch (shape)
-  {
-    case CellShape::Tetra:
-      return kTetraCorners;
-    case CellShape::Pyramid:
-      return kPyramidCorners;
-    case CellShape::Wedge:
-      return kWedgeCorners;
-    case CellShape::Hexahedron:
-      break;
-  }
-  return kHexahedronCorners;
-}
-
-void ParametricCenter(CellShape shape, double pcoords[3])
-{
-  switch (shape)
-  {
-    case CellShape::Tetra:
-      pcoords[0] = pcoords[1] = pcoords[2] = 0.25;
-      return;
-    case CellShape::Pyramid:
-      pcoords[0] = pcoords[1] = 0.4;
-      pcoords[2] = 0.2;
-      return;
-    case CellShape::Wedge:
-      // VTK uses 0.333333; the exact third keeps the point symmetric.
-      pcoords[0] = pcoords[1] = 1.0 / 3.0;
-      pcoords[2] = 0.5;
-      return;
-    case CellShape::Hexahedron:
-      break;
-  }
-  pcoords[0] = pcoords[1] = pcoords[2] = 0.5;
-}
-
-void ShapeFunctions(CellShape shape, const double p[3], double w[8])
-{
-  const double r = p[0], s = p[1], t = p[2];
-  const double rm = 1.0 - r, sm = 1.0 - s, tm = 1.0 - t;
-  switch (shape)
-  {
-    case CellShape::Tetra:
-      w[0] = 1.0 - r - s - t;
-      w[1] = r;
-      w[2] = s;
-      w[3] = t;
-      return;
-    case CellShape::Pyramid:
-      w[0] = rm * sm * tm;
-      w[1] = r * sm * tm;
-      w[2] = r * s * tm;
-      w[3] = rm * s * tm;
-      w[4] = t;
-      return;
-    case CellShape::Wedge:
-    {
-      const double u = 1.0 - r - s;
-      w[0] = u * tm;
-      w[1] = r * tm;
-      w[2] = s * tm;
-      w[3] = u * t;
-      w[4] = r * t;
-      w[5] = s * t;
-      return;
-    }
-    case CellShape::Hexahedron:
-      break;
-  }
-  w[0] = rm * sm * tm;
-  w[1] = r * sm * tm;
-  w[2] = r * s * tm;
-  w[3] = rm * s * tm;
-  w[4] = rm * sm * t;
-  w[5] = r * sm * t;
-  w[6] = r * s * t;
-  w[7] = rm * s * t;
-}
-
-void ClampToReferenceCell(CellShape shape, double p[3])
-{
-  for (int i = 0; i < 3; ++i)
-  {
-    // Written so that NaN lands on 0.
-    p[i] = p[i] > 0.0 ? std::min(p[i], 1.0) : 0.0;
-  }
-  double sum = 0.0;
-  if (shape == CellShape::Tetra)
-  {
-    sum = p[0] + p[1] + p[2];
-  }
-  else if (shape == CellShape::Wedge)
-  {
-    sum = p[0] + p[1];
-  }
-  if (sum > 1.0)
-  {
-    p[0] /= sum;
-    p[1] /= sum;
-    if (shape == CellShape::Tetra)
-    {
-      p[2] /= sum;
-    }
-  }
-}
-
-bool InsideReferenceCell(CellShape shape, const double p[3], double tolerance)
-{
-  const double low = -tolerance;
-  const double high = 1.0 + tolerance;
-  // Written so that NaN is outside.
-  if (!(p[0] >= low && p[1] >= low && p[2] >= low && p[2] <= high))
-  {
-    return false;
-  }
-  switch (shape)
-  {
-    case CellShape::Tetra:
-      return p[0] + p[1] + p[2] <= high;
-    case CellShape::Wedge:
-      return p[0] + p[1] <= high;
-    case CellShape::Pyramid:
-    case CellShape::Hexahedron:
-      break;
-  }
-  return p[0] <= high && p[1] <= high;
-}
-
 void CellInterpolator::Set(const CellCorners& cell)
 {
   this->CellType = cell.Shape;
@@ -519,8 +389,14 @@ bool CellInterpolator::Search(const double x[3], double pcoords[3], int* iterati
     return false;
   }
 
-  const bool pyramid = this->CellType == CellShape::Pyramid;
   double p[3] = { pcoords[0], pcoords[1], pcoords[2] };
+  return this->Newton(x, y, p, pcoords, iterations, tolerance, memory);
+}
+
+bool CellInterpolator::Newton(const double x[3], const double y[3], double p[3], double pcoords[3],
+  int* iterations, double tolerance, NewtonMemory* memory) const
+{
+  const bool pyramid = this->CellType == CellShape::Pyramid;
   double best[3] = { p[0], p[1], p[2] };
   double bestResidual = std::numeric_limits<double>::infinity();
   bool restarted = false;
@@ -571,30 +447,16 @@ bool CellInterpolator::Search(const double x[3], double pcoords[3], int* iterati
     {
       break;
     }
+    // Near the root a chord step, which reuses this Jacobian and only evaluates the map,
+    // costs a third of a Newton step and, once the step is small, usually ends the search:
+    // an image's tolerance is reached after one Newton and one chord step from a neighbour's
+    // guess instead of three Newton steps.
     const double step = NewtonStepSize(d, p, pyramid);
-    if (step < tolerance)
+    if (step < tolerance ||
+      (step < kChordRegime && this->ChordStep(y, p, cr, cs, ct, invDet, tolerance)))
     {
       Remember(memory, x, p, cr, cs, ct, invDet);
       return Converged(p, steps, pcoords, iterations);
-    }
-    if (step < kChordRegime)
-    {
-      // Near the root a chord step, which reuses this Jacobian and only evaluates the map,
-      // costs a third of a Newton step and, once the step is small, usually ends the
-      // search: an image's tolerance is reached after one Newton and one chord step from a
-      // neighbour's guess instead of three Newton steps.
-      double moved[3];
-      this->Map(p, moved);
-      const double G[3] = { moved[0] - y[0], moved[1] - y[1], moved[2] - y[2] };
-      const double e[3] = { Dot(G, cr) * invDet, Dot(G, cs) * invDet, Dot(G, ct) * invDet };
-      p[0] -= e[0];
-      p[1] -= e[1];
-      p[2] -= e[2];
-      if (IsFinite(p) && NewtonStepSize(e, p, pyramid) < tolerance)
-      {
-        Remember(memory, x, p, cr, cs, ct, invDet);
-        return Converged(p, steps, pcoords, iterations);
-      }
     }
     for (int i = 0; i < 3; ++i)
     {
@@ -611,6 +473,19 @@ bool CellInterpolator::Search(const double x[3], double pcoords[3], int* iterati
   pcoords[2] = best[2];
   ClampToReferenceCell(this->CellType, pcoords);
   return false;
+}
+
+bool CellInterpolator::ChordStep(const double y[3], double p[3], const double cr[3],
+  const double cs[3], const double ct[3], double invDet, double tolerance) const
+{
+  double moved[3];
+  this->Map(p, moved);
+  const double G[3] = { moved[0] - y[0], moved[1] - y[1], moved[2] - y[2] };
+  const double e[3] = { Dot(G, cr) * invDet, Dot(G, cs) * invDet, Dot(G, ct) * invDet };
+  p[0] -= e[0];
+  p[1] -= e[1];
+  p[2] -= e[2];
+  return IsFinite(p) && NewtonStepSize(e, p, this->CellType == CellShape::Pyramid) < tolerance;
 }
 
 double CellInterpolator::InterpolateScalar(const double pcoords[3]) const

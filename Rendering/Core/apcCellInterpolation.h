@@ -168,6 +168,13 @@ private:
   // ParametricCoordinates, also leaving the solution and its inverse Jacobian in memory.
   bool Search(const double x[3], double pcoords[3], int* iterations, double tolerance,
     NewtonMemory* memory) const;
+  // Search's iteration for a cell that is not affine: y = x - C[0], p the first guess.
+  bool Newton(const double x[3], const double y[3], double p[3], double pcoords[3], int* iterations,
+    double tolerance, NewtonMemory* memory) const;
+  // One chord step from p with the last Newton step's Jacobian (cofactors cr, cs, ct over
+  // its determinant): true if it lands within tolerance.
+  bool ChordStep(const double y[3], double p[3], const double cr[3], const double cs[3],
+    const double ct[3], double invDet, double tolerance) const;
 
   CellShape CellType = CellShape::Hexahedron;
   bool Affine = false;
