@@ -126,7 +126,7 @@ public:
    * saying what to change, once per setting and data extent: TakeSpacingNote hands it over
    * (empty if none) for the caller to say (the pass: on the display process only).
    */
-  static constexpr double kMaxSamplesPerRay = 16384;
+  static constexpr double kMaxSamplesPerRay = 4096;
   std::string TakeSpacingNote();
   /// Lattice samples taken since Prepare by pass 1 (all its bands), or by the exact or
   /// segment stage.
