@@ -47,6 +47,17 @@ T CheckedSetting(
   return used;
 }
 
+// A setter's store: the (checked) value, and Modified() on self only when it changed.
+template <class T>
+void Assign(vtkObject* self, T& setting, T value)
+{
+  if (setting != value)
+  {
+    setting = value;
+    self->Modified();
+  }
+}
+
 } // namespace apc
 
 #endif

@@ -114,26 +114,12 @@ int vtkAPCCompositePass::GetNumberOfVolumes() const
 }
 
 //------------------------------------------------------------------------------
-namespace
-{
-// A setting's setter: the value as given (checked by the caller), Modified() on a change.
-template <class T>
-void Assign(vtkObject* self, T& setting, T value)
-{
-  if (setting != value)
-  {
-    setting = value;
-    self->Modified();
-  }
-}
-}
-
 // The settings every process agrees on live in Internal->Settings: their setters and getters,
 // each setter checking its value where it enters.
 #define APC_FRAME_SETTING(Name, Type, checked)                                                     \
   void vtkAPCCompositePass::Set##Name(Type value)                                                  \
   {                                                                                                \
-    Assign(this, this->Internal->Settings.Name, checked);                                          \
+    apc::Assign(this, this->Internal->Settings.Name, checked);                                     \
   }                                                                                                \
   Type vtkAPCCompositePass::Get##Name() const                                                      \
   {                                                                                                \
@@ -157,13 +143,13 @@ APC_FRAME_SETTING(InteractiveImageReduction, int,
 
 void vtkAPCCompositePass::SetDisplayProcess(int process)
 {
-  Assign(this, this->DisplayProcess,
+  apc::Assign(this, this->DisplayProcess,
     apc::CheckedSetting(this, "DisplayProcess", process, 0, VTK_INT_MAX));
 }
 
 void vtkAPCCompositePass::SetVerbosity(int verbosity)
 {
-  Assign(this, this->Verbosity, apc::CheckedSetting(this, "Verbosity", verbosity, 0, 1));
+  apc::Assign(this, this->Verbosity, apc::CheckedSetting(this, "Verbosity", verbosity, 0, 1));
 }
 
 //------------------------------------------------------------------------------

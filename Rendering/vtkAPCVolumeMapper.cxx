@@ -33,20 +33,6 @@ struct vtkAPCVolumeMapper::Internals
   std::vector<int> Segments;
 };
 
-namespace
-{
-// A property's setter: the value as given (checked by the caller), Modified() on a change.
-template <class T>
-void Assign(vtkObject* self, T& setting, T value)
-{
-  if (setting != value)
-  {
-    setting = value;
-    self->Modified();
-  }
-}
-}
-
 //------------------------------------------------------------------------------
 vtkAPCVolumeMapper::vtkAPCVolumeMapper()
   : Internal(new Internals)
@@ -58,7 +44,7 @@ vtkAPCVolumeMapper::~vtkAPCVolumeMapper() = default;
 //------------------------------------------------------------------------------
 void vtkAPCVolumeMapper::SetMode(int mode)
 {
-  Assign(this, this->Internal->Settings.Exact,
+  apc::Assign(this, this->Internal->Settings.Exact,
     apc::CheckedSetting(this, "Mode", mode, int(EXACT), int(MBOIT), "0 EXACT, 1 MBOIT") == EXACT);
 }
 
@@ -75,7 +61,7 @@ void vtkAPCVolumeMapper::SetNumberOfMoments(int n)
     vtkWarningMacro(
       "NumberOfMoments must be 4, 6 or 8; " << n << " was given, " << valid << " is used.");
   }
-  Assign(this, this->Internal->Settings.Moments.Moments, valid);
+  apc::Assign(this, this->Internal->Settings.Moments.Moments, valid);
 }
 
 int vtkAPCVolumeMapper::GetNumberOfMoments() const
@@ -85,7 +71,7 @@ int vtkAPCVolumeMapper::GetNumberOfMoments() const
 
 void vtkAPCVolumeMapper::SetOverestimation(double beta)
 {
-  Assign(this, this->Internal->Settings.Moments.Overestimation,
+  apc::Assign(this, this->Internal->Settings.Moments.Overestimation,
     apc::CheckedSetting(this, "Overestimation", beta, 0.0, 1.0));
 }
 
@@ -96,7 +82,7 @@ double vtkAPCVolumeMapper::GetOverestimation() const
 
 void vtkAPCVolumeMapper::SetMomentBias(double bias)
 {
-  Assign(this, this->Internal->Settings.Moments.Bias,
+  apc::Assign(this, this->Internal->Settings.Moments.Bias,
     apc::CheckedSetting(
       this, "MomentBias", bias, -1.0, 1.0, "negative: the published constant for the moments"));
 }
@@ -110,7 +96,7 @@ void vtkAPCVolumeMapper::SetResolveMode(int mode)
 {
   const int clamped = apc::CheckedSetting(this, "ResolveMode", mode, int(RENORMALISED), int(HYBRID),
     "0 RENORMALISED, 1 PAPER_SUM, 2 HYBRID");
-  Assign(this, this->Internal->Settings.Moments.Resolve,
+  apc::Assign(this, this->Internal->Settings.Moments.Resolve,
     clamped == PAPER_SUM  ? apc::ResolveMode::PaperSum
       : clamped == HYBRID ? apc::ResolveMode::Hybrid
                           : apc::ResolveMode::Renormalised);
@@ -131,7 +117,7 @@ int vtkAPCVolumeMapper::GetResolveMode() const
 
 void vtkAPCVolumeMapper::SetSampleDistance(double distance)
 {
-  Assign(this, this->Internal->Settings.SampleDistance,
+  apc::Assign(this, this->Internal->Settings.SampleDistance,
     apc::CheckedSetting(this, "SampleDistance", distance, 0.0, VTK_DOUBLE_MAX,
       "0 picks the data's bounding-box diagonal / 256"));
 }
@@ -143,7 +129,7 @@ double vtkAPCVolumeMapper::GetSampleDistance() const
 
 void vtkAPCVolumeMapper::SetLatticeJitter(bool jitter)
 {
-  Assign(this, this->Internal->Settings.LatticeJitter, jitter);
+  apc::Assign(this, this->Internal->Settings.LatticeJitter, jitter);
 }
 
 bool vtkAPCVolumeMapper::GetLatticeJitter() const
@@ -153,7 +139,7 @@ bool vtkAPCVolumeMapper::GetLatticeJitter() const
 
 void vtkAPCVolumeMapper::SetSampleCacheSize(int megabytes)
 {
-  Assign(this, this->Internal->Settings.SampleCacheMiB,
+  apc::Assign(this, this->Internal->Settings.SampleCacheMiB,
     apc::CheckedSetting(
       this, "SampleCacheSize", megabytes, 0, VTK_INT_MAX, "MiB per process; 0 turns it off"));
 }
@@ -165,7 +151,7 @@ int vtkAPCVolumeMapper::GetSampleCacheSize() const
 
 void vtkAPCVolumeMapper::SetNumberOfThreads(int threads)
 {
-  Assign(this, this->Internal->Settings.NumberOfThreads,
+  apc::Assign(this, this->Internal->Settings.NumberOfThreads,
     apc::CheckedSetting(this, "NumberOfThreads", threads, 0, 1024, "0 lets TBB decide"));
 }
 
@@ -176,7 +162,7 @@ int vtkAPCVolumeMapper::GetNumberOfThreads() const
 
 void vtkAPCVolumeMapper::SetComputeSegmentCount(bool compute)
 {
-  Assign(this, this->Internal->Settings.ComputeSegmentCount, compute);
+  apc::Assign(this, this->Internal->Settings.ComputeSegmentCount, compute);
 }
 
 bool vtkAPCVolumeMapper::GetComputeSegmentCount() const
@@ -186,7 +172,7 @@ bool vtkAPCVolumeMapper::GetComputeSegmentCount() const
 
 void vtkAPCVolumeMapper::SetVectorMode(int mode)
 {
-  Assign(this, this->Internal->Settings.Scalars.VectorMode,
+  apc::Assign(this, this->Internal->Settings.Scalars.VectorMode,
     apc::CheckedSetting(this, "VectorMode", mode, int(vtkScalarsToColors::MAGNITUDE),
       int(vtkScalarsToColors::RGBCOLORS), "0 MAGNITUDE, 1 COMPONENT, 2 RGBCOLORS"));
 }
@@ -198,7 +184,7 @@ int vtkAPCVolumeMapper::GetVectorMode() const
 
 void vtkAPCVolumeMapper::SetVectorComponent(int component)
 {
-  Assign(this, this->Internal->Settings.Scalars.VectorComponent, component);
+  apc::Assign(this, this->Internal->Settings.Scalars.VectorComponent, component);
 }
 
 int vtkAPCVolumeMapper::GetVectorComponent() const

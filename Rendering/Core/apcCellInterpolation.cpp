@@ -63,38 +63,6 @@ inline bool IsFinite(const double p[3])
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
-const std::array<std::array<double, 3>, 8> kTetraCorners = { {
-  { 0, 0, 0 },
-  { 1, 0, 0 },
-  { 0, 1, 0 },
-  { 0, 0, 1 },
-} };
-const std::array<std::array<double, 3>, 8> kPyramidCorners = { {
-  { 0, 0, 0 },
-  { 1, 0, 0 },
-  { 1, 1, 0 },
-  { 0, 1, 0 },
-  { 0, 0, 1 },
-} };
-const std::array<std::array<double, 3>, 8> kWedgeCorners = { {
-  { 0, 0, 0 },
-  { 1, 0, 0 },
-  { 0, 1, 0 },
-  { 0, 0, 1 },
-  { 1, 0, 1 },
-  { 0, 1, 1 },
-} };
-const std::array<std::array<double, 3>, 8> kHexahedronCorners = { {
-  { 0, 0, 0 },
-  { 1, 0, 0 },
-  { 1, 1, 0 },
-  { 0, 1, 0 },
-  { 0, 0, 1 },
-  { 1, 0, 1 },
-  { 1, 1, 1 },
-  { 0, 1, 1 },
-} };
-
 // Monomial coefficients of the map, by expanding VTK's shape functions; see the header.
 void MapCoefficients(const CellCorners& cell, double c[8][3])
 {

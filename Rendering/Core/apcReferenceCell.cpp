@@ -5,10 +5,47 @@
 #include "apcCellInterpolation.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace apc
 {
+
+namespace
+{
+// VTK's parametric corners of each linear cell type.
+const std::array<std::array<double, 3>, 8> kTetraCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+} };
+const std::array<std::array<double, 3>, 8> kPyramidCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 1, 1, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+} };
+const std::array<std::array<double, 3>, 8> kWedgeCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+  { 1, 0, 1 },
+  { 0, 1, 1 },
+} };
+const std::array<std::array<double, 3>, 8> kHexahedronCorners = { {
+  { 0, 0, 0 },
+  { 1, 0, 0 },
+  { 1, 1, 0 },
+  { 0, 1, 0 },
+  { 0, 0, 1 },
+  { 1, 0, 1 },
+  { 1, 1, 1 },
+  { 0, 1, 1 },
+} };
+}
 
 const std::array<std::array<double, 3>, 8>& ReferenceCorners(CellShape shape)
 {
