@@ -6,16 +6,16 @@ total <s> s" line it prints, checks that the stages sum to the total to the prin
     TestDemoStages.py -- <command...>
 """
 
+import os
 import re
-import subprocess
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from apc_command import run_after_dashdash  # noqa: E402
 
 
 def main(argv):
-    command = argv[argv.index("--") + 1:]
-    run = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                         timeout=600)
-    output = re.sub(r"\x1b\[[0-9;]*m", "", run.stdout)
+    run, output = run_after_dashdash(argv)
     print(output)
     failures = []
     frames = [line for line in output.splitlines() if "on the display rank:" in line]

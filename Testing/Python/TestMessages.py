@@ -12,17 +12,16 @@ APC-MESSAGES-FAILED (not the scene's words, which ctest would take for this verd
     TestMessages.py -- <command...>
 """
 
+import os
 import re
-import subprocess
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from apc_command import run_after_dashdash  # noqa: E402
 
 
 def main(argv):
-    command = argv[argv.index("--") + 1:]
-    run = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                         timeout=600)
-    # ANSI colours of VTK's logger would split words.
-    output = re.sub(r"\x1b\[[0-9;]*m", "", run.stdout)
+    run, output = run_after_dashdash(argv)
     lines = output.splitlines()
     expectations = []
     others = []
