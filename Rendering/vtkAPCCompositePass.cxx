@@ -257,12 +257,11 @@ namespace
 {
 // This process's visible APC volumes: their engines begin the frame with the volumes' settings
 // (read once, at the VTK boundary) and take their inputs; their side of the agreement goes into
-// local. Returns the first visible volume's mapper (it says the input reports), or null.
-vtkAPCVolumeMapper* CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& local,
+// local; mappers lists their mappers in order (the first says the input reports).
+void CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& local,
   apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible,
   std::vector<vtkAPCVolumeMapper*>& mappers, apc::InputReport& reports, std::ostringstream& problem)
 {
-  vtkAPCVolumeMapper* first = nullptr;
   for (const VolumeEntry& entry : volumes)
   {
     if (!entry.Volume->GetVisibility())
@@ -290,17 +289,15 @@ vtkAPCVolumeMapper* CollectVolumes(const std::vector<VolumeEntry>& volumes, apc:
     double bounds[6];
     local.AddVolume(volumeSettings.Moments.Moments,
       engine->GetLocalBounds(bounds) ? bounds : nullptr, entry.Volume->GetProperty());
-    if (!first)
+    if (mappers.empty())
     {
       // The frame's moment settings: the first volume's beta, bias and resolve.
       frame.Moments = volumeSettings.Moments;
-      first = mapper;
     }
     mappers.push_back(mapper);
     visible.push_back(entry.Volume);
     frame.Engines.push_back(engine);
   }
-  return first;
 }
 
 // Step 1 of a frame: this process's visible APC volumes and its side of the agreement, then
@@ -315,9 +312,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   std::ostringstream problem;
   apc::InputReport reports; // said once for all processes when any has news
   std::vector<vtkAPCVolumeMapper*> mappers;
-  vtkAPCVolumeMapper* first =
-    CollectVolumes(volumes, local, frame, visible, mappers, reports, problem);
-  vtkObject* reporter = first ? static_cast<vtkObject*>(first) : self;
+  CollectVolumes(volumes, local, frame, visible, mappers, reports, problem);
+  vtkObject* reporter = mappers.empty() ? static_cast<vtkObject*>(self) : mappers.front();
   // The screen rectangle and every image buffer derive from the viewport: sizes that differ
   // between processes would make their collectives disagree in length.
   ren->GetTiledSizeAndOrigin(&local.Width, &local.Height, &frame.X0, &frame.Y0);
