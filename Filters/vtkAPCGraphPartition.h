@@ -95,10 +95,12 @@ public:
 
   ///@{
   /**
-   * Which graph partitioner cuts the pieces. METIS needs the whole dual graph on rank 0
-   * (about 50 bytes per cell) and runs serially; PT-Scotch keeps each rank's part of the graph
-   * where it is and partitions in parallel, so no rank holds more than its own share. Both
-   * balance the pieces to about 3 %. Default AUTO.
+   * Which graph partitioner cuts the pieces. METIS needs the whole dual graph on rank 0, and
+   * the boundary facets it is matched from, so rank 0's memory grows with the whole mesh while
+   * the other ranks' shrink with their share, and METIS runs serially; PT-Scotch keeps each
+   * rank's part of the graph where it is and partitions in parallel, so no rank holds more
+   * than its own share. Both balance the pieces to about 3 %. Default AUTO (METIS on one
+   * process, PT-Scotch on more). docs/evaluation.md, section 6, measures both.
    */
   vtkSetClampMacro(Partitioner, int, AUTO, PTSCOTCH);
   vtkGetMacro(Partitioner, int);

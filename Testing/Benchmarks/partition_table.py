@@ -15,7 +15,7 @@ def main(path):
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
     rows.sort(key=lambda r: (int(r["cells"]), int(r["ranks"]), r["partitioner"]))
-    print("| cells | ranks | K | partitioner | graph s | partition s | total s | CPU s rank 0 / max "
+    print("| cells | ranks | K | partitioner | wall s: graph | partition | total | CPU s rank 0 / busiest "
           "| peak MiB per rank (rank 0 first) | rank 0 / others | edge cut | imbalance |")
     print("|---:|---:|---:|---|---:|---:|---:|---|---|---:|---:|---:|")
     for r in rows:
