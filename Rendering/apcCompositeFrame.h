@@ -61,6 +61,7 @@ struct CompositeFrame
   ScreenRect Rect;
   TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the depth share ships
   MomentParameters Moments;
+  int Volumes = 0; // visible APC volumes, the most on any process
   std::vector<FrameEngine*> Engines;
   // The frame's float image is kept (KeepLastImage, or the display process's image file): the
   // display process then keeps the moments and colour sums in the result; otherwise they go

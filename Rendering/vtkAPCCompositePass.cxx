@@ -53,6 +53,7 @@ struct vtkAPCCompositePass::Internals
   vtkNew<vtkImageData> Image;
   vtkSmartPointer<vtkFloatArray> DelegateDepth; // this frame's, if its delegate gave one
   bool TransferWarned = false; // the display process said that transfer functions differ
+  bool SeveralWarned = false;  // ... that the exact modes cannot blend several volumes
 };
 
 //------------------------------------------------------------------------------
@@ -364,6 +365,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Tiles =
     r.Pixels() > 0 ? apc::TileGrid(r.Width(), 0, 0, r.Width(), r.Height()) : apc::TileGrid();
   frame.Moments.Moments = agreed.MaxMoments;
+  frame.Volumes = agreed.MaxVolumes;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
   return true;
 }
@@ -408,16 +410,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   apc::PrepareEngines(group, frame, volumes, depth);
   depth = std::vector<float>(); // the engines hold their rays' ends
 
-  int mode = frame.Settings.CompositeMode;
-  if (mode == AUTO)
-  {
-    const double bytesPerPixel = frame.Settings.CompositeInDouble
-      ? 8.0 * (frame.Moments.Moments + 5)
-      : 1 + 4.0 * (frame.Moments.Moments + 5);
-    mode = internal.Auto.Choose(group.Processes, bytesPerPixel) == apc::AutoMode::Moments
-      ? APC
-      : SEGMENTS;
-  }
+  const int mode = this->ChooseMode(group, frame);
   internal.LastMode = mode;
   apc::FrameResult result;
   switch (mode)
@@ -441,6 +434,46 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     this->RecordForAuto(group);
   }
   this->FinishFrame(group, frame, result);
+}
+
+//------------------------------------------------------------------------------
+int vtkAPCCompositePass::ChooseMode(
+  const apc::ProcessGroup& group, const apc::CompositeFrame& frame)
+{
+  Internals& internal = *this->Internal;
+  int mode = frame.Settings.CompositeMode;
+  // The exact modes blend each volume's samples on their own: where two volumes overlap,
+  // their segments (or images) cover the same depths, and no order of whole segments is the
+  // interleaved blend. Several volumes are rendered by APC, whose moments sum over volumes.
+  const bool several = frame.Volumes > 1;
+  if (several && (mode == SEGMENTS || mode == LOCAL_EXACT))
+  {
+    if (group.IsDisplay() && !internal.SeveralWarned)
+    {
+      vtkWarningMacro("APC Mode " << (mode == SEGMENTS ? "Exact (segments)" : "Local exact")
+                                  << " blends one APC volume at a time and cannot interleave "
+                                  << frame.Volumes
+                                  << " APC volumes where they overlap: this view renders them "
+                                     "with APC. Show one APC volume for the exact picture.");
+    }
+    internal.SeveralWarned = true;
+    return APC;
+  }
+  internal.SeveralWarned = false;
+  if (mode == AUTO)
+  {
+    if (several)
+    {
+      return APC; // never the segments: see above
+    }
+    const double bytesPerPixel = frame.Settings.CompositeInDouble
+      ? 8.0 * (frame.Moments.Moments + 5)
+      : 1 + 4.0 * (frame.Moments.Moments + 5);
+    mode = internal.Auto.Choose(group.Processes, bytesPerPixel) == apc::AutoMode::Moments
+      ? APC
+      : SEGMENTS;
+  }
+  return mode;
 }
 
 //------------------------------------------------------------------------------

@@ -46,8 +46,9 @@
  * scheduled in rounds so that blocking sends cannot deadlock), each owner sorts and blends
  * its pixels' segments front to back, and a gather brings the strips to the display
  * process, which blends them over the opaque image. Segments travel as 24 bytes (pixel,
- * first lattice index, float premultiplied colour and transmittance). Several volumes in this mode
- * are exact only if they do not overlap in space (their segments would interleave along a ray).
+ * first lattice index, float premultiplied colour and transmittance). The exact modes blend one
+ * volume's samples at a time and cannot interleave overlapping volumes: a frame with two or more
+ * visible APC volumes runs APC instead (one warning while it lasts), and AUTO chooses APC.
  *
  * Works with any vtkMultiProcessController (vtkMPIController for real runs; none or a
  * single process renders locally). In ParaView it is installed as the view's image
@@ -414,6 +415,9 @@ private:
   void operator=(const vtkAPCCompositePass&) = delete;
 
   void WriteImage();
+  // The mode this frame runs: the setting, AUTO's choice, or APC for several volumes (the
+  // exact modes cannot interleave them; said once while it lasts).
+  int ChooseMode(const apc::ProcessGroup& group, const apc::CompositeFrame& frame);
   // AUTO: what this frame measured, summed over processes, into the history of the choice.
   void RecordForAuto(const apc::ProcessGroup& group);
   // Stores, blends and writes the display process's image, and reports the frame.

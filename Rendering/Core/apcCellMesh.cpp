@@ -11,6 +11,15 @@ namespace apc
 {
 namespace
 {
+// Orders points by their coordinates (x, then y, then z), ids breaking ties between
+// coincident points. Coordinates, not ids, because the two cells sharing a face may number its
+// points differently: cells on different ranks, or in pieces appended without merging their
+// points, hold their own copies of the face's points.
+bool Precedes(const std::vector<std::array<double, 3>>& points, int64_t a, int64_t b)
+{
+  return points[a] != points[b] ? points[a] < points[b] : a < b;
+}
+
 // The plane of a face computed from its points in canonical order, so that both cells
 // sharing the face get the same numbers (see the header). Returns false for a face with no
 // area (collapsed corners), which then constrains nothing.
@@ -20,12 +29,13 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
   int first = 0;
   for (int i = 1; i < size; ++i)
   {
-    if (ids[i] < ids[first])
+    if (Precedes(points, ids[i], ids[first]))
     {
       first = i;
     }
   }
-  const int step = ids[(first + 1) % size] < ids[(first + size - 1) % size] ? 1 : size - 1;
+  const int step =
+    Precedes(points, ids[(first + 1) % size], ids[(first + size - 1) % size]) ? 1 : size - 1;
   int64_t ordered[4];
   for (int i = 0; i < size; ++i)
   {
@@ -50,10 +60,14 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
   {
     return false;
   }
-  // Unit normals keep t = (offset - n.o)/(n.d) well scaled whatever the cell size.
+  // Unit normals keep t = (offset - n.o)/(n.d) well scaled whatever the cell size. The
+  // normal is stored in float: the offset is taken with the rounded normal, so that the
+  // stored plane passes through the centroid (to double rounding) and is only tilted by the
+  // normal's rounding, an error relative to the face's size, not to its distance from the
+  // origin.
   for (int d = 0; d < 3; ++d)
   {
-    normal[d] = n[d] / length;
+    normal[d] = static_cast<float>(n[d] / length);
   }
   offset = (normal[0] * c[0] + normal[1] * c[1] + normal[2] * c[2]) / size;
   return true;
@@ -209,7 +223,7 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, std::vector<FacePlane>& pl
     const double sign = side > 0 ? -1.0 : 1.0;
     planes.push_back({ { static_cast<float>(sign * n[0]), static_cast<float>(sign * n[1]),
                          static_cast<float>(sign * n[2]) },
-      static_cast<float>(sign * offset) });
+      sign * offset });
   }
   // A cell needs at least four faces with area to enclose anything; with fewer (collapsed
   // corners, a flat cell) its planes would leave rays unbounded, so it is left out.

@@ -6,8 +6,9 @@
 // pyramids of CFD meshes). A non-planar quad face is replaced by one plane (Newell normal
 // through the face centroid). What makes the cells tile space without gaps or double counting
 // is that two cells sharing a face compute that face's plane bit for bit identically: the
-// plane is computed from the face's points in a canonical order (starting at the smallest
-// point id, walking towards the smaller neighbour), and only its sign differs between the two
+// plane is computed from the face's points in a canonical order (starting at the point with
+// the smallest coordinates, walking towards the smaller neighbour: coordinates, not ids, which
+// differ between ranks and between unmerged pieces), and only its sign differs between the two
 // cells. Together with half-open sample intervals [t_in, t_out) every lattice sample of a ray
 // then lands in exactly one cell, whichever rank owns it.
 #ifndef apcCellMesh_h
@@ -25,9 +26,13 @@ namespace apc
 
 struct FacePlane
 {
-  // Inside the cell: Normal . x - Offset <= 0 (Normal points out; not unit length).
+  // Inside the cell: Normal . x - Offset <= 0 (Normal points out, unit length to float
+  // rounding). The offset is the float normal's dot product with the face's centroid, in
+  // double: a float offset is off by up to half an ulp of the coordinates' magnitude (0.5 at
+  // 1e7), which moves faces far from the origin by more than a cell's width, while the
+  // double one keeps the plane within rounding of the face wherever the mesh sits.
   std::array<float, 3> Normal;
-  float Offset;
+  double Offset;
 };
 
 class CellMesh

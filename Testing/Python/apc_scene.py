@@ -57,6 +57,12 @@ parser.add_argument("--expect-blank", action="store_true",
 parser.add_argument("--interactive", help="folder: interactive renders (camera moving) run "
                     "reduced, the next still render is bit-identical to the one before, and "
                     "the interactive picture reads as the still one (SSIM)")
+parser.add_argument("--offset", type=float, default=0.0,
+                    help="move the data (and the camera) by this much along x, y and z, in "
+                    "double precision: precision must not depend on where the mesh sits")
+parser.add_argument("--scale", type=float, default=1.0,
+                    help="scale the data (and the camera, sample and opacity unit distances) "
+                    "by this factor after --offset")
 parser.add_argument("--client-timings", action="store_true",
                     help="the timings must reach this client (total > 0): client-server")
 parser.add_argument("--tiled", help="folder: a screenshot at twice the view size (ParaView "
@@ -234,6 +240,26 @@ def main():
         check(ids is not None and tuple(ids.GetRange()) == (0.0, pieces - 1.0),
               "PartitionId covers 0..%d" % (pieces - 1))
 
+    if args.offset != 0 or args.scale != 1:
+        # x -> scale * (x + offset), points in double (float points 1e7 away are 1 m apart).
+        moved = ProgrammableFilter(registrationName="Moved", Input=scene_source)
+        moved.OutputDataSetType = "vtkUnstructuredGrid"
+        moved.Script = (
+            "from vtkmodules.vtkCommonCore import vtkPoints\n"
+            "from vtkmodules.util.numpy_support import vtk_to_numpy, numpy_to_vtk\n"
+            "import numpy\n"
+            "out = self.GetOutput(); out.ShallowCopy(self.GetInput())\n"
+            "if out.GetPoints() is not None:\n"
+            "    x = vtk_to_numpy(out.GetPoints().GetData()).astype(numpy.float64)\n"
+            "    points = vtkPoints(); points.SetDataTypeToDouble()\n"
+            "    points.SetData(numpy_to_vtk((x + %r) * %r, deep=1))\n"
+            "    out.SetPoints(points)\n" % (args.offset, args.scale))
+        scene_source = moved
+        camera = {key: ([args.scale * (v + args.offset) for v in value]
+                        if key != "CameraViewUp" else value) for key, value in camera.items()}
+        unit *= args.scale
+        spacing *= args.scale
+
     if args.drop_array_on_rank >= 0:
         broken = ProgrammableFilter(registrationName="BrokenPiece", Input=scene_source)
         broken.OutputDataSetType = "vtkUnstructuredGrid"
@@ -265,7 +291,8 @@ def main():
     pwf = GetOpacityTransferFunction(scene_array)
     pwf.Points = [lo, 0.05, 0.5, 0.0, hi, 0.6, 0.5, 0.0]
     display.ScalarOpacityUnitDistance = unit
-    display.APCSampleDistance = args.sample_distance if args.sample_distance > 0 else spacing
+    display.APCSampleDistance = (args.sample_distance * args.scale if args.sample_distance > 0
+                                 else spacing)
     display.APCMode = args.mode
     if args.band_megapixels > 0:
         display.APCBandMegapixels = args.band_megapixels

@@ -15,6 +15,10 @@ prints its own checks' verdict (APC-TEST-PASSED / APC-TEST-FAILED) and, one per 
   per frame); choosing an array draws again.
 --case nan-once: NaN scalars and a collapsed cell are said once per data change: not again
   after display-property changes, again after the data changes.
+--case overlap: two overlapping APC volumes asking for Exact (segments): the exact modes cannot
+  interleave two volumes, so the view renders them with APC (the same float image as APC mode)
+  and says so once; Auto never picks the segments while both are shown, and does again for
+  one; the float image file is written.
 --case refresh-timings: pushing "Refresh Timings" (what the panel's button does) fills "Last
   Timings" with the last frame's timings, without any other call.
 """
@@ -29,7 +33,7 @@ import apcparaview
 parser = argparse.ArgumentParser()
 parser.add_argument("--case", required=True,
                     choices=["view-settings", "ranges", "sample-cap", "solid-color", "nan-once",
-                             "refresh-timings"])
+                             "refresh-timings", "overlap"])
 parser.add_argument("--out", default=".", help="folder for files the scene writes")
 args = parser.parse_args()
 
@@ -232,10 +236,63 @@ def refresh_timings():
     expect(0, 0, r"ERROR")
 
 
+def float_rgba(path):
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    reader = vtkXMLImageDataReader()
+    reader.SetFileName(path)
+    reader.Update()
+    return vtk_to_numpy(reader.GetOutput().GetPointData().GetArray("RGBA")).astype(float)
+
+
+def overlap():
+    view = make_view()
+    first = puzzle()
+    second = Transform(Input=puzzle())
+    second.Transform.Translate = [0.5, 0.3, 0.2]  # overlaps the first
+    displays = [apc_display(first, view), apc_display(second, view)]
+    view.ResetCamera()
+    images = {}
+    for mode in ("APC", "Exact (segments)"):
+        step(mode)
+        images[mode] = os.path.join(os.path.abspath(args.out), "overlap_%s.vti" % mode[:3])
+        if os.path.exists(images[mode]):
+            os.remove(images[mode])
+        for d in displays:
+            d.APCMode = mode
+            d.APCImageFile = images[mode]
+        for _ in range(3):
+            Render(view)
+            ran = int(apcparaview.last_timings(displays[0])["mode"])
+            check(ran == 0, "%s with two volumes runs APC (ran mode %d)" % (mode, ran))
+        check(os.path.exists(images[mode]), "two volumes write the float image (%s)" % mode)
+    if all(os.path.exists(p) for p in images.values()):
+        a, b = (float_rgba(images[m]) for m in ("APC", "Exact (segments)"))
+        diff = float(abs(a - b).max()) if a.shape == b.shape else float("inf")
+        print("two volumes, Exact (segments) against APC: max |diff| = %g, max alpha %.3f"
+              % (diff, float(a[:, 3].max())))
+        check(diff <= 1e-6 and float(a[:, 3].max()) > 0.2,
+              "Exact (segments) renders two volumes as APC does")
+    expect(1, 1, r"cannot interleave 2 APC volumes where they overlap")
+    step("Auto")
+    for d in displays:
+        d.APCMode = "Auto"
+    for _ in range(3):
+        Render(view)
+        ran = int(apcparaview.last_timings(displays[0])["mode"])
+        check(ran == 0, "Auto never composites segments with two volumes (ran mode %d)" % ran)
+    Hide(second, view)
+    Render(view)
+    ran = int(apcparaview.last_timings(displays[0])["mode"])
+    check(ran == 1, "with one volume left, Auto's first frame composites segments (ran %d)" % ran)
+    expect(0, 0, r"ERROR|APC frame skipped")
+
+
 apcparaview.load_plugin(ns=globals())
 {"view-settings": view_settings, "ranges": ranges, "sample-cap": sample_cap,
  "solid-color": solid_color, "nan-once": nan_once,
- "refresh-timings": refresh_timings}[args.case]()
+ "refresh-timings": refresh_timings, "overlap": overlap}[args.case]()
 print("APC-TEST-FAILED" if failures else "APC-TEST-PASSED")
 if failures:
     sys.exit(1)
