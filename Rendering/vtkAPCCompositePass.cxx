@@ -22,6 +22,7 @@
 #include "apcFrameSettings.h"
 #include "apcImageOutput.h"
 #include "apcInputReport.h"
+#include "apcNodeThreads.h"
 #include "apcSettingChecks.h"
 #include "apcVolumeSettings.h"
 
@@ -53,6 +54,10 @@ struct vtkAPCCompositePass::Internals
   vtkNew<vtkImageData> Image;
   vtkSmartPointer<vtkFloatArray> DelegateDepth; // this frame's, if its delegate gave one
   bool TransferWarned = false; // the display process said that transfer functions differ
+  // The default thread count was set from the processes sharing the node (a collective, so
+  // done in a frame, which every process renders, and once per controller).
+  vtkMultiProcessController* ThreadsSharedFor = nullptr;
+  bool ThreadsShared = false;
 };
 
 //------------------------------------------------------------------------------
@@ -390,6 +395,12 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   internal.Image->Initialize();
 
   const apc::ProcessGroup group(this->Controller, this->DisplayProcess);
+  if (!internal.ThreadsShared || internal.ThreadsSharedFor != this->Controller)
+  {
+    apc::ShareNodeCores(this->Controller);
+    internal.ThreadsShared = true;
+    internal.ThreadsSharedFor = this->Controller;
+  }
   apc::CompositeFrame frame;
   std::vector<vtkVolume*> volumes;
   if (!AgreeOnFrame(this, group, internal.Volumes, internal.Settings, s->GetRenderer(), frame,

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace apc
 {
@@ -68,6 +69,15 @@ int64_t CellMesh::AddCell(CellShape shape, const int64_t* pointIds)
   this->Connectivity.insert(this->Connectivity.end(), pointIds, pointIds + corners);
   this->Offsets.push_back(static_cast<int64_t>(this->Connectivity.size()));
   return static_cast<int64_t>(this->Shapes.size()) - 1;
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::SetCells(
+  std::vector<CellShape> shapes, std::vector<int64_t> offsets, std::vector<int64_t> connectivity)
+{
+  this->Shapes = std::move(shapes);
+  this->Offsets = std::move(offsets);
+  this->Connectivity = std::move(connectivity);
 }
 
 //------------------------------------------------------------------------------

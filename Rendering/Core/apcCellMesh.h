@@ -43,6 +43,12 @@ public:
   // reordered to hexahedron order by the caller). Returns the cell's index.
   int64_t AddCell(CellShape shape, const int64_t* pointIds);
 
+  // The bulk form of AddCell, for converters that fill the cells in parallel: replaces every
+  // cell by shapes (one per cell), offsets (one more, from 0: cell c's corner ids are
+  // connectivity[offsets[c] .. offsets[c + 1]), as many as its shape has) and connectivity.
+  void SetCells(
+    std::vector<CellShape> shapes, std::vector<int64_t> offsets, std::vector<int64_t> connectivity);
+
   // Derives bounds and face planes; call after the last AddCell and before rendering.
   // Returns false, with a message, if the mesh is unusable (ids out of range, scalars missing).
   bool Finalize(std::string* error = nullptr);
