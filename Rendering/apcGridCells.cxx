@@ -125,9 +125,9 @@ void CountBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, Block& b
 // The output arrays, filled by blocks at their own ranges.
 struct Output
 {
-  std::vector<CellShape> Shapes;
-  std::vector<int64_t> Offsets;
-  std::vector<int64_t> Connectivity;
+  UninitializedVector<CellShape> Shapes;
+  UninitializedVector<int64_t> Offsets;
+  UninitializedVector<int64_t> Connectivity;
   std::vector<float> Scalars;
   std::vector<long long> Origin;
 };
