@@ -3,7 +3,10 @@
 
 #include "apcCellMesh.h"
 #include "apcCellShapeCheck.h"
+#include "apcGridCells.h"
 #include "apcInputReport.h"
+#include "apcParallel.h"
+#include "apcScalarReader.h"
 
 #include "vtkCellData.h"
 #include "vtkCellType.h"
@@ -72,57 +75,6 @@ bool TriangulatedByTheFilter(int vtkType)
       return false;
   }
 }
-
-// One value per tuple as the selection asks for it.
-class ScalarReader
-{
-public:
-  ScalarReader(const ScalarSelection& selection, InputReport& report)
-    : Array(selection.Array)
-    , Components(selection.Array->GetNumberOfComponents())
-  {
-    if (this->Components == 1)
-    {
-      return;
-    }
-    if (selection.VectorMode == vtkScalarsToColors::COMPONENT)
-    {
-      this->Component = std::min(std::max(selection.VectorComponent, 0), this->Components - 1);
-      if (this->Component != selection.VectorComponent)
-      {
-        report[InputReport::ComponentClamped] = 1;
-      }
-    }
-    else if (selection.VectorMode == vtkScalarsToColors::RGBCOLORS)
-    {
-      report[InputReport::RGBColoursMode] = 1;
-    }
-  }
-
-  float operator()(vtkIdType tuple) const
-  {
-    if (this->Components == 1)
-    {
-      return static_cast<float>(this->Array->GetComponent(tuple, 0));
-    }
-    if (this->Component >= 0)
-    {
-      return static_cast<float>(this->Array->GetComponent(tuple, this->Component));
-    }
-    double sum = 0;
-    for (int c = 0; c < this->Components; ++c)
-    {
-      const double v = this->Array->GetComponent(tuple, c);
-      sum += v * v;
-    }
-    return static_cast<float>(std::sqrt(sum));
-  }
-
-private:
-  vtkDataArray* Array;
-  int Components;
-  int Component = -1; // the magnitude
-};
 
 // Appends the tetrahedra of one decomposed cell (4 point ids each), leaving out the flat ones
 // a triangulation makes of coplanar points: they hold no volume. Returns how many it added.
@@ -286,23 +238,16 @@ bool CellMeshFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection& scal
     return false;
   }
   const ScalarReader value(scalars, report);
-  const vtkIdType numPoints = input->GetNumberOfPoints();
-  mesh.Points.resize(numPoints);
-  for (vtkIdType p = 0; p < numPoints; ++p)
-  {
-    input->GetPoint(p, mesh.Points[p].data());
-  }
-  if (!scalars.CellData)
-  {
-    mesh.PointScalars.resize(numPoints);
-    for (vtkIdType p = 0; p < numPoints; ++p)
-    {
-      mesh.PointScalars[p] = value(p);
-    }
-  }
+  CopyPointsAndScalars(input, value, scalars.CellData, mesh);
 
+  // A plain grid without polyhedra straight from its arrays, in parallel; else cell by cell.
   std::vector<vtkIdType> forTheFilter;
-  int64_t flatDecomposed = ConvertCells(input, scalars, value, mesh, report, origin, forTheFilter);
+  auto* grid = vtkUnstructuredGrid::SafeDownCast(input);
+  int64_t flatDecomposed = 0;
+  if (!grid || !ConvertGridCells(grid, scalars.CellData, value, mesh, report, origin, forTheFilter))
+  {
+    flatDecomposed = ConvertCells(input, scalars, value, mesh, report, origin, forTheFilter);
+  }
   if (!forTheFilter.empty())
   {
     flatDecomposed += TriangulateWithTheFilter(input, scalars, value, forTheFilter, mesh, origin);
@@ -349,10 +294,14 @@ bool RefreshScalarsFromVTK(vtkUnstructuredGridBase* input, const ScalarSelection
   {
     mesh.CellScalars.clear();
     mesh.PointScalars.resize(mesh.Points.size());
-    for (vtkIdType p = 0; p < static_cast<vtkIdType>(mesh.PointScalars.size()); ++p)
-    {
-      mesh.PointScalars[p] = p < tuples ? value(p) : NAN;
-    }
+    ParallelFor(value.IsDirect() ? 0 : 1, static_cast<int64_t>(mesh.PointScalars.size()), 16384,
+      [&](int64_t first, int64_t last)
+      {
+        for (int64_t p = first; p < last; ++p)
+        {
+          mesh.PointScalars[p] = p < tuples ? value(p) : NAN;
+        }
+      });
   }
   if (!mesh.RefreshScalarRanges(&error))
   {

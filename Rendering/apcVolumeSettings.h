@@ -34,7 +34,7 @@ struct VolumeSettings
   double SampleDistance = 0.0; // world units; 0: the bounding-box diagonal / 256
   bool LatticeJitter = false;
   int SampleCacheMiB = 1024;
-  int NumberOfThreads = 0; // 0: TBB decides
+  int NumberOfThreads = 0; // 0: the process's share of its node (apcNodeThreads.h)
   bool ComputeSegmentCount = false;
 
   size_t SampleCacheBytes() const { return static_cast<size_t>(this->SampleCacheMiB) << 20; }

@@ -22,6 +22,7 @@
 #include "apcFrameSettings.h"
 #include "apcImageOutput.h"
 #include "apcInputReport.h"
+#include "apcNodeThreads.h"
 #include "apcSettingChecks.h"
 #include "apcVolumeSettings.h"
 
@@ -54,6 +55,10 @@ struct vtkAPCCompositePass::Internals
   vtkSmartPointer<vtkFloatArray> DelegateDepth; // this frame's, if its delegate gave one
   bool TransferWarned = false; // the display process said that transfer functions differ
   bool SeveralWarned = false;  // ... that the exact modes cannot blend several volumes
+  // The default thread count was set from the processes sharing the node (a collective, so
+  // done in a frame, which every process renders, and once per controller).
+  vtkMultiProcessController* ThreadsSharedFor = nullptr;
+  bool ThreadsShared = false;
 };
 
 //------------------------------------------------------------------------------
@@ -392,6 +397,12 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   internal.Image->Initialize();
 
   const apc::ProcessGroup group(this->Controller, this->DisplayProcess);
+  if (!internal.ThreadsShared || internal.ThreadsSharedFor != this->Controller)
+  {
+    apc::ShareNodeCores(this->Controller);
+    internal.ThreadsShared = true;
+    internal.ThreadsSharedFor = this->Controller;
+  }
   apc::CompositeFrame frame;
   std::vector<vtkVolume*> volumes;
   if (!AgreeOnFrame(this, group, internal.Volumes, internal.Settings, s->GetRenderer(), frame,

@@ -152,7 +152,8 @@ int vtkAPCVolumeMapper::GetSampleCacheSize() const
 void vtkAPCVolumeMapper::SetNumberOfThreads(int threads)
 {
   apc::Assign(this, this->Internal->Settings.NumberOfThreads,
-    apc::CheckedSetting(this, "NumberOfThreads", threads, 0, 1024, "0 lets TBB decide"));
+    apc::CheckedSetting(
+      this, "NumberOfThreads", threads, 0, 1024, "0 = this process's share of its node"));
 }
 
 int vtkAPCVolumeMapper::GetNumberOfThreads() const

@@ -169,7 +169,9 @@ public:
 
   ///@{
   /**
-   * TBB threads for ray marching; 0 (default) lets TBB decide.
+   * TBB threads for ray marching; 0 (default): under vtkAPCCompositePass an unbound process
+   * takes its share of the node's cores (cores / processes on the node), a bound one its
+   * affinity mask; rendered alone, TBB decides (the affinity mask).
    */
   void SetNumberOfThreads(int threads);
   int GetNumberOfThreads() const;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace apc
 {
@@ -85,6 +86,15 @@ int64_t CellMesh::AddCell(CellShape shape, const int64_t* pointIds)
 }
 
 //------------------------------------------------------------------------------
+void CellMesh::SetCells(UninitializedVector<CellShape> shapes, UninitializedVector<int64_t> offsets,
+  UninitializedVector<int64_t> connectivity)
+{
+  this->Shapes = std::move(shapes);
+  this->Offsets = std::move(offsets);
+  this->Connectivity = std::move(connectivity);
+}
+
+//------------------------------------------------------------------------------
 bool CellMesh::Finalize(std::string* error)
 {
   auto fail = [error](const std::string& message)
@@ -128,6 +138,8 @@ bool CellMesh::Finalize(std::string* error)
       for (int64_t block = begin; block < end; ++block)
       {
         std::vector<FacePlane>& planes = blockPlanes[block];
+        // At most six faces a cell: the block's planes never move while it grows.
+        planes.reserve(static_cast<size_t>(6 * kBlock));
         for (int64_t cell = block * kBlock; cell < std::min(numCells, (block + 1) * kBlock); ++cell)
         {
           const size_t before = planes.size();
@@ -146,22 +158,24 @@ bool CellMesh::Finalize(std::string* error)
   this->NonFiniteCornerCells = 0;
   this->FlatCells = 0;
   this->NonFiniteScalarCells = 0;
-  size_t total = 0;
-  for (const auto& planes : blockPlanes)
-  {
-    total += planes.size();
-  }
-  this->Planes.reserve(total);
-  for (auto& planes : blockPlanes)
-  {
-    this->Planes.insert(this->Planes.end(), planes.begin(), planes.end());
-    planes = std::vector<FacePlane>();
-  }
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
     this->PlaneOffsets.push_back(this->PlaneOffsets.back() + planeCounts[cell]);
     this->CountFate(cell, fates[cell]);
   }
+  // Each block's planes to where its first cell's go, blocks in parallel.
+  this->Planes.resize(static_cast<size_t>(this->PlaneOffsets.back()));
+  ParallelFor(0, blocks, 1,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t block = begin; block < end; ++block)
+      {
+        std::vector<FacePlane>& planes = blockPlanes[block];
+        std::copy(
+          planes.begin(), planes.end(), this->Planes.begin() + this->PlaneOffsets[block * kBlock]);
+        planes = std::vector<FacePlane>();
+      }
+    });
   if (!(this->MeshBounds[0] <= this->MeshBounds[1]))
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };

@@ -15,6 +15,7 @@
 #define apcCellMesh_h
 
 #include "apcCellInterpolation.h"
+#include "apcUninitialized.h"
 
 #include <array>
 #include <cstdint>
@@ -47,6 +48,12 @@ public:
   // Appends a cell given its corner point ids in VTK's order for the shape (a voxel must be
   // reordered to hexahedron order by the caller). Returns the cell's index.
   int64_t AddCell(CellShape shape, const int64_t* pointIds);
+
+  // The bulk form of AddCell, for converters that fill the cells in parallel: replaces every
+  // cell by shapes (one per cell), offsets (one more, from 0: cell c's corner ids are
+  // connectivity[offsets[c] .. offsets[c + 1]), as many as its shape has) and connectivity.
+  void SetCells(UninitializedVector<CellShape> shapes, UninitializedVector<int64_t> offsets,
+    UninitializedVector<int64_t> connectivity);
 
   // Derives bounds and face planes; call after the last AddCell and before rendering.
   // Returns false, with a message, if the mesh is unusable (ids out of range, scalars missing).
@@ -111,14 +118,14 @@ private:
   void CountFate(int64_t cell, CellFate fate);
   std::array<float, 2> ScalarRangeOf(int64_t cell) const;
 
-  std::vector<CellShape> Shapes;
-  std::vector<int64_t> Offsets{ 0 };
-  std::vector<int64_t> Connectivity;
+  UninitializedVector<CellShape> Shapes;
+  UninitializedVector<int64_t> Offsets{ 0 };
+  UninitializedVector<int64_t> Connectivity;
 
-  std::vector<FacePlane> Planes;
-  std::vector<int64_t> PlaneOffsets;
-  std::vector<std::array<double, 6>> Bounds;
-  std::vector<std::array<float, 2>> ScalarRanges;
+  UninitializedVector<FacePlane> Planes;
+  UninitializedVector<int64_t> PlaneOffsets;
+  UninitializedVector<std::array<double, 6>> Bounds;
+  UninitializedVector<std::array<float, 2>> ScalarRanges;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
   int64_t SkippedCells = 0;
   int64_t NonFiniteCornerCells = 0;

@@ -7,13 +7,49 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <atomic>
 #include <cstdint>
 
 namespace apc
 {
 
+// The threads used where none are requested (0): this process's share of its node's cores,
+// set once by whoever knows how many processes share the node (apcNodeThreads.h); 0 leaves
+// it to TBB, which follows the process's affinity mask.
+inline std::atomic<int> DefaultThreadsValue{ 0 };
+
+inline void SetDefaultThreads(int threads)
+{
+  DefaultThreadsValue.store(threads > 0 ? threads : 0);
+}
+
+inline int GetDefaultThreads()
+{
+  return DefaultThreadsValue.load();
+}
+
+// The arena size for a request: the request itself, else the default above, else TBB's.
+inline int ThreadsFor(int requested)
+{
+  const int threads = requested > 0 ? requested : GetDefaultThreads();
+  return threads > 0 ? threads : tbb::task_arena::automatic;
+}
+
+// The rule for the default (pure, so it is tested alone): a process bound to fewer cores than
+// the node has (affinityCores < nodeCores) keeps its mask, i.e. TBB's choice (0); an unbound
+// one takes its share of the node, nodeCores / processesOnNode, at least one.
+inline int NodeShareOfThreads(int nodeCores, int affinityCores, int processesOnNode)
+{
+  if (nodeCores < 1 || processesOnNode < 1 || (affinityCores > 0 && affinityCores < nodeCores))
+  {
+    return 0;
+  }
+  const int share = nodeCores / processesOnNode;
+  return share > 0 ? share : 1;
+}
+
 // Calls body(begin, end) on disjoint chunks of [0, count) of at least grain items, on up to
-// threads threads (0 = as many as TBB offers).
+// threads threads (0 = the default above).
 template <class Body>
 void ParallelFor(int threads, int64_t count, int64_t grain, Body&& body)
 {
@@ -21,7 +57,7 @@ void ParallelFor(int threads, int64_t count, int64_t grain, Body&& body)
   {
     return;
   }
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  tbb::task_arena arena(ThreadsFor(threads));
   arena.execute(
     [&]
     {

@@ -69,7 +69,8 @@ struct TileBins
 };
 
 // Bins mesh's cells for camera into tiles of tileSize pixels. A cell reaching behind the eye
-// gets the whole screen (conservative), one wholly behind it none. threads: 0 = TBB's choice.
+// gets the whole screen (conservative), one wholly behind it none. threads: 0 = the default
+// (apcParallel.h).
 void BinCells(
   const CellMesh* mesh, const RayCamera& camera, int tileSize, int threads, TileBins& bins);
 

@@ -1,0 +1,47 @@
+// A vector whose resize leaves new elements of trivial types unwritten (default-initialised):
+// the large per-cell arrays of a mesh are then first written, and their memory pages first
+// touched, by the parallel loops that fill them, instead of by one thread zeroing them first
+// (on the meshes at hand that zeroing and its page faults cost more than filling them).
+#ifndef apcUninitialized_h
+#define apcUninitialized_h
+
+#include <memory>
+#include <new>
+#include <utility>
+#include <vector>
+
+namespace apc
+{
+
+template <class T>
+struct UninitializedAllocator : std::allocator<T>
+{
+  template <class U>
+  struct rebind
+  {
+    using other = UninitializedAllocator<U>;
+  };
+  UninitializedAllocator() = default;
+  template <class U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept
+  {
+  }
+  // resize() and the size constructor: default-initialised, i.e. nothing written for trivial T.
+  template <class U>
+  void construct(U* p) noexcept
+  {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args)
+  {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+template <class T>
+using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
+
+} // namespace apc
+
+#endif

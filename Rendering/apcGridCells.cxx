@@ -1,0 +1,298 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "apcGridCells.h"
+
+#include "apcCellMesh.h"
+#include "apcInputReport.h"
+#include "apcParallel.h"
+#include "apcScalarReader.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellType.h"
+#include "vtkDataSetAttributes.h"
+#include "vtkPoints.h"
+#include "vtkUnsignedCharArray.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <algorithm>
+#include <array>
+
+namespace apc
+{
+namespace
+{
+// Cells per block: blocks are the unit of parallel work and of the join in cell order.
+constexpr int64_t kBlock = 16384;
+
+// The shape APC renders a VTK cell type as: its corner count (0 if not rendered as it is).
+int CornersOf(unsigned char type)
+{
+  switch (type)
+  {
+    case VTK_TETRA:
+      return 4;
+    case VTK_PYRAMID:
+      return 5;
+    case VTK_WEDGE:
+      return 6;
+    case VTK_HEXAHEDRON:
+    case VTK_VOXEL:
+      return 8;
+    default:
+      return 0;
+  }
+}
+
+// Whether vtkDataSetTriangleFilter cuts the type (CellMeshFromVTK's list).
+bool ForTheFilter(unsigned char type)
+{
+  switch (type)
+  {
+    case VTK_QUADRATIC_TETRA:
+    case VTK_QUADRATIC_PYRAMID:
+    case VTK_QUADRATIC_WEDGE:
+    case VTK_QUADRATIC_HEXAHEDRON:
+    case VTK_TRIQUADRATIC_HEXAHEDRON:
+    case VTK_TRIQUADRATIC_PYRAMID:
+    case VTK_QUADRATIC_LINEAR_WEDGE:
+    case VTK_BIQUADRATIC_QUADRATIC_WEDGE:
+    case VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON:
+    case VTK_PENTAGONAL_PRISM:
+    case VTK_HEXAGONAL_PRISM:
+      return true;
+    default:
+      return false;
+  }
+}
+
+// What one block of input cells gives.
+struct Block
+{
+  int64_t Cells = 0;   // rendered as they are
+  int64_t Corners = 0; // their corner ids
+  bool Polyhedra = false;
+  std::vector<vtkIdType> ForTheFilter;
+  std::vector<unsigned char> Unsupported;
+};
+
+// The grid's raw arrays, with ids of type Id (vtkCellArray stores 32- or 64-bit ids).
+template <class Id>
+struct Cells
+{
+  const unsigned char* Types;
+  const unsigned char* Ghosts; // null without ghost flags
+  const Id* Offsets;
+  const Id* Connectivity;
+
+  bool Skipped(vtkIdType c) const
+  {
+    const unsigned char mask =
+      vtkDataSetAttributes::DUPLICATECELL | vtkDataSetAttributes::HIDDENCELL;
+    return this->Ghosts && (this->Ghosts[c] & mask);
+  }
+};
+
+// Pass 1 over a block: counts, and the cells that go elsewhere.
+template <class Id>
+void CountBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, Block& block)
+{
+  for (vtkIdType c = begin; c < end; ++c)
+  {
+    if (cells.Skipped(c))
+    {
+      continue;
+    }
+    const unsigned char type = cells.Types[c];
+    if (const int corners = CornersOf(type))
+    {
+      ++block.Cells;
+      block.Corners += corners;
+    }
+    else if (type == VTK_POLYHEDRON)
+    {
+      block.Polyhedra = true;
+    }
+    else if (ForTheFilter(type))
+    {
+      block.ForTheFilter.push_back(c);
+    }
+    else
+    {
+      block.Unsupported.push_back(type);
+    }
+  }
+}
+
+// The output arrays, filled by blocks at their own ranges.
+struct Output
+{
+  UninitializedVector<CellShape> Shapes;
+  UninitializedVector<int64_t> Offsets;
+  UninitializedVector<int64_t> Connectivity;
+  std::vector<float> Scalars;
+  std::vector<long long> Origin;
+};
+
+// Pass 2 over a block: its cells written from output cell `cell` and corner `corner` on.
+template <class Id>
+void FillBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, bool cellData,
+  const ScalarReader& value, int64_t cell, int64_t corner, Output& out)
+{
+  for (vtkIdType c = begin; c < end; ++c)
+  {
+    const int corners = cells.Skipped(c) ? 0 : CornersOf(cells.Types[c]);
+    if (corners == 0)
+    {
+      continue;
+    }
+    const Id* ids = cells.Connectivity + cells.Offsets[c];
+    const bool voxel = cells.Types[c] == VTK_VOXEL;
+    for (int i = 0; i < corners; ++i)
+    {
+      out.Connectivity[corner + i] = ids[voxel ? kVoxelToHexahedron[i] : i];
+    }
+    out.Shapes[cell] = static_cast<CellShape>(corners);
+    out.Origin[cell] = c;
+    if (cellData)
+    {
+      out.Scalars[cell] = value(c);
+    }
+    corner += corners;
+    out.Offsets[++cell] = corner;
+  }
+}
+
+template <class Id>
+bool Convert(const Cells<Id>& cells, vtkIdType numCells, bool cellData, const ScalarReader& value,
+  CellMesh& mesh, InputReport& report, std::vector<long long>& origin,
+  std::vector<vtkIdType>& forTheFilter)
+{
+  const int64_t blocks = (numCells + kBlock - 1) / kBlock;
+  std::vector<Block> counts(static_cast<size_t>(blocks));
+  auto range = [numCells](int64_t b) { return std::min<int64_t>(numCells, (b + 1) * kBlock); };
+  ParallelFor(0, blocks, 1,
+    [&](int64_t first, int64_t last)
+    {
+      for (int64_t b = first; b < last; ++b)
+      {
+        CountBlock(cells, b * kBlock, range(b), counts[b]);
+      }
+    });
+  std::vector<int64_t> cellStart(blocks + 1, 0);
+  std::vector<int64_t> cornerStart(blocks + 1, 0);
+  for (int64_t b = 0; b < blocks; ++b)
+  {
+    if (counts[b].Polyhedra)
+    {
+      return false;
+    }
+    cellStart[b + 1] = cellStart[b] + counts[b].Cells;
+    cornerStart[b + 1] = cornerStart[b] + counts[b].Corners;
+  }
+  Output out;
+  out.Shapes.resize(cellStart[blocks]);
+  out.Offsets.resize(cellStart[blocks] + 1);
+  out.Offsets[0] = 0;
+  out.Connectivity.resize(cornerStart[blocks]);
+  out.Origin.resize(cellStart[blocks]);
+  out.Scalars.resize(cellData ? cellStart[blocks] : 0);
+  // Scalars read through vtkDataArray are read by one thread.
+  ParallelFor(cellData && !value.IsDirect() ? 1 : 0, blocks, 1,
+    [&](int64_t first, int64_t last)
+    {
+      for (int64_t b = first; b < last; ++b)
+      {
+        FillBlock(cells, b * kBlock, range(b), cellData, value, cellStart[b], cornerStart[b], out);
+      }
+    });
+  for (const Block& block : counts)
+  {
+    forTheFilter.insert(forTheFilter.end(), block.ForTheFilter.begin(), block.ForTheFilter.end());
+    for (unsigned char type : block.Unsupported)
+    {
+      report.AddUnsupported(type);
+    }
+  }
+  mesh.SetCells(std::move(out.Shapes), std::move(out.Offsets), std::move(out.Connectivity));
+  mesh.CellScalars = std::move(out.Scalars);
+  origin = std::move(out.Origin);
+  return true;
+}
+}
+
+//------------------------------------------------------------------------------
+void CopyPointsAndScalars(
+  vtkUnstructuredGridBase* input, const ScalarReader& value, bool cellData, CellMesh& mesh)
+{
+  const vtkIdType numPoints = input->GetNumberOfPoints();
+  mesh.Points.resize(numPoints);
+  vtkPoints* points = input->GetPoints();
+  vtkDataArray* data = points ? points->GetData() : nullptr;
+  auto* floats = vtkFloatArray::FastDownCast(data);
+  auto* doubles = vtkDoubleArray::FastDownCast(data);
+  const bool direct = (floats || doubles) && data->GetNumberOfComponents() == 3;
+  ParallelFor(direct ? 0 : 1, numPoints, 16384,
+    [&](int64_t first, int64_t last)
+    {
+      for (int64_t p = first; p < last; ++p)
+      {
+        auto& x = mesh.Points[p];
+        if (floats && direct)
+        {
+          const float* f = floats->GetPointer(3 * p);
+          x = { f[0], f[1], f[2] };
+        }
+        else if (direct)
+        {
+          const double* d = doubles->GetPointer(3 * p);
+          x = { d[0], d[1], d[2] };
+        }
+        else
+        {
+          input->GetPoint(p, x.data());
+        }
+      }
+    });
+  if (cellData)
+  {
+    return;
+  }
+  mesh.PointScalars.resize(numPoints);
+  ParallelFor(value.IsDirect() ? 0 : 1, numPoints, 16384,
+    [&](int64_t first, int64_t last)
+    {
+      for (int64_t p = first; p < last; ++p)
+      {
+        mesh.PointScalars[p] = value(p);
+      }
+    });
+}
+
+//------------------------------------------------------------------------------
+bool ConvertGridCells(vtkUnstructuredGrid* grid, bool cellData, const ScalarReader& value,
+  CellMesh& mesh, InputReport& report, std::vector<long long>& origin,
+  std::vector<vtkIdType>& forTheFilter)
+{
+  vtkCellArray* cellArray = grid->GetCells();
+  vtkUnsignedCharArray* types = grid->GetCellTypesArray();
+  const vtkIdType numCells = grid->GetNumberOfCells();
+  if (!cellArray || !types || types->GetNumberOfValues() != numCells ||
+    cellArray->GetNumberOfCells() != numCells)
+  {
+    return false;
+  }
+  vtkUnsignedCharArray* ghosts = grid->GetCellGhostArray();
+  const unsigned char* ghostFlags = ghosts ? ghosts->GetPointer(0) : nullptr;
+  if (cellArray->IsStorage64Bit())
+  {
+    const Cells<vtkTypeInt64> cells{ types->GetPointer(0), ghostFlags,
+      cellArray->GetOffsetsArray64()->GetPointer(0),
+      cellArray->GetConnectivityArray64()->GetPointer(0) };
+    return Convert(cells, numCells, cellData, value, mesh, report, origin, forTheFilter);
+  }
+  const Cells<vtkTypeInt32> cells{ types->GetPointer(0), ghostFlags,
+    cellArray->GetOffsetsArray32()->GetPointer(0),
+    cellArray->GetConnectivityArray32()->GetPointer(0) };
+  return Convert(cells, numCells, cellData, value, mesh, report, origin, forTheFilter);
+}
+
+}

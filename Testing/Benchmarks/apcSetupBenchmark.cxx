@@ -1,0 +1,162 @@
+// What a data change costs before the first sample, part by part, on the bundled wind data (or
+// --data FILE.pvtu/.vtu): the conversion to the ray marcher's mesh (CellMeshFromVTK, which
+// ends with CellMesh::Finalize), Finalize alone, and the per-view binning (BinCells) at
+// --size pixels. Prints one CSV row per part: the smallest CPU time (all threads) and wall
+// time over --repeats, and a checksum of the mesh, so that two builds run side by side show
+// both their costs and that they make the same mesh. Uses only interfaces that older builds
+// have, so the same source measures a baseline.
+//
+//   apcSetupBenchmark [--data FILE] [--array U_mag] [--size 1024] [--repeats 3]
+
+#include "apcCellMesh.h"
+#include "apcCellMeshFromVTK.h"
+#include "apcInputReport.h"
+#include "apcRayCamera.h"
+#include "apcTileBins.h"
+
+#include "vtkDataArray.h"
+#include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkUnstructuredGrid.h"
+#include "vtkXMLPUnstructuredGridReader.h"
+#include "vtkXMLUnstructuredGridReader.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <functional>
+#include <string>
+
+namespace
+{
+double CpuSeconds()
+{
+  timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
+
+double WallSeconds()
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// The smallest CPU and wall time of repeats runs of work.
+void Time(
+  const char* part, int repeats, const std::function<void()>& work, double& cpu, double& wall)
+{
+  cpu = wall = 1e300;
+  for (int r = 0; r < repeats; ++r)
+  {
+    const double c0 = CpuSeconds();
+    const double w0 = WallSeconds();
+    work();
+    cpu = std::min(cpu, CpuSeconds() - c0);
+    wall = std::min(wall, WallSeconds() - w0);
+  }
+  std::printf("%s,%.4f,%.4f\n", part, cpu, wall);
+  std::fflush(stdout);
+}
+
+void Mix(unsigned long long& hash, const void* data, size_t bytes)
+{
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < bytes; ++i)
+  {
+    hash = (hash ^ p[i]) * 1099511628211ull;
+  }
+}
+
+// Everything the marcher reads of the mesh.
+unsigned long long Checksum(const apc::CellMesh& mesh)
+{
+  unsigned long long hash = 1469598103934665603ull;
+  Mix(hash, mesh.Points.data(), mesh.Points.size() * sizeof(mesh.Points[0]));
+  Mix(hash, mesh.PointScalars.data(), mesh.PointScalars.size() * sizeof(float));
+  Mix(hash, mesh.CellScalars.data(), mesh.CellScalars.size() * sizeof(float));
+  for (int64_t c = 0; c < mesh.GetNumberOfCells(); ++c)
+  {
+    const apc::CellShape shape = mesh.GetShape(c);
+    Mix(hash, &shape, sizeof shape);
+    Mix(hash, mesh.GetCellPoints(c), apc::NumberOfCorners(shape) * sizeof(int64_t));
+    int count = 0;
+    const apc::FacePlane* planes = mesh.GetPlanes(c, count);
+    Mix(hash, planes, count * sizeof(apc::FacePlane));
+    Mix(hash, mesh.GetCellBounds(c).data(), 6 * sizeof(double));
+    Mix(hash, mesh.GetScalarRange(c).data(), 2 * sizeof(float));
+  }
+  return hash;
+}
+}
+
+int main(int argc, char* argv[])
+{
+  std::string data = std::string(APC_SOURCE_DIR) + "/Data/windAroundBuildings/wind.pvtu";
+  std::string arrayName = "U_mag";
+  int size = 1024;
+  int repeats = 3;
+  for (int i = 1; i + 1 < argc; i += 2)
+  {
+    const std::string option = argv[i];
+    if (option == "--data")
+      data = argv[i + 1];
+    else if (option == "--array")
+      arrayName = argv[i + 1];
+    else if (option == "--size")
+      size = std::atoi(argv[i + 1]);
+    else if (option == "--repeats")
+      repeats = std::max(1, std::atoi(argv[i + 1]));
+  }
+  vtkSmartPointer<vtkUnstructuredGrid> grid;
+  if (data.size() > 5 && data.compare(data.size() - 5, 5, ".pvtu") == 0)
+  {
+    vtkNew<vtkXMLPUnstructuredGridReader> reader;
+    reader->SetFileName(data.c_str());
+    reader->Update();
+    grid = reader->GetOutput();
+  }
+  else
+  {
+    vtkNew<vtkXMLUnstructuredGridReader> reader;
+    reader->SetFileName(data.c_str());
+    reader->Update();
+    grid = reader->GetOutput();
+  }
+  vtkDataArray* scalars = grid ? grid->GetPointData()->GetArray(arrayName.c_str()) : nullptr;
+  if (!scalars)
+  {
+    std::fprintf(stderr, "error: no point array %s in %s\n", arrayName.c_str(), data.c_str());
+    return 1;
+  }
+  std::printf("# %s: %lld cells, %lld points; part,cpu_s,wall_s\n", data.c_str(),
+    static_cast<long long>(grid->GetNumberOfCells()),
+    static_cast<long long>(grid->GetNumberOfPoints()));
+  apc::ScalarSelection selection;
+  selection.Array = scalars;
+  apc::CellMesh mesh;
+  apc::InputReport report;
+  std::string error;
+  double cpu, wall;
+  bool ok = true;
+  Time(
+    "conversion", repeats,
+    [&] { ok = apc::CellMeshFromVTK(grid, selection, mesh, report, error) && ok; }, cpu, wall);
+  if (!ok)
+  {
+    std::fprintf(stderr, "error: %s\n", error.c_str());
+    return 1;
+  }
+  Time(
+    "finalize", repeats, [&] { mesh.Finalize(); }, cpu, wall);
+  // The camera of first_frame.py and paraview_vs_apc.py, a square image.
+  const apc::RayCamera camera(
+    { -120, -260, 420 }, { 155, 90, 40 }, { 0, 0, 1 }, 30.0, false, 1.0, size, size, 1.0, 2000.0);
+  apc::TileBins bins;
+  Time(
+    "bins", repeats, [&] { apc::BinCells(&mesh, camera, 16, 0, bins); }, cpu, wall);
+  std::printf("# mesh checksum %016llx, %lld cells, %zu tile entries\n", Checksum(mesh),
+    static_cast<long long>(mesh.GetNumberOfCells()), bins.Cells.size());
+  return 0;
+}
