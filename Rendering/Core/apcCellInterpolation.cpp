@@ -63,55 +63,68 @@ inline bool IsFinite(const double p[3])
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
-// Monomial coefficients of the map, by expanding VTK's shape functions; see the header.
+// Monomial coefficients c[0..7] of sum_i w_i(r,s,t) v(i), by expanding VTK's shape
+// functions; see the header. v(i) is corner i's value (a coordinate or the scalar).
+template <class Value>
+void Monomials(CellShape shape, Value v, double c[8])
+{
+  for (int k = 0; k < 8; ++k)
+  {
+    c[k] = 0.0;
+  }
+  c[0] = v(0);
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      c[1] = v(1) - v(0);
+      c[2] = v(2) - v(0);
+      c[3] = v(3) - v(0);
+      break;
+    case CellShape::Pyramid:
+    {
+      // x = (1-t) B(r,s) + t X4 with B bilinear over the base.
+      const double br = v(1) - v(0);
+      const double bs = v(3) - v(0);
+      const double brs = v(2) - v(1) - v(3) + v(0);
+      c[1] = br;
+      c[2] = bs;
+      c[3] = v(4) - v(0);
+      c[4] = brs;
+      c[5] = -br;
+      c[6] = -bs;
+      c[7] = -brs;
+      break;
+    }
+    case CellShape::Wedge:
+      c[1] = v(1) - v(0);
+      c[2] = v(2) - v(0);
+      c[3] = v(3) - v(0);
+      c[5] = v(4) - v(1) - v(3) + v(0);
+      c[6] = v(5) - v(2) - v(3) + v(0);
+      break;
+    case CellShape::Hexahedron:
+      c[1] = v(1) - v(0);
+      c[2] = v(3) - v(0);
+      c[3] = v(4) - v(0);
+      c[4] = v(2) - v(1) - v(3) + v(0);
+      c[5] = v(5) - v(1) - v(4) + v(0);
+      c[6] = v(7) - v(3) - v(4) + v(0);
+      c[7] = v(6) - v(2) - v(5) - v(7) + v(1) + v(3) + v(4) - v(0);
+      break;
+  }
+}
+
+// The map's coefficients, c[k][d] for coordinate d.
 void MapCoefficients(const CellCorners& cell, double c[8][3])
 {
-  const auto& X = cell.X;
   for (int d = 0; d < 3; ++d)
   {
+    double column[8];
+    Monomials(
+      cell.Shape, [&cell, d](int i) { return cell.X[i][d]; }, column);
     for (int k = 0; k < 8; ++k)
     {
-      c[k][d] = 0.0;
-    }
-    c[0][d] = X[0][d];
-    switch (cell.Shape)
-    {
-      case CellShape::Tetra:
-        c[1][d] = X[1][d] - X[0][d];
-        c[2][d] = X[2][d] - X[0][d];
-        c[3][d] = X[3][d] - X[0][d];
-        break;
-      case CellShape::Pyramid:
-      {
-        // x = (1-t) B(r,s) + t X4 with B bilinear over the base.
-        const double br = X[1][d] - X[0][d];
-        const double bs = X[3][d] - X[0][d];
-        const double brs = X[2][d] - X[1][d] - X[3][d] + X[0][d];
-        c[1][d] = br;
-        c[2][d] = bs;
-        c[3][d] = X[4][d] - X[0][d];
-        c[4][d] = brs;
-        c[5][d] = -br;
-        c[6][d] = -bs;
-        c[7][d] = -brs;
-        break;
-      }
-      case CellShape::Wedge:
-        c[1][d] = X[1][d] - X[0][d];
-        c[2][d] = X[2][d] - X[0][d];
-        c[3][d] = X[3][d] - X[0][d];
-        c[5][d] = X[4][d] - X[1][d] - X[3][d] + X[0][d];
-        c[6][d] = X[5][d] - X[2][d] - X[3][d] + X[0][d];
-        break;
-      case CellShape::Hexahedron:
-        c[1][d] = X[1][d] - X[0][d];
-        c[2][d] = X[3][d] - X[0][d];
-        c[3][d] = X[4][d] - X[0][d];
-        c[4][d] = X[2][d] - X[1][d] - X[3][d] + X[0][d];
-        c[5][d] = X[5][d] - X[1][d] - X[4][d] + X[0][d];
-        c[6][d] = X[7][d] - X[3][d] - X[4][d] + X[0][d];
-        c[7][d] = X[6][d] - X[2][d] - X[5][d] - X[7][d] + X[1][d] + X[3][d] + X[4][d] - X[0][d];
-        break;
+      c[k][d] = column[k];
     }
   }
 }
@@ -154,20 +167,147 @@ void CellInterpolator::Set(const CellCorners& cell)
   const double det = Dot(J[0], cr);
   this->Degenerate = !(this->Size > 0.0) || !std::isfinite(this->Size) ||
     !std::isfinite(nonlinear) || IsSingular(det, J[0], J[1], J[2]);
+  Monomials(
+    cell.Shape, [this](int i) { return this->S[i]; }, this->SC);
   if (this->Degenerate)
   {
     this->Affine = false;
+    this->LinearScalarError = std::numeric_limits<double>::infinity();
     return;
+  }
+  this->SetLinear(center, offset, cr, cs, ct, det);
+}
+
+namespace
+{
+// How far outside the reference cell (parametric units) the error bound of LinearRay still
+// holds. The marcher samples points inside the cell's face planes; where the cell is nearly
+// affine its faces are nearly planar, so those points lie within about the bound's own
+// parametric error of the reference cell, which the bound only accepts below this.
+constexpr double kLinearMargin = 0.05;
+}
+
+void CellInterpolator::SetLinear(const double centre[3], const double offset[3], const double cr[3],
+  const double cs[3], const double ct[3], double det)
+{
+  // Rows of the inverse of [J0 J1 J2] are the cross products over the determinant.
+  for (int d = 0; d < 3; ++d)
+  {
+    this->Inverse[0][d] = cr[d] / det;
+    this->Inverse[1][d] = cs[d] / det;
+    this->Inverse[2][d] = ct[d] / det;
   }
   if (this->Affine)
   {
-    // Rows of the inverse of [J0 J1 J2] are the cross products over the determinant.
     for (int d = 0; d < 3; ++d)
     {
-      this->Inverse[0][d] = cr[d] / det;
-      this->Inverse[1][d] = cs[d] / det;
-      this->Inverse[2][d] = ct[d] / det;
+      this->LinearP[d] = 0.0;
+      this->LinearX[d] = this->C[0][d];
     }
+    this->LinearScalarError = 0.0;
+    return;
+  }
+  for (int d = 0; d < 3; ++d)
+  {
+    this->LinearP[d] = centre[d];
+    this->LinearX[d] = this->C[0][d] + offset[d];
+  }
+  this->LinearScalarError = std::numeric_limits<double>::infinity();
+  if (this->CellType == CellShape::Pyramid)
+  {
+    this->SetLinearPyramid();
+    return;
+  }
+  // About the centre, x(p) = x(pc) + J (p - pc) + R(p - pc) exactly, with the remainder
+  // R = dr ds (c4 + tc c7) + dr dt (c5 + sc c7) + ds dt (c6 + rc c7) + dr ds dt c7. So the
+  // linear inverse p' = pc + J^-1 (x - x(pc)) of a point x = x(p) is p' = p + J^-1 R:
+  // |p' - p| <= |J^-1| |R| componentwise, with |dr| <= h[0] etc. over the cell.
+  const auto& c = this->C;
+  const double rc = centre[0], sc = centre[1], tc = centre[2];
+  double h[3];
+  for (int d = 0; d < 3; ++d)
+  {
+    h[d] = std::max(centre[d], 1.0 - centre[d]) + kLinearMargin;
+  }
+  double remainder[3];
+  for (int i = 0; i < 3; ++i)
+  {
+    remainder[i] = h[0] * h[1] * std::abs(c[4][i] + tc * c[7][i]) +
+      h[0] * h[2] * std::abs(c[5][i] + sc * c[7][i]) +
+      h[1] * h[2] * std::abs(c[6][i] + rc * c[7][i]) + h[0] * h[1] * h[2] * std::abs(c[7][i]);
+  }
+  double e[3];
+  for (int d = 0; d < 3; ++d)
+  {
+    e[d] = std::abs(this->Inverse[d][0]) * remainder[0] +
+      std::abs(this->Inverse[d][1]) * remainder[1] + std::abs(this->Inverse[d][2]) * remainder[2];
+  }
+  if (!(std::max(e[0], std::max(e[1], e[2])) <= kLinearMargin))
+  {
+    return;
+  }
+  // The scalar's parametric gradient, bounded over the box that holds p and p' (the same
+  // expansion about the centre), times the parametric error: the mean value theorem.
+  const double H[3] = { h[0] + e[0], h[1] + e[1], h[2] + e[2] };
+  const auto& a = this->SC;
+  const double gr = std::abs(a[1] + a[4] * sc + a[5] * tc + a[7] * sc * tc) +
+    std::abs(a[4] + a[7] * tc) * H[1] + std::abs(a[5] + a[7] * sc) * H[2] +
+    std::abs(a[7]) * H[1] * H[2];
+  const double gs = std::abs(a[2] + a[4] * rc + a[6] * tc + a[7] * rc * tc) +
+    std::abs(a[4] + a[7] * tc) * H[0] + std::abs(a[6] + a[7] * rc) * H[2] +
+    std::abs(a[7]) * H[0] * H[2];
+  const double gt = std::abs(a[3] + a[5] * rc + a[6] * sc + a[7] * rc * sc) +
+    std::abs(a[5] + a[7] * sc) * H[0] + std::abs(a[6] + a[7] * rc) * H[1] +
+    std::abs(a[7]) * H[0] * H[1];
+  const double bound = gr * e[0] + gs * e[1] + gt * e[2];
+  if (std::isfinite(bound))
+  {
+    this->LinearScalarError = bound;
+  }
+}
+
+void CellInterpolator::SetLinearPyramid()
+{
+  // In (u, v, t) the map is C0 + M (u, v, t) + C4 w with M = [C1 C2 C3] and w = r s (1-t),
+  // at most (1 + margin)^3 in the grown cell: the linear inverse q' = M^-1 (x - C0) is off by
+  // |M^-1| |C4| w_max per axis. Its scalar (LinearScalarAt) is Lipschitz in u, v and t with
+  // constants |SC1| + |SC4|, |SC2| + |SC4| and |SC3| + |SC4| (the clamped r s (1-t) changes by
+  // at most 1 per unit of each).
+  const auto& c = this->C;
+  double cr[3], cs[3], ct[3];
+  Cross(c[2], c[3], cr);
+  Cross(c[3], c[1], cs);
+  Cross(c[1], c[2], ct);
+  const double det = Dot(c[1], cr);
+  if (IsSingular(det, c[1], c[2], c[3]))
+  {
+    return;
+  }
+  for (int d = 0; d < 3; ++d)
+  {
+    this->Inverse[0][d] = cr[d] / det;
+    this->Inverse[1][d] = cs[d] / det;
+    this->Inverse[2][d] = ct[d] / det;
+    this->LinearP[d] = 0.0;
+    this->LinearX[d] = c[0][d];
+  }
+  const double grown = 1.0 + kLinearMargin;
+  const double wMax = grown * grown * grown;
+  const auto& a = this->SC;
+  const double lipschitz[3] = { std::abs(a[1]) + std::abs(a[4]), std::abs(a[2]) + std::abs(a[4]),
+    std::abs(a[3]) + std::abs(a[4]) };
+  double bound = 0;
+  for (int d = 0; d < 3; ++d)
+  {
+    const double e = wMax *
+      (std::abs(this->Inverse[d][0]) * std::abs(c[4][0]) +
+        std::abs(this->Inverse[d][1]) * std::abs(c[4][1]) +
+        std::abs(this->Inverse[d][2]) * std::abs(c[4][2]));
+    bound += lipschitz[d] * e;
+  }
+  if (std::isfinite(bound))
+  {
+    this->LinearScalarError = bound;
   }
 }
 

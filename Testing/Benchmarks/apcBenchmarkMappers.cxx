@@ -14,7 +14,8 @@
 // the resolved image's largest difference from the exact blend. --setup paraview renders as
 // ParaView does by default: a linear opacity ramp over the data range, a cool-to-warm colour
 // map, the opacity unit distance ParaView derives from the bounds (diagonal / cells^(1/3)) and
-// APC's default sample distance (bounding-box diagonal / 256).
+// APC's default sample distance (bounding-box diagonal / 256; with --spacing-scale F, F times the
+// mean cell size).
 //
 // Run under an X server (xvfb-run); Testing/Benchmarks/run-benchmark.sh does everything.
 #include "vtkAPCPuzzleSource.h"
@@ -144,6 +145,7 @@ struct Options
   vtkIdType ZSweepMaxCells = 100000;
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
+  bool SpacingScaleGiven = false;  // --setup paraview: the mean cell size times SpacingScale
   int Moments = 4;                 // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
@@ -345,6 +347,10 @@ MapperScene MakeScene(const std::string& name, const Options& options, bool tetr
   if (options.Setup == "paraview")
   {
     UseParaViewDefaults(scene);
+    if (options.SpacingScaleGiven)
+    {
+      scene.SampleDistance = options.SpacingScale * MeanCellSize(scene.Grid);
+    }
   }
 
   // Bunyk assumes tetrahedra and ZSweep reads only the first three points of every face, so
@@ -567,7 +573,7 @@ public:
            "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
            "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
            "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
-           "mesh_s,finalize_s\n";
+           "mesh_s,finalize_s,linear_change\n";
   }
 
   // Rows from index first on; written per data set so that a crash keeps what was measured.
@@ -592,11 +598,11 @@ public:
             << ',' << Format(s.ErrorVsExact) << ',' << Format(s.StopChange) << ','
             << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
             << Format(s.WorseShare) << ',' << Format(s.MeshSeconds) << ','
-            << Format(s.FinalizeSeconds);
+            << Format(s.FinalizeSeconds) << ',' << Format(s.LinearChange);
       }
       else
       {
-        out << ",,,,,,,,,,,";
+        out << ",,,,,,,,,,,,";
       }
       out << '\n';
     }
@@ -841,6 +847,7 @@ private:
     row.Cpu = s.Pass1Cpu + s.Pass2Cpu;
     row.Setup = s.ViewSeconds;
     row.Samples = static_cast<double>(s.Samples);
+    row.Spacing = s.Spacing;
     row.Note = "core marcher alone: pass 1 + pass 2, CPU ns per sample; setup_s = binning";
     if (!scene.Note.empty())
     {
@@ -855,7 +862,8 @@ private:
               << " (pixels over 1/255: " << Format(s.StopChangeShare) << "), unstopped error "
               << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
               << ", mesh " << Format(s.MeshSeconds) << " s (finalize " << Format(s.FinalizeSeconds)
-              << " s), bin " << Format(s.ViewSeconds) << " s\n";
+              << " s), bin " << Format(s.ViewSeconds) << " s, linear change "
+              << Format(s.LinearChange) << ", spacing " << Format(s.Spacing) << "\n";
     this->Rows.push_back(row);
   }
 
@@ -1053,6 +1061,7 @@ int main(int argc, char* argv[])
     else if (arg == "--spacing-scale")
     {
       options.SpacingScale = std::stod(value());
+      options.SpacingScaleGiven = true;
     }
     else if (arg == "--setup")
     {

@@ -47,6 +47,10 @@ struct SamplerTiming
   double ErrorVsExactAll = NAN; // ErrorVsExact of the image marched without stopping
   // Share of pixels farther from the exact blend with the stop than without by over 1/255.
   double WorseShare = NAN;
+  // Largest difference of the exact blend with nearly affine cells sampled linearly from the
+  // one with Newton in every non-affine cell (0 where the marcher has no linear inverse).
+  double LinearChange = NAN;
+  double Spacing = NAN; // the sample spacing used
 
   double HiddenShare() const
   {
