@@ -12,6 +12,10 @@
 #include <cstdint>
 #include <limits>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace apc
 {
 namespace walk
@@ -86,12 +90,47 @@ struct CellPlanes
   // evaluates a shared face with the same numbers (up to an exact sign flip), so the
   // intervals of neighbours meet exactly. Each quotient is the one a per-plane division
   // gives, and the interval is their max and min, so the result does not depend on the
-  // order or the vectorisation.
+  // order or the vectorisation (two planes per SSE2 instruction, the same IEEE operations).
   void Clip(const RaySetup& ray, double& tin, double& tout) const
   {
+#ifdef __SSE2__
+    const __m128d dx = _mm_set1_pd(ray.D[0]);
+    const __m128d dy = _mm_set1_pd(ray.D[1]);
+    const __m128d dz = _mm_set1_pd(ray.D[2]);
+    const __m128d zero = _mm_setzero_pd();
+    const __m128d inf = _mm_set1_pd(std::numeric_limits<double>::infinity());
+    __m128d lo = _mm_set1_pd(tin);
+    __m128d hi = _mm_set1_pd(tout);
+    __m128d out = zero;
+    for (int p = 0; p < kMaxPlanes; p += 2)
+    {
+      const __m128d denom = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(this->Nx + p), dx),
+                                         _mm_mul_pd(_mm_loadu_pd(this->Ny + p), dy)),
+        _mm_mul_pd(_mm_loadu_pd(this->Nz + p), dz));
+      const __m128d num =
+        this->SharedOrigin ? _mm_loadu_pd(this->Num + p) : this->Numerators(p, ray);
+      const __m128d q = _mm_div_pd(num, denom);
+      // max/min return the second operand if the first is NaN, as std::max(lo, q) keeps lo.
+      const __m128d entering = _mm_cmplt_pd(denom, zero);
+      const __m128d leaving = _mm_cmpgt_pd(denom, zero);
+      lo = _mm_max_pd(
+        _mm_or_pd(_mm_and_pd(entering, q), _mm_andnot_pd(entering, _mm_sub_pd(zero, inf))), lo);
+      hi = _mm_min_pd(_mm_or_pd(_mm_and_pd(leaving, q), _mm_andnot_pd(leaving, inf)), hi);
+      // See the scalar form below for the rays parallel to a plane.
+      const __m128d parallelOut = _mm_and_pd(_mm_cmpeq_pd(denom, zero),
+        _mm_or_pd(_mm_cmplt_pd(num, zero),
+          _mm_and_pd(_mm_cmpeq_pd(num, zero),
+            _mm_cmpeq_pd(_mm_loadu_pd(this->KeepsParallelRays + p), zero))));
+      out = _mm_or_pd(out, parallelOut);
+    }
+    const double lo2 = std::max(_mm_cvtsd_f64(lo), _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)));
+    const double hi2 = std::min(_mm_cvtsd_f64(hi), _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi)));
+    tin = lo2;
+    tout = _mm_movemask_pd(out) != 0 ? -std::numeric_limits<double>::infinity() : hi2;
+#else
     double lo = tin;
     double hi = tout;
-    double out = 0;
+    bool out = false;
     for (int p = 0; p < kMaxPlanes; ++p)
     {
       const double denom = this->Nx[p] * ray.D[0] + this->Ny[p] * ray.D[1] + this->Nz[p] * ray.D[2];
@@ -102,13 +141,24 @@ struct CellPlanes
       // The ray is outside this plane, or runs inside it. A plane shared by two cells appears
       // in both with exactly opposite normals, so letting only the copy whose normal points
       // into the "positive" half-space keep such a ray gives it to exactly one cell.
-      const bool parallelOut =
-        denom == 0 && (num < 0 || (num == 0 && this->KeepsParallelRays[p] == 0));
-      out = parallelOut ? 1 : out;
+      out = out || (denom == 0 && (num < 0 || (num == 0 && this->KeepsParallelRays[p] == 0)));
     }
     tin = lo;
-    tout = out != 0 ? -std::numeric_limits<double>::infinity() : hi;
+    tout = out ? -std::numeric_limits<double>::infinity() : hi;
+#endif
   }
+
+#ifdef __SSE2__
+  // Planes p and p + 1's numerators for a ray of its own origin (a parallel camera).
+  __m128d Numerators(int p, const RaySetup& ray) const
+  {
+    const __m128d dot =
+      _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(this->Nx + p), _mm_set1_pd(ray.O[0])),
+                   _mm_mul_pd(_mm_loadu_pd(this->Ny + p), _mm_set1_pd(ray.O[1]))),
+        _mm_mul_pd(_mm_loadu_pd(this->Nz + p), _mm_set1_pd(ray.O[2])));
+    return _mm_sub_pd(_mm_loadu_pd(this->Offset + p), dot);
+  }
+#endif
 };
 
 // Scalars need about single precision: 1e-7 in parametric units is ample and saves Newton

@@ -8,6 +8,7 @@
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
+//     [--linear-tolerance BINS]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -146,6 +147,7 @@ struct Options
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
   bool SpacingScaleGiven = false;  // --setup paraview: the mean cell size times SpacingScale
+  double LinearTolerance = NAN;    // sampler: the linear inverse's tolerance in bins (NaN: default)
   int Moments = 4;                 // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
@@ -839,7 +841,8 @@ private:
     stage.SetMapper(mapper, scene);
     auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
     const apcbench::SamplerTiming s = apcbench::TimeSampler(grid, stage.Renderer, stage.Property,
-      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare);
+      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare,
+      this->Opt.LinearTolerance);
     row.Sampler = s;
     row.Pass1 = s.Pass1Seconds;
     row.Pass2 = s.Pass2Seconds;
@@ -982,7 +985,8 @@ void Usage()
                "  [--threads 1,2] [--zsweep-max-cells N] [--time-cap SECONDS] [--spacing-scale F] "
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
-               "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n";
+               "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
+               "  [--linear-tolerance BINS]\n";
 }
 
 } // namespace
@@ -1062,6 +1066,10 @@ int main(int argc, char* argv[])
     {
       options.SpacingScale = std::stod(value());
       options.SpacingScaleGiven = true;
+    }
+    else if (arg == "--linear-tolerance")
+    {
+      options.LinearTolerance = std::stod(value());
     }
     else if (arg == "--setup")
     {

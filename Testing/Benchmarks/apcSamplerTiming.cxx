@@ -118,6 +118,20 @@ struct HasLinear<M, std::void_t<decltype(std::declval<M&>().SetLinearTolerance(1
   : std::true_type
 {
 };
+template <class M>
+void SetLinearTolerance(M& marcher, double bins)
+{
+  if constexpr (HasLinear<M>::value)
+  {
+    marcher.SetLinearTolerance(bins);
+  }
+  else
+  {
+    (void)marcher;
+    (void)bins;
+  }
+}
+
 // The exact blend with the linear inverse's tolerance set to bins; false if there is none.
 template <class M>
 bool ExactWithLinearTolerance(
@@ -239,7 +253,8 @@ std::vector<float> MboitImage(apc::VolumeRayMarcher& marcher, const apc::Transfe
 }
 
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
-  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare)
+  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
+  double linearTolerance)
 {
   SamplerTiming result;
   apc::CellMesh mesh;
@@ -274,6 +289,10 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   apc::VolumeRayMarcher marcher;
   marcher.SetNumberOfThreads(threads);
   SetStop(marcher, RecommendedStop<apc::VolumeRayMarcher>());
+  if (!std::isnan(linearTolerance))
+  {
+    SetLinearTolerance(marcher, linearTolerance);
+  }
   marcher.SetMesh(&mesh);
   std::vector<double> view, pass1, pass2, cpu1, cpu2;
   std::vector<double> moments(pixels * 5);
