@@ -44,8 +44,7 @@ struct VolumeRayMarcher::Walker
   // Largest scalar error (scalar units) of a cell sampled by its linear inverse.
   double LinearTolerance;
 
-  // How a cell's samples get their scalar: the cell's own (cell scalars, or none needed),
-  // linearly along the ray (affine and nearly affine cells), or by Newton.
+  // A cell's scalars: its own (or none needed), linear along the ray, or by Newton.
   enum class Sampling
   {
     Constant,
