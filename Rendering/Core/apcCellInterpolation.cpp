@@ -1,11 +1,17 @@
 #include "apcCellInterpolation.h"
 
+#include "apcCellAlgebra.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace apc
 {
+
+using cellalgebra::Cross;
+using cellalgebra::Dot;
+using cellalgebra::IsSingular;
 
 namespace
 {
@@ -15,11 +21,6 @@ namespace
 // so an exactly affine cell far from the origin still qualifies; the closed form then errs
 // by at most this much in parametric units, well inside kNewtonTolerance.
 constexpr double kAffineTolerance = 1e-12;
-
-// |det J| below this fraction of the product of the column lengths (the Hadamard bound) is
-// treated as singular: the columns are then coplanar to ~1e-12 rad and the Newton update
-// would be dominated by rounding.
-constexpr double kSingularRatio = 1e-12;
 
 // A residual this small, relative to the cell size, is accepted even where the Jacobian is
 // singular (a pyramid's apex maps from the whole plane t = 1).
@@ -34,28 +35,9 @@ constexpr double kChordRegime = 1e-2;
 constexpr double kBoxLow = -1.0;
 constexpr double kBoxHigh = 2.0;
 
-inline double Dot(const double a[3], const double b[3])
-{
-  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-inline void Cross(const double a[3], const double b[3], double c[3])
-{
-  c[0] = a[1] * b[2] - a[2] * b[1];
-  c[1] = a[2] * b[0] - a[0] * b[2];
-  c[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 inline double MaxAbs(const double a[3])
 {
   return std::max(std::abs(a[0]), std::max(std::abs(a[1]), std::abs(a[2])));
-}
-
-// NaN-safe: !(det^2 > ...) is true for NaN as well.
-inline bool IsSingular(double det, const double c0[3], const double c1[3], const double c2[3])
-{
-  const double bound = Dot(c0, c0) * Dot(c1, c1) * Dot(c2, c2);
-  return !(det * det > kSingularRatio * kSingularRatio * bound);
 }
 
 inline bool IsFinite(const double p[3])
@@ -63,55 +45,68 @@ inline bool IsFinite(const double p[3])
   return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
 }
 
-// Monomial coefficients of the map, by expanding VTK's shape functions; see the header.
+// Monomial coefficients c[0..7] of sum_i w_i(r,s,t) v(i), by expanding VTK's shape
+// functions; see the header. v(i) is corner i's value (a coordinate or the scalar).
+template <class Value>
+void Monomials(CellShape shape, Value v, double c[8])
+{
+  for (int k = 0; k < 8; ++k)
+  {
+    c[k] = 0.0;
+  }
+  c[0] = v(0);
+  switch (shape)
+  {
+    case CellShape::Tetra:
+      c[1] = v(1) - v(0);
+      c[2] = v(2) - v(0);
+      c[3] = v(3) - v(0);
+      break;
+    case CellShape::Pyramid:
+    {
+      // x = (1-t) B(r,s) + t X4 with B bilinear over the base.
+      const double br = v(1) - v(0);
+      const double bs = v(3) - v(0);
+      const double brs = v(2) - v(1) - v(3) + v(0);
+      c[1] = br;
+      c[2] = bs;
+      c[3] = v(4) - v(0);
+      c[4] = brs;
+      c[5] = -br;
+      c[6] = -bs;
+      c[7] = -brs;
+      break;
+    }
+    case CellShape::Wedge:
+      c[1] = v(1) - v(0);
+      c[2] = v(2) - v(0);
+      c[3] = v(3) - v(0);
+      c[5] = v(4) - v(1) - v(3) + v(0);
+      c[6] = v(5) - v(2) - v(3) + v(0);
+      break;
+    case CellShape::Hexahedron:
+      c[1] = v(1) - v(0);
+      c[2] = v(3) - v(0);
+      c[3] = v(4) - v(0);
+      c[4] = v(2) - v(1) - v(3) + v(0);
+      c[5] = v(5) - v(1) - v(4) + v(0);
+      c[6] = v(7) - v(3) - v(4) + v(0);
+      c[7] = v(6) - v(2) - v(5) - v(7) + v(1) + v(3) + v(4) - v(0);
+      break;
+  }
+}
+
+// The map's coefficients, c[k][d] for coordinate d.
 void MapCoefficients(const CellCorners& cell, double c[8][3])
 {
-  const auto& X = cell.X;
   for (int d = 0; d < 3; ++d)
   {
+    double column[8];
+    Monomials(
+      cell.Shape, [&cell, d](int i) { return cell.X[i][d]; }, column);
     for (int k = 0; k < 8; ++k)
     {
-      c[k][d] = 0.0;
-    }
-    c[0][d] = X[0][d];
-    switch (cell.Shape)
-    {
-      case CellShape::Tetra:
-        c[1][d] = X[1][d] - X[0][d];
-        c[2][d] = X[2][d] - X[0][d];
-        c[3][d] = X[3][d] - X[0][d];
-        break;
-      case CellShape::Pyramid:
-      {
-        // x = (1-t) B(r,s) + t X4 with B bilinear over the base.
-        const double br = X[1][d] - X[0][d];
-        const double bs = X[3][d] - X[0][d];
-        const double brs = X[2][d] - X[1][d] - X[3][d] + X[0][d];
-        c[1][d] = br;
-        c[2][d] = bs;
-        c[3][d] = X[4][d] - X[0][d];
-        c[4][d] = brs;
-        c[5][d] = -br;
-        c[6][d] = -bs;
-        c[7][d] = -brs;
-        break;
-      }
-      case CellShape::Wedge:
-        c[1][d] = X[1][d] - X[0][d];
-        c[2][d] = X[2][d] - X[0][d];
-        c[3][d] = X[3][d] - X[0][d];
-        c[5][d] = X[4][d] - X[1][d] - X[3][d] + X[0][d];
-        c[6][d] = X[5][d] - X[2][d] - X[3][d] + X[0][d];
-        break;
-      case CellShape::Hexahedron:
-        c[1][d] = X[1][d] - X[0][d];
-        c[2][d] = X[3][d] - X[0][d];
-        c[3][d] = X[4][d] - X[0][d];
-        c[4][d] = X[2][d] - X[1][d] - X[3][d] + X[0][d];
-        c[5][d] = X[5][d] - X[1][d] - X[4][d] + X[0][d];
-        c[6][d] = X[7][d] - X[3][d] - X[4][d] + X[0][d];
-        c[7][d] = X[6][d] - X[2][d] - X[5][d] - X[7][d] + X[1][d] + X[3][d] + X[4][d] - X[0][d];
-        break;
+      c[k][d] = column[k];
     }
   }
 }
@@ -154,21 +149,15 @@ void CellInterpolator::Set(const CellCorners& cell)
   const double det = Dot(J[0], cr);
   this->Degenerate = !(this->Size > 0.0) || !std::isfinite(this->Size) ||
     !std::isfinite(nonlinear) || IsSingular(det, J[0], J[1], J[2]);
+  Monomials(
+    cell.Shape, [this](int i) { return this->S[i]; }, this->SC);
   if (this->Degenerate)
   {
     this->Affine = false;
+    this->LinearScalarError = std::numeric_limits<double>::infinity();
     return;
   }
-  if (this->Affine)
-  {
-    // Rows of the inverse of [J0 J1 J2] are the cross products over the determinant.
-    for (int d = 0; d < 3; ++d)
-    {
-      this->Inverse[0][d] = cr[d] / det;
-      this->Inverse[1][d] = cs[d] / det;
-      this->Inverse[2][d] = ct[d] / det;
-    }
-  }
+  this->SetLinear(center, offset, cr, cs, ct, det);
 }
 
 // Inlined into every Newton and chord step (the marcher's innermost work).

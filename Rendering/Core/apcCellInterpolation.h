@@ -30,6 +30,7 @@
 #ifndef apcCellInterpolation_h
 #define apcCellInterpolation_h
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -98,8 +99,8 @@ struct NewtonMemory
 };
 
 // The inverse map and the interpolation of one cell, set up once per cell and then queried
-// per sample. Allocation-free; 344 bytes, so it lives on the stack or in a per-thread
-// cache.
+// per sample. Allocation-free; about 550 bytes, so it lives on the stack or in a
+// per-thread cache.
 class CellInterpolator
 {
 public:
@@ -147,8 +148,64 @@ public:
     }
   }
 
+  // Nearly affine cells: the parametric coordinates along the ray x(t) = o + t d by the
+  // affine part of the map about the cell's parametric centre (its centre Jacobian),
+  // p(t) = p0 + t dp, with a scalar error of at most GetLinearScalarError(). Exactly affine
+  // cells get AffineRay's closed form bit for bit (LinearP is 0 and LinearX is C[0]).
+  void LinearRay(const double o[3], const double d[3], double p0[3], double dp[3]) const
+  {
+    const double y[3] = { o[0] - this->LinearX[0], o[1] - this->LinearX[1],
+      o[2] - this->LinearX[2] };
+    for (int i = 0; i < 3; ++i)
+    {
+      p0[i] = this->LinearP[i] +
+        (this->Inverse[i][0] * y[0] + this->Inverse[i][1] * y[1] + this->Inverse[i][2] * y[2]);
+      dp[i] = this->Inverse[i][0] * d[0] + this->Inverse[i][1] * d[1] + this->Inverse[i][2] * d[2];
+    }
+  }
+
+  // A bound on how far LinearScalarAt (LinearRay's coordinates) can lie from the scalar at
+  // the exact inverse (Newton's), for any point of the cell: 0 for affine cells, +inf for
+  // degenerate ones. Derived from the map's non-linear coefficients, the inverse of its
+  // linear part and the scalar's gradient; see docs/sampler.md.
+  double GetLinearScalarError() const { return this->LinearScalarError; }
+
+  // The scalar at LinearRay's coordinates q. For pyramids these are not (r, s, t) but
+  // (u, v, t) = ((1-t) r, (1-t) s, t), in which the map is affine but for the base's twist
+  // (rs term): x = C0 + C1 u + C2 v + C3 t + C4 uv / (1-t). The scalar is
+  // S0 + SC3 t + SC1 u + SC2 v + SC4 r s (1-t), with r and s clamped to [0,1] so that it
+  // stays bounded (and Lipschitz) near the apex.
+  double LinearScalarAt(const double q[3]) const
+  {
+    if (this->CellType != CellShape::Pyramid)
+    {
+      return this->ScalarAt(q);
+    }
+    const auto& a = this->SC;
+    double twist = 0;
+    const double below = 1.0 - q[2];
+    if (below > 0)
+    {
+      const double r = std::min(std::max(q[0] / below, 0.0), 1.0);
+      const double s = std::min(std::max(q[1] / below, 0.0), 1.0);
+      twist = r * s * below;
+    }
+    return a[0] + q[2] * a[3] + q[0] * a[1] + q[1] * a[2] + twist * a[4];
+  }
+
   // Sum of VTK's weights times the corner scalars: exact at the corners.
   double InterpolateScalar(const double pcoords[3]) const;
+
+  // The same interpolant in monomial form, cheaper per sample (the marcher's form); it
+  // differs from InterpolateScalar by rounding only.
+  double ScalarAt(const double p[3]) const
+  {
+    const double r = p[0], s = p[1], t = p[2];
+    const double rs = r * s;
+    const auto& a = this->SC;
+    return a[0] + r * a[1] + s * a[2] + t * a[3] + rs * a[4] + r * t * a[5] + s * t * a[6] +
+      rs * t * a[7];
+  }
 
   // Reference -> world.
   void WorldPosition(const double pcoords[3], double x[3]) const;
@@ -186,6 +243,17 @@ private:
   double Inverse[3][3] = {};
   // Largest linear coefficient: the cell's size, the scale of every tolerance on x.
   double Size = 0.0;
+  // The scalar in the monomial basis of the map: s(r,s,t) = SC[0] + SC[1] r + ... + SC[7] rst.
+  double SC[8] = {};
+  // LinearRay's expansion point: p = LinearP + Inverse (x - LinearX); for affine cells
+  // Inverse is exact, else it is the inverse Jacobian at the centre LinearP.
+  double LinearP[3] = {};
+  double LinearX[3] = {};
+  double LinearScalarError = 0.0;
+
+  void SetLinear(const double centre[3], const double offset[3], const double cr[3],
+    const double cs[3], const double ct[3], double det);
+  void SetLinearPyramid();
 };
 
 // Convenience forms that set up a CellInterpolator per call (tests, one-off queries).

@@ -29,23 +29,4 @@ LogDepthWarp::LogDepthWarp(double zmin, double zmax)
   this->Scale = 2.0 / logRange;
 }
 
-double LogDepthWarp::operator()(double d) const
-{
-  if (this->Degenerate)
-  {
-    return 0.0;
-  }
-  if (std::isnan(d) || d >= this->ZMax)
-  {
-    return 1.0;
-  }
-  if (d <= this->ZMin)
-  {
-    return -1.0;
-  }
-  const double z = this->Scale * (std::log(d) - this->LogZMin) - 1.0;
-  // Rounding can push the endpoints a few ulps outside; the moments assume |z| <= 1.
-  return z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
-}
-
 } // namespace apc

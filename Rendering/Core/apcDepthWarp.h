@@ -4,6 +4,8 @@
 #ifndef apcDepthWarp_h
 #define apcDepthWarp_h
 
+#include <cmath>
+
 namespace apc
 {
 
@@ -27,7 +29,25 @@ public:
 
   LogDepthWarp(double zmin, double zmax);
 
-  double operator()(double d) const;
+  // Inline: pass 1 warps every sample.
+  double operator()(double d) const
+  {
+    if (this->Degenerate)
+    {
+      return 0.0;
+    }
+    if (std::isnan(d) || d >= this->ZMax)
+    {
+      return 1.0;
+    }
+    if (d <= this->ZMin)
+    {
+      return -1.0;
+    }
+    const double z = this->Scale * (std::log(d) - this->LogZMin) - 1.0;
+    // Rounding can push the endpoints a few ulps outside; the moments assume |z| <= 1.
+    return z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
+  }
 
   double Near() const { return this->ZMin; }
   double Far() const { return this->ZMax; }

@@ -174,8 +174,13 @@ struct Moments : NoSegments
     AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
     if (this->Recording)
     {
-      this->Recorded.push_back({ static_cast<float>(z), static_cast<float>(scalar),
-        static_cast<uint16_t>(pixel), static_cast<uint16_t>(k) });
+      // Written field by field in place: a record built on the stack and copied was read
+      // back across its two 16-bit stores, which stalls store forwarding (a tenth of pass 1).
+      CachedSample& record = this->Recorded.emplace_back();
+      record.Z = static_cast<float>(z);
+      record.Scalar = static_cast<float>(scalar);
+      record.Pixel = static_cast<uint16_t>(pixel);
+      record.K16 = static_cast<uint16_t>(k);
     }
   }
   void EndTile(const TileRect& tile)

@@ -12,6 +12,10 @@
 #include <cstdint>
 #include <limits>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace apc
 {
 namespace walk
@@ -37,68 +41,124 @@ inline bool InPositiveHalf(const std::array<float, 3>& n)
 // A cell's face planes, set up once per cell and tile. Every ray of a perspective camera
 // starts at the eye, so each plane's distance from it is computed here once, not per ray
 // (with the same expression, so the numbers are the ones a per-ray evaluation gives).
+// Stored by component and padded to kMaxPlanes with planes that clip nothing, so that Clip
+// runs one fixed, branch-free loop the compiler unrolls and vectorises.
 struct CellPlanes
 {
   static constexpr int kMaxPlanes = 6;
   int Count = 0;
   bool SharedOrigin = false;
-  double N[kMaxPlanes][3];
+  double Nx[kMaxPlanes];
+  double Ny[kMaxPlanes];
+  double Nz[kMaxPlanes];
   double Offset[kMaxPlanes];
   double Num[kMaxPlanes];
-  bool KeepsParallelRays[kMaxPlanes];
+  // 1 where a ray running inside the plane is kept (see Clip), else 0.
+  double KeepsParallelRays[kMaxPlanes];
 
   void Set(const FacePlane* planes, int count, const RaySetup& anyRay, bool sharedOrigin)
   {
     this->Count = std::min(count, kMaxPlanes);
     this->SharedOrigin = sharedOrigin;
-    for (int p = 0; p < this->Count; ++p)
+    for (int p = 0; p < kMaxPlanes; ++p)
     {
-      for (int d = 0; d < 3; ++d)
+      if (p < this->Count)
       {
-        this->N[p][d] = planes[p].Normal[d];
+        this->Nx[p] = planes[p].Normal[0];
+        this->Ny[p] = planes[p].Normal[1];
+        this->Nz[p] = planes[p].Normal[2];
+        this->Offset[p] = planes[p].Offset;
+        this->KeepsParallelRays[p] = InPositiveHalf(planes[p].Normal) ? 1 : 0;
       }
-      this->Offset[p] = planes[p].Offset;
-      this->KeepsParallelRays[p] = InPositiveHalf(planes[p].Normal);
-      if (sharedOrigin)
+      else
       {
-        this->Num[p] = this->Numerator(p, anyRay);
+        // Parallel to every ray with every ray strictly inside: no effect.
+        this->Nx[p] = this->Ny[p] = this->Nz[p] = 0;
+        this->Offset[p] = 1;
+        this->KeepsParallelRays[p] = 1;
       }
+      this->Num[p] = sharedOrigin ? this->Numerator(p, anyRay) : 0;
     }
   }
   double Numerator(int p, const RaySetup& ray) const
   {
     return this->Offset[p] -
-      (this->N[p][0] * ray.O[0] + this->N[p][1] * ray.O[1] + this->N[p][2] * ray.O[2]);
+      (this->Nx[p] * ray.O[0] + this->Ny[p] * ray.O[1] + this->Nz[p] * ray.O[2]);
   }
 
   // Clips a ray against the planes: [tin, tout) is the part inside the cell. Every cell
   // evaluates a shared face with the same numbers (up to an exact sign flip), so the
-  // intervals of neighbours meet exactly.
+  // intervals of neighbours meet exactly. Each quotient is the one a per-plane division
+  // gives, and the interval is their max and min, so the result does not depend on the
+  // order or the vectorisation (two planes per SSE2 instruction, the same IEEE operations).
   void Clip(const RaySetup& ray, double& tin, double& tout) const
   {
-    for (int p = 0; p < this->Count && tin < tout; ++p)
+#ifdef __SSE2__
+    const __m128d dx = _mm_set1_pd(ray.D[0]);
+    const __m128d dy = _mm_set1_pd(ray.D[1]);
+    const __m128d dz = _mm_set1_pd(ray.D[2]);
+    const __m128d zero = _mm_setzero_pd();
+    const __m128d inf = _mm_set1_pd(std::numeric_limits<double>::infinity());
+    __m128d lo = _mm_set1_pd(tin);
+    __m128d hi = _mm_set1_pd(tout);
+    __m128d out = zero;
+    for (int p = 0; p < kMaxPlanes; p += 2)
     {
-      const double denom =
-        this->N[p][0] * ray.D[0] + this->N[p][1] * ray.D[1] + this->N[p][2] * ray.D[2];
-      const double num = this->SharedOrigin ? this->Num[p] : this->Numerator(p, ray);
-      if (denom < 0)
-      {
-        tin = std::max(tin, num / denom);
-      }
-      else if (denom > 0)
-      {
-        tout = std::min(tout, num / denom);
-      }
-      else if (num < 0 || (num == 0 && !this->KeepsParallelRays[p]))
-      {
-        // The ray is outside this plane, or runs inside it. A plane shared by two cells
-        // appears in both with exactly opposite normals, so letting only the copy whose
-        // normal points into the "positive" half-space keep such a ray gives it to exactly
-        // one cell.
-        tout = -std::numeric_limits<double>::infinity();
-      }
+      const __m128d denom = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(this->Nx + p), dx),
+                                         _mm_mul_pd(_mm_loadu_pd(this->Ny + p), dy)),
+        _mm_mul_pd(_mm_loadu_pd(this->Nz + p), dz));
+      const __m128d num =
+        this->SharedOrigin ? _mm_loadu_pd(this->Num + p) : this->Numerators(p, ray);
+      const __m128d q = _mm_div_pd(num, denom);
+      // max/min return the second operand if the first is NaN, as std::max(lo, q) keeps lo.
+      const __m128d entering = _mm_cmplt_pd(denom, zero);
+      const __m128d leaving = _mm_cmpgt_pd(denom, zero);
+      lo = _mm_max_pd(
+        _mm_or_pd(_mm_and_pd(entering, q), _mm_andnot_pd(entering, _mm_sub_pd(zero, inf))), lo);
+      hi = _mm_min_pd(_mm_or_pd(_mm_and_pd(leaving, q), _mm_andnot_pd(leaving, inf)), hi);
+      // See the scalar form below for the rays parallel to a plane.
+      const __m128d parallelOut = _mm_and_pd(_mm_cmpeq_pd(denom, zero),
+        _mm_or_pd(_mm_cmplt_pd(num, zero),
+          _mm_and_pd(_mm_cmpeq_pd(num, zero),
+            _mm_cmpeq_pd(_mm_loadu_pd(this->KeepsParallelRays + p), zero))));
+      out = _mm_or_pd(out, parallelOut);
     }
+    const double lo2 = std::max(_mm_cvtsd_f64(lo), _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)));
+    const double hi2 = std::min(_mm_cvtsd_f64(hi), _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi)));
+    tin = lo2;
+    tout = _mm_movemask_pd(out) != 0 ? -std::numeric_limits<double>::infinity() : hi2;
+#else
+    double lo = tin;
+    double hi = tout;
+    bool out = false;
+    for (int p = 0; p < kMaxPlanes; ++p)
+    {
+      const double denom = this->Nx[p] * ray.D[0] + this->Ny[p] * ray.D[1] + this->Nz[p] * ray.D[2];
+      const double num = this->SharedOrigin ? this->Num[p] : this->Numerator(p, ray);
+      const double q = num / denom; // unused where denom == 0
+      lo = denom < 0 && lo < q ? q : lo;
+      hi = denom > 0 && q < hi ? q : hi;
+      // The ray is outside this plane, or runs inside it. A plane shared by two cells appears
+      // in both with exactly opposite normals, so letting only the copy whose normal points
+      // into the "positive" half-space keep such a ray gives it to exactly one cell.
+      out = out || (denom == 0 && (num < 0 || (num == 0 && this->KeepsParallelRays[p] == 0)));
+    }
+    tin = lo;
+    tout = out ? -std::numeric_limits<double>::infinity() : hi;
+#endif
   }
+
+#ifdef __SSE2__
+  // Planes p and p + 1's numerators for a ray of its own origin (a parallel camera).
+  __m128d Numerators(int p, const RaySetup& ray) const
+  {
+    const __m128d dot =
+      _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(this->Nx + p), _mm_set1_pd(ray.O[0])),
+                   _mm_mul_pd(_mm_loadu_pd(this->Ny + p), _mm_set1_pd(ray.O[1]))),
+        _mm_mul_pd(_mm_loadu_pd(this->Nz + p), _mm_set1_pd(ray.O[2])));
+    return _mm_sub_pd(_mm_loadu_pd(this->Offset + p), dot);
+  }
+#endif
 };
 
 // Scalars need about single precision: 1e-7 in parametric units is ample and saves Newton
@@ -126,7 +186,11 @@ struct Lattice
   }
   int64_t First(double t, double offset) const
   {
-    int64_t k = static_cast<int64_t>(std::ceil(t * this->InverseSpacing - offset));
+    // A cheap ceiling (the loops below correct it): truncation, then up for positive
+    // fractions. t is finite and at most the mesh's far bound here.
+    const double x = t * this->InverseSpacing - offset;
+    int64_t k = static_cast<int64_t>(x);
+    k += static_cast<double>(k) < x ? 1 : 0;
     while (this->At(k - 1, offset) >= t)
     {
       --k;

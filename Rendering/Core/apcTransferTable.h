@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace apc
@@ -69,6 +70,11 @@ public:
   }
 
   double GetSampleSpacing() const { return this->Spacing; }
+  // The scalar step between entries (+inf for a zero-width range: every scalar looks alike).
+  double GetBinWidth() const
+  {
+    return this->Scale > 0 ? 1.0 / this->Scale : std::numeric_limits<double>::infinity();
+  }
   // True if no entry can make a sample visible: nothing to render.
   bool IsTransparent() const;
 

@@ -41,6 +41,16 @@ struct VolumeRayMarcher::Walker
   double OpaqueAbsorbance;
 
   Lattice Grid; // the samples t_k of every ray
+  // Largest scalar error (scalar units) of a cell sampled by its linear inverse.
+  double LinearTolerance;
+
+  // A cell's scalars: its own (or none needed), linear along the ray, or by Newton.
+  enum class Sampling
+  {
+    Constant,
+    Linear,
+    Follow
+  };
 
   // What a cell needs while its rays are marched; reused from cell to cell.
   struct CellState
@@ -54,6 +64,7 @@ struct VolumeRayMarcher::Walker
     double Hi = 0;
     bool Interpolate = false; // point scalars of a visible cell
     bool HaveCorners = false; // Corners and Interpolator are set up
+    bool Linear = false;      // the interpolator's linear inverse is close enough
     TransferSample CellSample{};
     double CellScalar = std::numeric_limits<double>::quiet_NaN();
     // Newton starts a ray from the first sample of the cell's previous ray (a neighbouring
@@ -165,47 +176,54 @@ struct VolumeRayMarcher::Walker
       this->Mesh.GetCorners(state.Cell, state.Corners);
       state.Interpolator.Set(state.Corners);
       ParametricCenter(state.Corners.Shape, state.Centre);
+      state.Linear = state.Interpolator.IsAffine() ||
+        state.Interpolator.GetLinearScalarError() <= this->LinearTolerance;
       state.HaveCorners = true;
     }
-    return this->Samples(local, ray, tin, tout, visitor, state, progress);
+    if (!state.Interpolate)
+    {
+      return this->Samples<Sampling::Constant>(local, ray, tin, tout, visitor, state, progress);
+    }
+    if (state.Linear)
+    {
+      return this->Samples<Sampling::Linear>(local, ray, tin, tout, visitor, state, progress);
+    }
+    return this->Samples<Sampling::Follow>(local, ray, tin, tout, visitor, state, progress);
   }
 
-  // The lattice samples of the ray in [tin, tout), the same points on every rank.
-  template <class Visitor>
+  // The lattice samples of the ray in [tin, tout), the same points on every rank; one loop
+  // per way of finding the scalar.
+  template <Sampling How, class Visitor>
   int64_t Samples(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
     CellState& state, RayProgress& progress) const
   {
-    // Affine cells (any tetrahedron, parallelepipeds) in closed form, linear along the ray;
-    // the others by Newton, following the ray.
-    const bool affine = state.Interpolate && state.Interpolator.IsAffine();
-    const bool follow = state.Interpolate && !affine;
     double p0[3] = { 0, 0, 0 };
     double dp[3] = { 0, 0, 0 };
-    if (affine)
-    {
-      state.Interpolator.AffineRay(ray.O, ray.D, p0, dp);
-    }
     NewtonMemory memory;
-    if (follow)
+    if (How == Sampling::Linear)
+    {
+      state.Interpolator.LinearRay(ray.O, ray.D, p0, dp);
+    }
+    else if (How == Sampling::Follow)
     {
       memory = state.FirstMemory;
     }
     double pcoords[3] = { state.Centre[0], state.Centre[1], state.Centre[2] };
-    bool first = follow;
+    bool first = How == Sampling::Follow;
     int64_t samples = 0;
     int64_t k = this->Grid.First(tin, ray.Offset);
     for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
     {
       TransferSample s = state.CellSample;
       double scalar = state.CellScalar;
-      if (affine)
+      if (How == Sampling::Linear)
       {
         for (int d = 0; d < 3; ++d)
         {
           pcoords[d] = p0[d] + t * dp[d];
         }
       }
-      else if (follow)
+      else if (How == Sampling::Follow)
       {
         const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
           ray.O[2] + t * ray.D[2] };
@@ -216,13 +234,15 @@ struct VolumeRayMarcher::Walker
           first = false;
         }
       }
-      if (state.Interpolate)
+      if (How != Sampling::Constant)
       {
         // Clamped to the cell's range: a point inside the planes but outside the
         // interpolating map's cell (non-planar faces) must not extrapolate past the corners,
         // and it is what makes skipping by range exact.
-        scalar =
-          std::min(std::max(state.Interpolator.InterpolateScalar(pcoords), state.Lo), state.Hi);
+        const double interpolated = How == Sampling::Linear
+          ? state.Interpolator.LinearScalarAt(pcoords)
+          : state.Interpolator.ScalarAt(pcoords);
+        scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
         s = this->Table.Lookup(scalar);
       }
       ++samples;
@@ -350,7 +370,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
     !this->Camera->IsParallel(),
     Visitor::StopsWhenOpaque ? this->FrameStop : std::numeric_limits<double>::infinity(),
-    Lattice(table.GetSampleSpacing()) };
+    Lattice(table.GetSampleSpacing()),
+    this->LinearTolerance > 0 ? this->LinearTolerance * table.GetBinWidth() : 0.0 };
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;

@@ -86,6 +86,15 @@ public:
   // far below one step of an 8-bit colour (1/255).
   static constexpr double kRecommendedOpaqueAbsorbance = 9.210340371976184;
 
+  // Nearly affine cells take their parametric coordinates linearly along a ray (the inverse
+  // of the map's affine part about the cell's centre) where that moves no sample's scalar by
+  // more than this many transfer-table bins (CellInterpolator::GetLinearScalarError); the
+  // others by Newton. 0: only exactly affine cells. The choice is the cell's own, so every
+  // rank makes the same one.
+  void SetLinearTolerance(double bins) { this->LinearTolerance = bins; }
+  double GetLinearTolerance() const { return this->LinearTolerance; }
+  static constexpr double kDefaultLinearTolerance = 0.25;
+
   // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
   // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
   // the tiles beyond the budget are marched again. 0 disables. Default 1 GiB. Lowering it
@@ -155,6 +164,7 @@ private:
   int Threads = 0;
   bool LatticeJitter = false;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
+  double LinearTolerance = kDefaultLinearTolerance;
   // The stop of the last pass 1, which its pass 2 must use too.
   double FrameStop = std::numeric_limits<double>::infinity();
   int64_t LastSamples = 0;

@@ -8,13 +8,15 @@
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
+//     [--linear-tolerance BINS]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
 // the resolved image's largest difference from the exact blend. --setup paraview renders as
 // ParaView does by default: a linear opacity ramp over the data range, a cool-to-warm colour
 // map, the opacity unit distance ParaView derives from the bounds (diagonal / cells^(1/3)) and
-// APC's default sample distance (bounding-box diagonal / 256).
+// APC's default sample distance (bounding-box diagonal / 256; with --spacing-scale F, F times the
+// mean cell size).
 //
 // Run under an X server (xvfb-run); Testing/Benchmarks/run-benchmark.sh does everything.
 #include "vtkAPCPuzzleSource.h"
@@ -144,6 +146,8 @@ struct Options
   vtkIdType ZSweepMaxCells = 100000;
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
+  bool SpacingScaleGiven = false;  // --setup paraview: the mean cell size times SpacingScale
+  double LinearTolerance = NAN;    // sampler: the linear inverse's tolerance in bins (NaN: default)
   int Moments = 4;                 // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
@@ -345,6 +349,10 @@ MapperScene MakeScene(const std::string& name, const Options& options, bool tetr
   if (options.Setup == "paraview")
   {
     UseParaViewDefaults(scene);
+    if (options.SpacingScaleGiven)
+    {
+      scene.SampleDistance = options.SpacingScale * MeanCellSize(scene.Grid);
+    }
   }
 
   // Bunyk assumes tetrahedra and ZSweep reads only the first three points of every face, so
@@ -567,7 +575,7 @@ public:
            "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
            "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
            "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
-           "mesh_s,finalize_s\n";
+           "mesh_s,finalize_s,linear_change\n";
   }
 
   // Rows from index first on; written per data set so that a crash keeps what was measured.
@@ -592,11 +600,11 @@ public:
             << ',' << Format(s.ErrorVsExact) << ',' << Format(s.StopChange) << ','
             << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
             << Format(s.WorseShare) << ',' << Format(s.MeshSeconds) << ','
-            << Format(s.FinalizeSeconds);
+            << Format(s.FinalizeSeconds) << ',' << Format(s.LinearChange);
       }
       else
       {
-        out << ",,,,,,,,,,,";
+        out << ",,,,,,,,,,,,";
       }
       out << '\n';
     }
@@ -833,7 +841,8 @@ private:
     stage.SetMapper(mapper, scene);
     auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
     const apcbench::SamplerTiming s = apcbench::TimeSampler(grid, stage.Renderer, stage.Property,
-      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare);
+      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare,
+      this->Opt.LinearTolerance);
     row.Sampler = s;
     row.Pass1 = s.Pass1Seconds;
     row.Pass2 = s.Pass2Seconds;
@@ -841,6 +850,7 @@ private:
     row.Cpu = s.Pass1Cpu + s.Pass2Cpu;
     row.Setup = s.ViewSeconds;
     row.Samples = static_cast<double>(s.Samples);
+    row.Spacing = s.Spacing;
     row.Note = "core marcher alone: pass 1 + pass 2, CPU ns per sample; setup_s = binning";
     if (!scene.Note.empty())
     {
@@ -855,7 +865,8 @@ private:
               << " (pixels over 1/255: " << Format(s.StopChangeShare) << "), unstopped error "
               << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
               << ", mesh " << Format(s.MeshSeconds) << " s (finalize " << Format(s.FinalizeSeconds)
-              << " s), bin " << Format(s.ViewSeconds) << " s\n";
+              << " s), bin " << Format(s.ViewSeconds) << " s, linear change "
+              << Format(s.LinearChange) << ", spacing " << Format(s.Spacing) << "\n";
     this->Rows.push_back(row);
   }
 
@@ -974,7 +985,8 @@ void Usage()
                "  [--threads 1,2] [--zsweep-max-cells N] [--time-cap SECONDS] [--spacing-scale F] "
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
-               "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n";
+               "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
+               "  [--linear-tolerance BINS]\n";
 }
 
 } // namespace
@@ -1053,6 +1065,11 @@ int main(int argc, char* argv[])
     else if (arg == "--spacing-scale")
     {
       options.SpacingScale = std::stod(value());
+      options.SpacingScaleGiven = true;
+    }
+    else if (arg == "--linear-tolerance")
+    {
+      options.LinearTolerance = std::stod(value());
     }
     else if (arg == "--setup")
     {

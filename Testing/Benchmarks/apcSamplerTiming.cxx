@@ -108,6 +108,53 @@ double GetStop(const M& marcher)
   }
 }
 
+// The marcher's linear inverse of nearly affine cells, where it has one.
+template <class M, class = void>
+struct HasLinear : std::false_type
+{
+};
+template <class M>
+struct HasLinear<M, std::void_t<decltype(std::declval<M&>().SetLinearTolerance(1.0))>>
+  : std::true_type
+{
+};
+template <class M>
+void SetLinearTolerance(M& marcher, double bins)
+{
+  if constexpr (HasLinear<M>::value)
+  {
+    marcher.SetLinearTolerance(bins);
+  }
+  else
+  {
+    (void)marcher;
+    (void)bins;
+  }
+}
+
+// The exact blend with the linear inverse's tolerance set to bins; false if there is none.
+template <class M>
+bool ExactWithLinearTolerance(
+  M& marcher, const apc::TransferTable& table, double bins, std::vector<float>& rgba)
+{
+  if constexpr (HasLinear<M>::value)
+  {
+    const double kept = marcher.GetLinearTolerance();
+    marcher.SetLinearTolerance(bins);
+    marcher.RenderExact(table, rgba.data());
+    marcher.SetLinearTolerance(kept);
+    return true;
+  }
+  else
+  {
+    (void)marcher;
+    (void)table;
+    (void)bins;
+    (void)rgba;
+    return false;
+  }
+}
+
 // The same table the mapper builds (apcFrameInputsFromVTK.cxx): colour and opacity sampled
 // over the union of their ranges, 1024 entries.
 apc::TransferTable MakeTable(vtkVolumeProperty* property, double spacing)
@@ -206,7 +253,8 @@ std::vector<float> MboitImage(apc::VolumeRayMarcher& marcher, const apc::Transfe
 }
 
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
-  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare)
+  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
+  double linearTolerance)
 {
   SamplerTiming result;
   apc::CellMesh mesh;
@@ -229,6 +277,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
                 (b[5] - b[4]) * (b[5] - b[4])) /
       256.0;
   }
+  result.Spacing = spacing;
   const apc::TransferTable table = MakeTable(property, spacing);
   const apc::RayCamera camera = MakeCamera(renderer, size);
   double tmin = 0;
@@ -240,6 +289,10 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   apc::VolumeRayMarcher marcher;
   marcher.SetNumberOfThreads(threads);
   SetStop(marcher, RecommendedStop<apc::VolumeRayMarcher>());
+  if (!std::isnan(linearTolerance))
+  {
+    SetLinearTolerance(marcher, linearTolerance);
+  }
   marcher.SetMesh(&mesh);
   std::vector<double> view, pass1, pass2, cpu1, cpu2;
   std::vector<double> moments(pixels * 5);
@@ -281,6 +334,9 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   std::vector<float> exact(pixels * 4, 0.0f);
   marcher.RenderExact(table, exact.data());
   result.ErrorVsExact = MaxDifference(stopped, exact);
+  std::vector<float> newton(pixels * 4, 0.0f);
+  result.LinearChange =
+    ExactWithLinearTolerance(marcher, table, 0.0, newton) ? MaxDifference(exact, newton) : 0.0;
   result.ErrorVsExactAll = result.ErrorVsExact;
   result.StopChange = 0;
   result.StopChangeShare = 0;

@@ -47,6 +47,10 @@ struct SamplerTiming
   double ErrorVsExactAll = NAN; // ErrorVsExact of the image marched without stopping
   // Share of pixels farther from the exact blend with the stop than without by over 1/255.
   double WorseShare = NAN;
+  // Largest difference of the exact blend with nearly affine cells sampled linearly from the
+  // one with Newton in every non-affine cell (0 where the marcher has no linear inverse).
+  double LinearChange = NAN;
+  double Spacing = NAN; // the sample spacing used
 
   double HiddenShare() const
   {
@@ -60,8 +64,10 @@ struct SamplerTiming
 // property's transfer function, at size x size with the given sample spacing (0: the mapper's
 // default, the bounding-box diagonal / 256) and 4 moments. compare: also render the exact and
 // the non-stopping images for the two errors (one untimed frame each).
+// linearTolerance: the marcher's linear-inverse tolerance in table bins (NaN: its default).
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
-  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare);
+  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
+  double linearTolerance = NAN);
 
 } // namespace apcbench
 

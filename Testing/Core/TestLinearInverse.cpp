@@ -1,0 +1,180 @@
+// The linear inverse of nearly affine cells (CellInterpolator::LinearRay) against the exact
+// interpolant and Newton's inverse: the stated scalar error bound must hold at every point of
+// the cell, and be tight enough to be useful.
+#include "apcCellInterpolation.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace
+{
+
+using apc::CellCorners;
+using apc::CellInterpolator;
+using apc::CellShape;
+
+// The reference cell moved by up to distortion per corner and axis, scaled by 2 and shifted
+// away from the origin; corner scalars in [0, 10].
+CellCorners NearlyAffineCell(CellShape shape, double distortion, std::mt19937& rng)
+{
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> value(0.0, 10.0);
+  CellCorners cell;
+  cell.Shape = shape;
+  const auto& reference = apc::ReferenceCorners(shape);
+  // A fixed shear, so that the affine part is not diagonal.
+  const double A[3][3] = { { 2.0, 0.4, 0.1 }, { -0.3, 1.5, 0.2 }, { 0.2, -0.1, 2.5 } };
+  for (int i = 0; i < apc::NumberOfCorners(shape); ++i)
+  {
+    double m[3];
+    for (int d = 0; d < 3; ++d)
+    {
+      m[d] = reference[i][d] + distortion * u(rng);
+    }
+    for (int d = 0; d < 3; ++d)
+    {
+      cell.X[i][d] = 50.0 + A[d][0] * m[0] + A[d][1] * m[1] + A[d][2] * m[2];
+    }
+    cell.S[i] = value(rng);
+  }
+  return cell;
+}
+
+void RandomPCoords(CellShape shape, std::mt19937& rng, double p[3])
+{
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  do
+  {
+    p[0] = u(rng);
+    p[1] = u(rng);
+    p[2] = u(rng);
+  } while ((shape == CellShape::Tetra && p[0] + p[1] + p[2] > 1.0) ||
+    (shape == CellShape::Wedge && p[0] + p[1] > 1.0));
+}
+
+// The scalar the linear inverse gives at x, reached along a ray through x.
+double LinearScalar(const CellInterpolator& cell, const double x[3], std::mt19937& rng)
+{
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double d[3] = { u(rng), u(rng), u(rng) };
+  const double t = 3.0 + u(rng);
+  const double o[3] = { x[0] - t * d[0], x[1] - t * d[1], x[2] - t * d[2] };
+  double p0[3], dp[3];
+  cell.LinearRay(o, d, p0, dp);
+  const double p[3] = { p0[0] + t * dp[0], p0[1] + t * dp[1], p0[2] + t * dp[2] };
+  return cell.LinearScalarAt(p);
+}
+
+} // namespace
+
+TEST(LinearInverse, ErrorBoundHoldsAndIsTight)
+{
+  std::mt19937 rng(7);
+  for (CellShape shape : { CellShape::Pyramid, CellShape::Wedge, CellShape::Hexahedron })
+  {
+    for (double distortion : { 1e-5, 1e-4, 1e-3, 1e-2 })
+    {
+      double tightest = 0.0; // largest error seen over its bound, over the cells
+      for (int c = 0; c < 40; ++c)
+      {
+        const CellCorners corners = NearlyAffineCell(shape, distortion, rng);
+        const CellInterpolator cell(corners);
+        ASSERT_FALSE(cell.IsAffine());
+        const double bound = cell.GetLinearScalarError();
+        ASSERT_TRUE(std::isfinite(bound)) << "distortion " << distortion;
+        ASSERT_GT(bound, 0.0);
+        double worst = 0.0;
+        for (int k = 0; k < 200; ++k)
+        {
+          double p[3];
+          RandomPCoords(shape, rng, p);
+          double x[3];
+          cell.WorldPosition(p, x);
+          const double linear = LinearScalar(cell, x, rng);
+          // The exact scalar at x, and Newton's (what the marcher uses otherwise).
+          const double exact = cell.InterpolateScalar(p);
+          double newton[3] = { 0.5, 0.5, 0.5 };
+          const double rounding = 1e-11;
+          EXPECT_LE(std::abs(linear - exact), bound + rounding) << "distortion " << distortion;
+          if (cell.ParametricCoordinates(x, newton))
+          {
+            EXPECT_LE(std::abs(linear - cell.InterpolateScalar(newton)), bound + 1e-8);
+          }
+          worst = std::max(worst, std::abs(linear - exact));
+        }
+        tightest = std::max(tightest, worst / bound);
+      }
+      // A bound far above every error would send cells to Newton for nothing.
+      EXPECT_GT(tightest, 0.15) << "shape " << static_cast<int>(shape) << " distortion "
+                                << distortion;
+    }
+  }
+}
+
+TEST(LinearInverse, BoundGrowsWithDistortion)
+{
+  std::mt19937 rng(11);
+  double mean[2] = { 0.0, 0.0 };
+  for (int i = 0; i < 2; ++i)
+  {
+    for (int c = 0; c < 50; ++c)
+    {
+      std::mt19937 same(static_cast<unsigned>(c));
+      mean[i] +=
+        CellInterpolator(NearlyAffineCell(CellShape::Hexahedron, i == 0 ? 1e-4 : 1e-3, same))
+          .GetLinearScalarError();
+    }
+  }
+  // The error is first order in the non-linear coefficients.
+  EXPECT_NEAR(mean[1] / mean[0], 10.0, 1.0);
+}
+
+TEST(LinearInverse, AffineCellsAreExact)
+{
+  std::mt19937 rng(3);
+  for (CellShape shape : { CellShape::Tetra, CellShape::Wedge, CellShape::Hexahedron })
+  {
+    const CellInterpolator cell(NearlyAffineCell(shape, 0.0, rng));
+    ASSERT_TRUE(cell.IsAffine());
+    EXPECT_EQ(cell.GetLinearScalarError(), 0.0);
+    const double o[3] = { 1.0, -2.0, 3.0 };
+    const double d[3] = { 0.3, 0.5, -0.7 };
+    double p0[3], dp[3], q0[3], dq[3];
+    cell.LinearRay(o, d, p0, dp);
+    cell.AffineRay(o, d, q0, dq);
+    for (int i = 0; i < 3; ++i)
+    {
+      EXPECT_EQ(p0[i], q0[i]);
+      EXPECT_EQ(dp[i], dq[i]);
+    }
+  }
+  // A pyramid over a parallelogram: affine in (u, v, t) = ((1-t) r, (1-t) s, t).
+  const CellInterpolator pyramid(NearlyAffineCell(CellShape::Pyramid, 0.0, rng));
+  EXPECT_LT(pyramid.GetLinearScalarError(), 1e-12);
+  CellCorners flat = NearlyAffineCell(CellShape::Hexahedron, 0.0, rng);
+  for (auto& x : flat.X)
+  {
+    x[2] = 0.0;
+  }
+  EXPECT_EQ(CellInterpolator(flat).GetLinearScalarError(), std::numeric_limits<double>::infinity());
+}
+
+TEST(LinearInverse, MonomialScalarMatchesShapeFunctions)
+{
+  std::mt19937 rng(5);
+  for (CellShape shape :
+    { CellShape::Tetra, CellShape::Pyramid, CellShape::Wedge, CellShape::Hexahedron })
+  {
+    const CellInterpolator cell(NearlyAffineCell(shape, 0.1, rng));
+    for (int k = 0; k < 100; ++k)
+    {
+      double p[3];
+      RandomPCoords(shape, rng, p);
+      EXPECT_NEAR(cell.ScalarAt(p), cell.InterpolateScalar(p), 1e-12) << static_cast<int>(shape);
+    }
+  }
+}
