@@ -108,6 +108,30 @@ double GetStop(const M& marcher)
   }
 }
 
+// Pass 2's share of samples skipped as hidden, where the marcher reports it.
+template <class M, class = void>
+struct ReportsHidden : std::false_type
+{
+};
+template <class M>
+struct ReportsHidden<M, std::void_t<decltype(std::declval<const M&>().GetLastHiddenShare())>>
+  : std::true_type
+{
+};
+template <class M>
+double Pass2HiddenShare(const M& marcher)
+{
+  if constexpr (ReportsHidden<M>::value)
+  {
+    return marcher.GetLastHiddenShare();
+  }
+  else
+  {
+    (void)marcher;
+    return 0.0;
+  }
+}
+
 // The same table the mapper builds (apcFrameInputsFromVTK.cxx): colour and opacity sampled
 // over the union of their ranges, 1024 entries.
 apc::TransferTable MakeTable(vtkVolumeProperty* property, double spacing)
@@ -264,6 +288,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
     cpu2.push_back(CpuSeconds() - cpu);
     result.CacheShare = marcher.GetLastColourCacheShare();
     result.Pass2Samples = marcher.GetLastSampleCount();
+    result.Pass2HiddenShare = Pass2HiddenShare(marcher);
   }
   result.ViewSeconds = Median(view);
   result.Pass1Seconds = Median(pass1);
