@@ -567,7 +567,7 @@ public:
            "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
            "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
            "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
-           "mesh_s,finalize_s,pass2_hidden_share\n";
+           "mesh_s,finalize_s,pass2_hidden_share,pass2_hidden_share_unstopped\n";
   }
 
   // Rows from index first on; written per data set so that a crash keeps what was measured.
@@ -592,11 +592,12 @@ public:
             << ',' << Format(s.ErrorVsExact) << ',' << Format(s.StopChange) << ','
             << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
             << Format(s.WorseShare) << ',' << Format(s.MeshSeconds) << ','
-            << Format(s.FinalizeSeconds) << ',' << Format(s.Pass2HiddenShare);
+            << Format(s.FinalizeSeconds) << ',' << Format(s.Pass2HiddenShare) << ','
+            << Format(s.Pass2HiddenShareUnstopped);
       }
       else
       {
-        out << ",,,,,,,,,,,,";
+        out << ",,,,,,,,,,,,,";
       }
       out << '\n';
     }
@@ -856,7 +857,8 @@ private:
               << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
               << ", mesh " << Format(s.MeshSeconds) << " s (finalize " << Format(s.FinalizeSeconds)
               << " s), bin " << Format(s.ViewSeconds) << " s\n";
-    std::cerr << "   sampler pass 2: hidden " << Format(s.Pass2HiddenShare) << "\n";
+    std::cerr << "   sampler pass 2: hidden " << Format(s.Pass2HiddenShare) << ", unstopped "
+              << Format(s.Pass2HiddenShareUnstopped) << "\n";
     this->Rows.push_back(row);
   }
 

@@ -314,6 +314,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   if (SetStop(marcher, std::numeric_limits<double>::infinity()))
   {
     const std::vector<float> all = MboitImage(marcher, table, warp, pixels, result.AllSamples);
+    result.Pass2HiddenShareUnstopped = Pass2HiddenShare(marcher);
     result.StopChange = MaxDifference(stopped, all);
     result.StopChangeShare = ShareOver(stopped, all, 1.0 / 255);
     result.ErrorVsExactAll = MaxDifference(all, exact);

@@ -31,6 +31,7 @@ struct SamplerTiming
   // Share of pass 2's samples skipped behind the hidden depth of the global moments (0 where
   // the marcher cannot skip them).
   double Pass2HiddenShare = NAN;
+  double Pass2HiddenShareUnstopped = NAN; // the same in the frame marched without the stop
   // Set-up once per data change, wall seconds: the whole conversion from VTK (Finalize
   // included) and CellMesh::Finalize alone (run again on the converted mesh).
   double MeshSeconds = NAN;
