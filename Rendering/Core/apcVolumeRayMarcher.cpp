@@ -1,6 +1,7 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
+#include "apcColourVisitors.h"
 #include "apcCompressedRows.h"
 #include "apcLatticeJitter.h"
 #include "apcParallel.h"
