@@ -7,6 +7,14 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
+
+// The batched weights' helpers must be inlined into their AVX2 copy to be compiled for it.
+#if defined(__GNUC__)
+#define APC_ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define APC_ALWAYS_INLINE inline
+#endif
 
 namespace apc
 {
@@ -32,17 +40,6 @@ double AllAtQueryDepth(double beta, double b0)
   return std::exp(-beta * b0);
 }
 
-// value if keep, else +0, by masking its bits: compilers turn a plain ?: into a branch (and
-// sink the division into it), and that branch mispredicts on about every other query.
-double KeepIf(bool keep, double value)
-{
-  std::uint64_t bits;
-  std::memcpy(&bits, &value, sizeof bits);
-  bits &= std::uint64_t{ 0 } - static_cast<std::uint64_t>(keep);
-  std::memcpy(&value, &bits, sizeof bits);
-  return value;
-}
-
 template <int M>
 int KernelRoots(const double* c, double* roots)
 {
@@ -61,7 +58,183 @@ int KernelRoots(const double* c, double* roots)
   }
 }
 
+// exp(x) for x <= 0 in vectorisable arithmetic: x = k ln 2 + r, |r| <= ln 2 / 2, e^r by its
+// Taylor series to degree 13 (truncation below 2e-16 relative), 2^k added to the exponent.
+// Below -708 (where 2^k would leave the normal range) the result is 0, whose difference from
+// exp(x) is below 1e-307.
+APC_ALWAYS_INLINE double ExpNonPositive(double x)
+{
+  constexpr double kLog2e = 1.4426950408889634;
+  constexpr double kLn2Hi = 6.93147180369123816490e-01;
+  constexpr double kLn2Lo = 1.90821492927058770002e-10;
+  constexpr double kShifter = 6755399441055744.0; // 1.5 * 2^52: adding it rounds to an integer
+  const double xc = x < -708.0 ? -708.0 : x;
+  const double shifted = xc * kLog2e + kShifter;
+  const double k = shifted - kShifter;
+  const double r = (xc - k * kLn2Hi) - k * kLn2Lo;
+  double p = 1.0 / 6227020800.0;
+  p = p * r + 1.0 / 479001600.0;
+  p = p * r + 1.0 / 39916800.0;
+  p = p * r + 1.0 / 3628800.0;
+  p = p * r + 1.0 / 362880.0;
+  p = p * r + 1.0 / 40320.0;
+  p = p * r + 1.0 / 5040.0;
+  p = p * r + 1.0 / 720.0;
+  p = p * r + 1.0 / 120.0;
+  p = p * r + 1.0 / 24.0;
+  p = p * r + 1.0 / 6.0;
+  p = p * r + 0.5;
+  p = p * r + 1.0;
+  p = p * r + 1.0;
+  // k sits in the low bits of shifted; unsigned arithmetic wraps as two's complement.
+  uint64_t kBits;
+  std::memcpy(&kBits, &shifted, sizeof kBits);
+  uint64_t bits;
+  std::memcpy(&bits, &p, sizeof bits);
+  bits += (kBits - uint64_t{ 0x4338000000000000 }) << 52;
+  double result;
+  std::memcpy(&result, &bits, sizeof result);
+  return x < -708.0 ? 0.0 : result;
+}
+
+// 1 - exp(-a) for a >= 0 without the cancellation of small a: its alternating series below
+// 1/2 (16 terms, truncation below 1e-19 relative), 1 - exp(-a) above.
+APC_ALWAYS_INLINE double OpacityOfAbsorbance(double a)
+{
+  // Written out: a loop here would stop the vectoriser.
+  double series = 1.0 - a * (1.0 / 17.0);
+  series = 1.0 - a * (1.0 / 16.0) * series;
+  series = 1.0 - a * (1.0 / 15.0) * series;
+  series = 1.0 - a * (1.0 / 14.0) * series;
+  series = 1.0 - a * (1.0 / 13.0) * series;
+  series = 1.0 - a * (1.0 / 12.0) * series;
+  series = 1.0 - a * (1.0 / 11.0) * series;
+  series = 1.0 - a * (1.0 / 10.0) * series;
+  series = 1.0 - a * (1.0 / 9.0) * series;
+  series = 1.0 - a * (1.0 / 8.0) * series;
+  series = 1.0 - a * (1.0 / 7.0) * series;
+  series = 1.0 - a * (1.0 / 6.0) * series;
+  series = 1.0 - a * (1.0 / 5.0) * series;
+  series = 1.0 - a * (1.0 / 4.0) * series;
+  series = 1.0 - a * (1.0 / 3.0) * series;
+  series = 1.0 - a * (1.0 / 2.0) * series;
+  // Blended, not selected: with a select the compiler moves the exponential into a branch,
+  // which stops the vectoriser. Both terms are finite for a in [0, kAbsorbanceMax].
+  const double small = a < 0.5 ? 1.0 : 0.0;
+  return small * (a * series) + (1.0 - small) * (1.0 - ExpNonPositive(-a));
+}
+
+struct FourMomentPixel
+{
+  double L3, L4, L6, L7, L8, D0, D1, D2, B0, Beta;
+};
+
+// Query's 4-moment arithmetic for n samples, every branch turned into a select so that the loop
+// vectorises; full[i] is set where Query's fast path would not answer (it then gives the
+// sample's transmittance). Compiled twice, for the build's baseline and for AVX2 with FMA, and
+// chosen by what the CPU has.
+APC_ALWAYS_INLINE void FourMomentWeightsBody(const FourMomentPixel& px, const double* depths,
+  const double* absorbances, double* weights, uint8_t* full, int n)
+{
+  // Locals: the stores to weights might otherwise alias px, and reloading it each sample
+  // stops the vectoriser.
+  const double l3 = px.L3, l4 = px.L4, l6 = px.L6, l7 = px.L7, l8 = px.L8;
+  const double d0 = px.D0, d1 = px.D1, d2 = px.D2, b0 = px.B0, beta = px.Beta;
+  for (int i = 0; i < n; ++i)
+  {
+    const double raw = depths[i];
+    const double z = raw < -1.0 ? -1.0 : (raw > 1.0 ? 1.0 : raw);
+    const double y1 = l4 * z + l3;
+    const double y2 = (l8 * z + l7) * z + l6;
+    const double u0 = d0;
+    const double u1 = y1 * d1;
+    const double u2 = y2 * d2;
+    const double kernelAtZ = u0 + y1 * u1 + y2 * u2;
+    const double c2 = u2;
+    const double c1 = u1 + u2 * l7;
+    const double c0 = u2 * l6 + u1 * l3 + u0;
+    const double disc = c1 * c1 - 4.0 * c0 * c2;
+    const double wz = 1.0 / kernelAtZ;
+    const double outside = 2.0 * c2 * z > -c1 ? 1.0 - (1.0 - beta) * wz : beta * wz;
+    const double root = std::sqrt(disc > 0.0 ? disc : 0.0);
+    const double q = -0.5 * (c1 + (c1 < 0.0 ? -root : root));
+    const double r0 = q / c2;
+    const double r1 = c0 / q;
+    const double lo = r0 < r1 ? r0 : r1;
+    const double ylo1 = l4 * lo + l3;
+    const double ylo2 = (l8 * lo + l7) * lo + l6;
+    const double kernelAtLo = d0 + ylo1 * ylo1 * d1 + ylo2 * ylo2 * d2;
+    const double between = beta * wz + 1.0 / kernelAtLo;
+    const double absorbance = c2 > 0.0 ? outside : between;
+    // Bitwise, not short-circuit: a branch would stop the vectoriser.
+    const bool usual = (c2 != 0.0) & (disc > 0.0) &
+      ((c2 > 0.0) | ((q != 0.0) & (std::abs(lo) <= 1.7976931348623157e308))) &
+      (std::abs(absorbance) <= 1.7976931348623157e308);
+    const double t = ExpNonPositive(-b0 * (usual ? absorbance : 0.0));
+    const double clamped = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    weights[i] = OpacityOfAbsorbance(absorbances[i]) * clamped;
+    full[i] = usual ? 0 : 1;
+  }
+}
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#define APC_HAVE_AVX2_WEIGHTS 1
+__attribute__((target("avx2,fma"))) void FourMomentWeightsAvx2(const FourMomentPixel& px,
+  const double* depths, const double* absorbances, double* weights, uint8_t* full, int n)
+{
+  FourMomentWeightsBody(px, depths, absorbances, weights, full, n);
+}
+#endif
+
+void FourMomentWeights(const FourMomentPixel& px, const double* depths, const double* absorbances,
+  double* weights, uint8_t* full, int n)
+{
+#ifdef APC_HAVE_AVX2_WEIGHTS
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  if (avx2)
+  {
+    FourMomentWeightsAvx2(px, depths, absorbances, weights, full, n);
+    return;
+  }
+#endif
+  FourMomentWeightsBody(px, depths, absorbances, weights, full, n);
+}
+
 } // namespace
+
+template <int N>
+void MomentTransmittance<N>::Weights(
+  const double* depths, const double* absorbances, double* weights, int n) const
+{
+  if constexpr (M == 2)
+  {
+    if (this->State == PixelState::Valid)
+    {
+      constexpr int kChunk = 256;
+      const FourMomentPixel px{ this->LInv[3], this->LInv[4], this->LInv[6], this->LInv[7],
+        this->LInv[8], this->InvD[0], this->InvD[1], this->InvD[2], this->B0, this->Beta };
+      uint8_t full[kChunk];
+      for (int begin = 0; begin < n; begin += kChunk)
+      {
+        const int count = std::min(kChunk, n - begin);
+        FourMomentWeights(px, depths + begin, absorbances + begin, weights + begin, full, count);
+        for (int i = 0; i < count; ++i)
+        {
+          if (full[i])
+          {
+            weights[begin + i] = OpacityOfAbsorbance(absorbances[begin + i]) *
+              this->FullQuery(depths[begin + i]).Transmittance;
+          }
+        }
+      }
+      return;
+    }
+  }
+  for (int i = 0; i < n; ++i)
+  {
+    weights[i] = -std::expm1(-absorbances[i]) * this->Query(depths[i]).Transmittance;
+  }
+}
 
 template <int N>
 MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSettings<N>& settings)
@@ -148,7 +321,7 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
 }
 
 template <int N>
-TransmittanceQuery MomentTransmittance<N>::Query(double z) const
+TransmittanceQuery MomentTransmittance<N>::FullQuery(double z) const
 {
   if (this->State == PixelState::Empty)
   {
@@ -185,38 +358,6 @@ TransmittanceQuery MomentTransmittance<N>::Query(double z) const
     c[k] = ck;
   }
 
-  if constexpr (M == 2)
-  {
-    // The common case of 4 moments, written out: two real roots from the stable quadratic
-    // formula (the same arithmetic as SolveQuadratic), and no data-dependent branch between
-    // them and the result. Which roots lie in front of z is a coin flip per query, and a
-    // mispredicted branch there costs more than forming both kernels. Everything unusual
-    // (degree drop, discriminant <= 0, a zero or non-finite root) takes the general path.
-    const double disc = c[1] * c[1] - 4.0 * c[0] * c[2];
-    if (c[2] != 0.0 && disc > 0.0)
-    {
-      const double q = -0.5 * (c[1] + std::copysign(std::sqrt(disc), c[1]));
-      const double r0 = q / c[2];
-      const double r1 = c[0] / q;
-      const double lo = std::min(r0, r1);
-      const double hi = std::max(r1, r0);
-      if (q != 0.0 && std::isfinite(lo) && std::isfinite(hi))
-      {
-        const double wLo = 1.0 / this->ChristoffelKernel(lo);
-        const double wHi = 1.0 / this->ChristoffelKernel(hi);
-        // Summed in the general path's order. The selects keep a (pathological) NaN weight
-        // behind z out of the sum, as the general path never forms it.
-        double absorbance = this->Beta / kernelAtZ;
-        absorbance += KeepIf(lo < z, wLo);
-        absorbance += KeepIf(hi < z, wHi);
-        const double t = std::exp(-this->B0 * absorbance);
-        if (std::isfinite(absorbance) && !std::isnan(t))
-        {
-          return { t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t), false };
-        }
-      }
-    }
-  }
   return this->GeneralQuery(z, kernelAtZ, c.data());
 }
 
@@ -275,16 +416,40 @@ TransmittanceQuery MomentTransmittance<N>::GeneralQuery(
 }
 
 template <int N>
-double MomentTransmittance<N>::ChristoffelKernel(double x) const
+double MomentTransmittance<N>::HiddenDepth(double maxWeight) const
 {
-  // e(x)^T (L D L^T)^-1 e(x) = |L^-1 e(x)|^2 in the D^-1 norm: a sum of positive terms.
-  double kernel = 0.0;
-  for (int i = 0; i <= M; ++i)
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  // Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
+  // pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
+  if (this->State != PixelState::Valid || !(maxWeight > 0.0) ||
+    !(std::exp(-this->B0) * this->B0 <= maxWeight))
   {
-    const double yi = EvaluatePolynomial(&this->LInv[i * (M + 1)], i, x);
-    kernel += yi * yi * this->InvD[i];
+    return kNone;
   }
-  return kernel;
+  const double limit = maxWeight / this->B0;
+  auto hidden = [&](double z)
+  {
+    const TransmittanceQuery q = this->Query(z);
+    return !q.Fallback && q.Transmittance <= limit;
+  };
+  if (!hidden(1.0))
+  {
+    return kNone;
+  }
+  if (hidden(-1.0))
+  {
+    return -1.0;
+  }
+  // T(hi) <= limit throughout; T non-increasing carries it to every z >= hi. 2^-9 of the
+  // warped range: a sample or two of a ray's front lie between the true crossing and hi.
+  double lo = -1.0;
+  double hi = 1.0;
+  for (int step = 0; step < 10; ++step)
+  {
+    const double mid = 0.5 * (lo + hi);
+    (hidden(mid) ? hi : lo) = mid;
+  }
+  return hi;
 }
 
 template class MomentTransmittance<4>;

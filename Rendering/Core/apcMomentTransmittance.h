@@ -33,9 +33,12 @@
 #ifndef apcMomentTransmittance_h
 #define apcMomentTransmittance_h
 
+#include "apcPolynomialRoots.h"
 #include "apcPowerMoments.h"
 
 #include <array>
+#include <cmath>
+#include <limits>
 
 namespace apc
 {
@@ -121,8 +124,22 @@ public:
   {
   }
 
+  // Inline for 4 moments (pass 2 queries once per sample); the rest out of line.
   TransmittanceQuery Query(double z) const;
   double operator()(double z) const { return this->Query(z).Transmittance; }
+
+  // Pass 2's weights alpha T(z) of n samples at once: weights[i] = (1 - exp(-absorbances[i]))
+  // T(depths[i]), as Query and std::expm1 give them to a few units in the last place. For 4
+  // moments the samples go through vector arithmetic (the CPU's widest that the build knows),
+  // and those an unusual case stops (see Query) through Query.
+  void Weights(const double* depths, const double* absorbances, double* weights, int n) const;
+
+  // A depth from which on every sample is hidden: for z >= HiddenDepth(w), T(z) b0 <= w (up to
+  // the ~1e-10 by which rounding lets T rise). A pixel's samples weigh alpha T(z) each and
+  // their alphas sum to at most b0, so the samples there weigh at most w together, whichever
+  // process holds them. Found by bisection on a fixed grid of [-1,1] from the moments alone,
+  // hence the same on every process. +inf where no depth qualifies.
+  double HiddenDepth(double maxWeight) const;
 
   bool IsEmpty() const { return this->State == PixelState::Empty; }
   bool IsDegenerate() const { return this->State == PixelState::Degenerate; }
@@ -133,6 +150,7 @@ public:
 private:
   static constexpr int M = N / 2;
   double ChristoffelKernel(double x) const;
+  TransmittanceQuery FullQuery(double z) const;
   TransmittanceQuery GeneralQuery(double z, double kernelAtZ, const double* c) const;
 
   enum class PixelState
@@ -153,6 +171,72 @@ private:
   std::array<double, (M + 1) * (M + 1)> LInv{};
   std::array<double, M + 1> InvD{};
 };
+
+template <int N>
+inline TransmittanceQuery MomentTransmittance<N>::Query(double z) const
+{
+  if constexpr (M == 2)
+  {
+    // 4 moments, the common case. The kernel polynomial P(x) = sum c_k x^k, c = B^-1 e(z),
+    // has P(z) = K(z) > 0, so with two real roots z lies between them iff c2 < 0, and beyond
+    // both iff also past the vertex. The three canonical weights sum to 1 (the normalised
+    // b0), so outside the roots the absorbance in front needs only w_z = 1 / K(z): no roots,
+    // no square root. Between them only the nearer root's weight is formed. Everything
+    // unusual (degree drop, discriminant <= 0, a zero or non-finite root) takes the full
+    // query.
+    if (this->State == PixelState::Valid && !std::isnan(z))
+    {
+      z = z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
+      const double* l = this->LInv.data();
+      const double y1 = l[4] * z + l[3];
+      const double y2 = (l[8] * z + l[7]) * z + l[6];
+      const double u0 = this->InvD[0];
+      const double u1 = y1 * this->InvD[1];
+      const double u2 = y2 * this->InvD[2];
+      const double kernelAtZ = u0 + y1 * u1 + y2 * u2;
+      const double c2 = u2;
+      const double c1 = u1 + u2 * l[7];
+      const double c0 = u2 * l[6] + u1 * l[3] + u0;
+      const double disc = c1 * c1 - 4.0 * c0 * c2;
+      if (c2 != 0.0 && disc > 0.0)
+      {
+        const double wz = 1.0 / kernelAtZ;
+        double absorbance = 0.0;
+        bool ok = true;
+        if (c2 > 0.0)
+        {
+          absorbance = 2.0 * c2 * z > -c1 ? 1.0 - (1.0 - this->Beta) * wz : this->Beta * wz;
+        }
+        else
+        {
+          const double q = -0.5 * (c1 + std::copysign(std::sqrt(disc), c1));
+          const double lo = std::min(q / c2, c0 / q);
+          ok = q != 0.0 && std::isfinite(lo);
+          absorbance = this->Beta * wz + 1.0 / this->ChristoffelKernel(lo);
+        }
+        const double t = std::exp(-this->B0 * absorbance);
+        if (ok && std::isfinite(absorbance) && !std::isnan(t))
+        {
+          return { t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t), false };
+        }
+      }
+    }
+  }
+  return this->FullQuery(z);
+}
+
+template <int N>
+inline double MomentTransmittance<N>::ChristoffelKernel(double x) const
+{
+  // e(x)^T (L D L^T)^-1 e(x) = |L^-1 e(x)|^2 in the D^-1 norm: a sum of positive terms.
+  double kernel = 0.0;
+  for (int i = 0; i <= M; ++i)
+  {
+    const double yi = EvaluatePolynomial(&this->LInv[i * (M + 1)], i, x);
+    kernel += yi * yi * this->InvD[i];
+  }
+  return kernel;
+}
 
 extern template class MomentTransmittance<4>;
 extern template class MomentTransmittance<6>;

@@ -7,17 +7,15 @@
 #define apcRayVisitors_h
 
 #include "apcDepthWarp.h"
-#include "apcHybridTransmittance.h"
-#include "apcMomentTransmittance.h"
 #include "apcPowerMoments.h"
 #include "apcRaySegments.h"
-#include "apcResolve.h"
 #include "apcSampleCache.h"
 #include "apcTileBins.h"
 #include "apcTransferTable.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <utility>
@@ -205,153 +203,6 @@ struct Moments : NoSegments
       if (this->Own)
       {
         AddPowerMoments<N>(this->Own + at, this->Sums.data() + p * (N + 1));
-      }
-    }
-  }
-};
-
-// MBOIT pass 2: colour weighted by alpha * T(z), T reconstructed from the global moments.
-template <int N>
-struct Colour : NoSegments
-{
-  static constexpr bool StopsWhenOpaque = true;
-  double* Output;
-  int Width;
-  const LogDepthWarp* Warp;
-  const double* GlobalMoments;
-  MomentSettings<N> Settings;
-  std::vector<MomentTransmittance<N>> Transmittance;
-  std::vector<ColourSums> Sums;
-
-  Colour(double* output, int width, const LogDepthWarp* warp, const double* moments,
-    const MomentSettings<N>& settings)
-    : Output(output)
-    , Width(width)
-    , Warp(warp)
-    , GlobalMoments(moments)
-    , Settings(settings)
-  {
-  }
-  void BeginTile(const TileRect& tile)
-  {
-    this->Transmittance.clear();
-    this->Transmittance.reserve(tile.Pixels());
-    for (int p = 0; p < tile.Pixels(); ++p)
-    {
-      this->Transmittance.emplace_back(
-        this->GlobalMoments + (N + 1) * tile.ImagePixel(p, this->Width), this->Settings);
-    }
-    this->Sums.assign(tile.Pixels(), ColourSums());
-  }
-  void Sample(int pixel, int64_t, double t, double, const TransferSample& s)
-  {
-    this->Add(pixel, (*this->Warp)(t), s);
-  }
-  void Add(int pixel, double z, const TransferSample& s)
-  {
-    const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
-    this->Sums[pixel].Add(alpha * this->Transmittance[pixel](z),
-      { static_cast<double>(s.Colour[0]), static_cast<double>(s.Colour[1]),
-        static_cast<double>(s.Colour[2]) });
-  }
-  void Replay(const CachedSample& sample, const TransferSample& s)
-  {
-    this->Add(sample.Pixel, sample.Z, s);
-  }
-  void EndTile(const TileRect& tile)
-  {
-    for (int p = 0; p < tile.Pixels(); ++p)
-    {
-      double* out = this->Output + 4 * tile.ImagePixel(p, this->Width);
-      for (int c = 0; c < 4; ++c)
-      {
-        out[c] += this->Sums[p].Sums[c];
-      }
-    }
-  }
-};
-
-// A pass-1 sample's place along its ray when only the cache holds it: its float depth (as an
-// integer that orders like the float), then the low bits of its lattice index for depths that
-// rounded to the same float. Consecutive samples differ in k by 1, so ties never span a wrap
-// of the 16 bits unless 65536 samples share one float depth.
-inline int64_t ReplayOrder(const CachedSample& sample)
-{
-  uint32_t bits = 0;
-  std::memcpy(&bits, &sample.Z, sizeof(bits));
-  bits = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
-  return (static_cast<int64_t>(bits) << 16) | sample.K16;
-}
-
-// Hybrid pass 2 (apcHybridTransmittance.h): each pixel's own samples collected, sorted by
-// their place along the ray and weighted by alpha T_own T_others, T_own the exact ordered
-// product of the own samples in front, T_others reconstructed from global - own moments.
-template <int N>
-struct HybridColour : NoSegments
-{
-  static constexpr bool StopsWhenOpaque = true;
-  struct OwnSample
-  {
-    int64_t Order; // lattice index k, or ReplayOrder for cached samples
-    double Z;
-    float Absorbance;
-    std::array<float, 3> Colour;
-  };
-
-  double* Output;
-  int Width;
-  const LogDepthWarp* Warp;
-  const double* GlobalMoments;
-  const double* OwnMoments;
-  MomentSettings<N> Settings;
-  std::vector<std::vector<OwnSample>> Pixels;
-
-  HybridColour(double* output, int width, const LogDepthWarp* warp, const double* global,
-    const double* own, const MomentSettings<N>& settings)
-    : Output(output)
-    , Width(width)
-    , Warp(warp)
-    , GlobalMoments(global)
-    , OwnMoments(own)
-    , Settings(settings)
-  {
-  }
-  void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
-  void Sample(int pixel, int64_t k, double t, double, const TransferSample& s)
-  {
-    this->Pixels[pixel].push_back({ k, (*this->Warp)(t), s.Absorbance, s.Colour });
-  }
-  void Replay(const CachedSample& sample, const TransferSample& s)
-  {
-    this->Pixels[sample.Pixel].push_back({ ReplayOrder(sample), sample.Z, s.Absorbance, s.Colour });
-  }
-  void EndTile(const TileRect& tile)
-  {
-    for (int p = 0; p < tile.Pixels(); ++p)
-    {
-      auto& samples = this->Pixels[p];
-      if (samples.empty())
-      {
-        continue;
-      }
-      std::sort(samples.begin(), samples.end(),
-        [](const OwnSample& a, const OwnSample& b) { return a.Order < b.Order; });
-      const size_t at = static_cast<size_t>(tile.ImagePixel(p, this->Width));
-      const OthersTransmittance<N> others(
-        this->GlobalMoments + (N + 1) * at, this->OwnMoments + (N + 1) * at, this->Settings);
-      OwnTransmittance own;
-      ColourSums sums;
-      for (const OwnSample& s : samples)
-      {
-        const double weight = own.Weight(static_cast<double>(s.Absorbance));
-        sums.Add(others.IsEmpty() ? weight : weight * others(s.Z),
-          { static_cast<double>(s.Colour[0]), static_cast<double>(s.Colour[1]),
-            static_cast<double>(s.Colour[2]) });
-      }
-      double* out = this->Output + 4 * at;
-      for (int c = 0; c < 4; ++c)
-      {
-        out[c] += sums.Sums[c];
       }
     }
   }

@@ -1,6 +1,7 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
+#include "apcColourVisitors.h"
 #include "apcCompressedRows.h"
 #include "apcLatticeJitter.h"
 #include "apcParallel.h"
@@ -12,6 +13,7 @@
 #include <tbb/combinable.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <functional>
@@ -471,6 +473,7 @@ void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDep
     return replayed;
   };
   int64_t replayed = 0;
+  std::atomic<int64_t> hidden{ 0 };
   if (hybrid && this->OwnMomentsOrder == N)
   {
     visitors::HybridColour<N> visitor(
@@ -480,11 +483,15 @@ void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDep
   else
   {
     visitors::Colour<N> visitor(colourSums, this->Width(), &warp, moments, settings);
+    visitor.HiddenWeight = this->HiddenSampleWeight;
+    visitor.Hidden = &hidden;
     replayed = run(visitor);
   }
   this->LastSamples += replayed;
   this->LastColourCacheShare =
     this->LastSamples > 0 ? static_cast<double>(replayed) / this->LastSamples : (usable ? 1 : 0);
+  this->LastHiddenShare =
+    this->LastSamples > 0 ? static_cast<double>(hidden.load()) / this->LastSamples : 0.0;
 }
 
 //------------------------------------------------------------------------------
@@ -513,13 +520,7 @@ int64_t VolumeRayMarcher::ReplayColour(
         {
           continue;
         }
-        const TileRect tile = Walker::Shifted(grid.Tile(t), rows.J0);
-        visitor.BeginTile(tile);
-        for (const CachedSample& sample : recorded)
-        {
-          visitor.Replay(sample, table.Lookup(sample.Scalar));
-        }
-        visitor.EndTile(tile);
+        visitor.ReplayTile(Walker::Shifted(grid.Tile(t), rows.J0), recorded, table);
         samples.local() += static_cast<int64_t>(recorded.size());
       }
     });

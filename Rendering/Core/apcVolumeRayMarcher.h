@@ -94,6 +94,19 @@ public:
   void SetLinearTolerance(double bins) { this->LinearTolerance = bins; }
   double GetLinearTolerance() const { return this->LinearTolerance; }
   static constexpr double kDefaultLinearTolerance = 0.25;
+  // Pass 2 skips a pixel's samples behind the depth from which the transmittance
+  // reconstructed from the global moments, times the pixel's total absorbance b0, stays at or
+  // below this weight (apc::MomentTransmittance::HiddenDepth): the alphas of a pixel's samples
+  // sum to at most b0, so what is skipped weighs at most this much together, and the depth
+  // depends on the global moments alone, so N processes skip exactly what one would. 0 weights
+  // every sample. Hybrid pass 2 never skips. Default kDefaultHiddenSampleWeight.
+  void SetHiddenSampleWeight(double weight) { this->HiddenSampleWeight = weight; }
+  double GetHiddenSampleWeight() const { return this->HiddenSampleWeight; }
+  // 1e-4: far below one step of an 8-bit colour (1/255) in the Paper Sum resolve's weights,
+  // and below it in Renormalised's (which divides by the weights' sum W) unless W < 0.026.
+  static constexpr double kDefaultHiddenSampleWeight = 1e-4;
+  // The share of the last AccumulateColour's samples skipped as hidden (0 to 1).
+  double GetLastHiddenShare() const { return this->LastHiddenShare; }
 
   // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
   // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
@@ -161,6 +174,8 @@ private:
   std::vector<double> OwnMoments;
   int OwnMomentsOrder = 0;
   double LastColourCacheShare = 0;
+  double LastHiddenShare = 0;
+  double HiddenSampleWeight = kDefaultHiddenSampleWeight;
   int Threads = 0;
   bool LatticeJitter = false;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();

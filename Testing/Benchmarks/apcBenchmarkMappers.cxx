@@ -575,7 +575,7 @@ public:
            "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
            "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
            "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
-           "mesh_s,finalize_s,linear_change\n";
+           "mesh_s,finalize_s,linear_change,pass2_hidden_share,pass2_hidden_share_unstopped\n";
   }
 
   // Rows from index first on; written per data set so that a crash keeps what was measured.
@@ -600,11 +600,12 @@ public:
             << ',' << Format(s.ErrorVsExact) << ',' << Format(s.StopChange) << ','
             << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
             << Format(s.WorseShare) << ',' << Format(s.MeshSeconds) << ','
-            << Format(s.FinalizeSeconds) << ',' << Format(s.LinearChange);
+            << Format(s.FinalizeSeconds) << ',' << Format(s.LinearChange) << ','
+            << Format(s.Pass2HiddenShare) << ',' << Format(s.Pass2HiddenShareUnstopped);
       }
       else
       {
-        out << ",,,,,,,,,,,,";
+        out << ",,,,,,,,,,,,,,";
       }
       out << '\n';
     }
@@ -867,6 +868,8 @@ private:
               << ", mesh " << Format(s.MeshSeconds) << " s (finalize " << Format(s.FinalizeSeconds)
               << " s), bin " << Format(s.ViewSeconds) << " s, linear change "
               << Format(s.LinearChange) << ", spacing " << Format(s.Spacing) << "\n";
+    std::cerr << "   sampler pass 2: hidden " << Format(s.Pass2HiddenShare) << ", unstopped "
+              << Format(s.Pass2HiddenShareUnstopped) << "\n";
     this->Rows.push_back(row);
   }
 

@@ -108,6 +108,30 @@ double GetStop(const M& marcher)
   }
 }
 
+// Pass 2's share of samples skipped as hidden, where the marcher reports it.
+template <class M, class = void>
+struct ReportsHidden : std::false_type
+{
+};
+template <class M>
+struct ReportsHidden<M, std::void_t<decltype(std::declval<const M&>().GetLastHiddenShare())>>
+  : std::true_type
+{
+};
+template <class M>
+double Pass2HiddenShare(const M& marcher)
+{
+  if constexpr (ReportsHidden<M>::value)
+  {
+    return marcher.GetLastHiddenShare();
+  }
+  else
+  {
+    (void)marcher;
+    return 0.0;
+  }
+}
+
 // The marcher's linear inverse of nearly affine cells, where it has one.
 template <class M, class = void>
 struct HasLinear : std::false_type
@@ -317,6 +341,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
     cpu2.push_back(CpuSeconds() - cpu);
     result.CacheShare = marcher.GetLastColourCacheShare();
     result.Pass2Samples = marcher.GetLastSampleCount();
+    result.Pass2HiddenShare = Pass2HiddenShare(marcher);
   }
   result.ViewSeconds = Median(view);
   result.Pass1Seconds = Median(pass1);
@@ -345,6 +370,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   if (SetStop(marcher, std::numeric_limits<double>::infinity()))
   {
     const std::vector<float> all = MboitImage(marcher, table, warp, pixels, result.AllSamples);
+    result.Pass2HiddenShareUnstopped = Pass2HiddenShare(marcher);
     result.StopChange = MaxDifference(stopped, all);
     result.StopChangeShare = ShareOver(stopped, all, 1.0 / 255);
     result.ErrorVsExactAll = MaxDifference(all, exact);

@@ -28,6 +28,10 @@ struct SamplerTiming
   int64_t AllSamples = 0;   // the same view marched without stopping (= Samples if it cannot)
   int64_t Pass2Samples = 0; // pass 2's samples: pass 1's visible ones (absorbance > 0)
   double CacheShare = NAN;  // share of pass 2's samples replayed from the cache
+  // Share of pass 2's samples skipped behind the hidden depth of the global moments (0 where
+  // the marcher cannot skip them).
+  double Pass2HiddenShare = NAN;
+  double Pass2HiddenShareUnstopped = NAN; // the same in the frame marched without the stop
   // Set-up once per data change, wall seconds: the whole conversion from VTK (Finalize
   // included) and CellMesh::Finalize alone (run again on the converted mesh).
   double MeshSeconds = NAN;

@@ -1,0 +1,318 @@
+// MBOIT pass 2's visitors (see apcRayVisitors.h): the colour sums weighted by the transmittance
+// reconstructed from the global moments, and Hybrid's, weighted by a process's own samples
+// exactly and the others' by moments. Internal to the core's marcher.
+#ifndef apcColourVisitors_h
+#define apcColourVisitors_h
+
+#include "apcHybridTransmittance.h"
+#include "apcMomentTransmittance.h"
+#include "apcRayVisitors.h"
+#include "apcResolve.h"
+
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+namespace apc
+{
+namespace visitors
+{
+
+// MBOIT pass 2: colour weighted by alpha * T(z), T reconstructed from the global moments.
+// Samples behind a pixel's hidden depth (MomentTransmittance::HiddenDepth(HiddenWeight)) are
+// skipped: they weigh at most HiddenWeight together, and the depth comes from the global
+// moments alone, so every process skips the same samples.
+template <int N>
+struct Colour : NoSegments
+{
+  static constexpr bool StopsWhenOpaque = true;
+  // A cached sample as pass 2 reads it, grouped by pixel.
+  struct DepthAndScalar
+  {
+    float Z;
+    float Scalar;
+  };
+
+  double* Output;
+  int Width;
+  const LogDepthWarp* Warp;
+  const double* GlobalMoments;
+  MomentSettings<N> Settings;
+  double HiddenWeight = 0;                // 0: every sample is weighted
+  std::atomic<int64_t>* Hidden = nullptr; // samples skipped, added once per tile
+  std::vector<MomentTransmittance<N>> Transmittance;
+  std::vector<double> HiddenFrom; // per pixel of a marched tile; NaN until its first sample
+  std::vector<ColourSums> Sums;
+  int64_t TileHidden = 0;
+  // ReplayTile's pixel grouping, kept from tile to tile.
+  std::vector<uint32_t> Starts;
+  std::vector<DepthAndScalar> Grouped;
+  // One pixel's visible samples for MomentTransmittance::Weights.
+  std::vector<double> Depths;
+  std::vector<double> Absorbances;
+  std::vector<std::array<float, 3>> Colours;
+  std::vector<double> Weights;
+
+  Colour(double* output, int width, const LogDepthWarp* warp, const double* moments,
+    const MomentSettings<N>& settings)
+    : Output(output)
+    , Width(width)
+    , Warp(warp)
+    , GlobalMoments(moments)
+    , Settings(settings)
+  {
+  }
+  const double* MomentsOf(const TileRect& tile, int p) const
+  {
+    return this->GlobalMoments + (N + 1) * tile.ImagePixel(p, this->Width);
+  }
+  double HiddenDepth(const MomentTransmittance<N>& t) const
+  {
+    return this->HiddenWeight > 0 ? t.HiddenDepth(this->HiddenWeight)
+                                  : std::numeric_limits<double>::infinity();
+  }
+  void BeginTile(const TileRect& tile)
+  {
+    this->Transmittance.clear();
+    this->Transmittance.reserve(tile.Pixels());
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      this->Transmittance.emplace_back(this->MomentsOf(tile, p), this->Settings);
+    }
+    this->HiddenFrom.assign(tile.Pixels(), std::numeric_limits<double>::quiet_NaN());
+    this->Sums.assign(tile.Pixels(), ColourSums());
+    this->TileHidden = 0;
+  }
+  void Sample(int pixel, int64_t, double t, double, const TransferSample& s)
+  {
+    double& hiddenFrom = this->HiddenFrom[pixel];
+    if (std::isnan(hiddenFrom))
+    {
+      hiddenFrom = this->HiddenDepth(this->Transmittance[pixel]);
+    }
+    const double z = (*this->Warp)(t);
+    if (z >= hiddenFrom)
+    {
+      ++this->TileHidden;
+      return;
+    }
+    Add(this->Sums[pixel], this->Transmittance[pixel], z, s);
+  }
+  static void Add(ColourSums& sums, const MomentTransmittance<N>& transmittance, double z,
+    const TransferSample& s)
+  {
+    const double alpha = -std::expm1(-static_cast<double>(s.Absorbance));
+    sums.Add(alpha * transmittance(z),
+      { static_cast<double>(s.Colour[0]), static_cast<double>(s.Colour[1]),
+        static_cast<double>(s.Colour[2]) });
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      this->Write(tile, p, this->Sums[p]);
+    }
+    this->CountHidden();
+  }
+  void Write(const TileRect& tile, int p, const ColourSums& sums) const
+  {
+    double* out = this->Output + 4 * tile.ImagePixel(p, this->Width);
+    for (int c = 0; c < 4; ++c)
+    {
+      out[c] += sums.Sums[c];
+    }
+  }
+  void CountHidden()
+  {
+    if (this->Hidden && this->TileHidden > 0)
+    {
+      this->Hidden->fetch_add(this->TileHidden, std::memory_order_relaxed);
+    }
+    this->TileHidden = 0;
+  }
+
+  // Pass 2 of a tile from pass 1's cached samples. They are grouped by pixel first (a stable
+  // counting sort, so each pixel sums in the order it did before), so that a pixel's
+  // reconstruction is set up once, only for pixels with samples, and stays in registers.
+  void ReplayTile(
+    const TileRect& tile, const std::vector<CachedSample>& recorded, const TransferTable& table)
+  {
+    this->Group(tile, recorded);
+    this->TileHidden = 0;
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      const uint32_t begin = this->Starts[p];
+      const uint32_t end = this->Starts[p + 1];
+      if (begin == end)
+      {
+        continue;
+      }
+      const MomentTransmittance<N> transmittance(this->MomentsOf(tile, p), this->Settings);
+      const double hiddenFrom = this->HiddenDepth(transmittance);
+      // The pixel's visible samples looked up, then weighted all at once (vectorised).
+      const size_t most = end - begin;
+      if (this->Depths.size() < most)
+      {
+        this->Depths.resize(most);
+        this->Absorbances.resize(most);
+        this->Colours.resize(most);
+        this->Weights.resize(most);
+      }
+      int count = 0;
+      for (uint32_t i = begin; i < end; ++i)
+      {
+        const DepthAndScalar sample = this->Grouped[i];
+        if (sample.Z >= hiddenFrom)
+        {
+          continue;
+        }
+        const TransferSample s = table.Lookup(sample.Scalar);
+        this->Depths[count] = sample.Z;
+        this->Absorbances[count] = s.Absorbance;
+        this->Colours[count] = s.Colour;
+        ++count;
+      }
+      this->TileHidden += static_cast<int64_t>(most) - count;
+      transmittance.Weights(
+        this->Depths.data(), this->Absorbances.data(), this->Weights.data(), count);
+      ColourSums sums;
+      for (int i = 0; i < count; ++i)
+      {
+        const std::array<float, 3>& c = this->Colours[i];
+        sums.Add(this->Weights[i],
+          { static_cast<double>(c[0]), static_cast<double>(c[1]), static_cast<double>(c[2]) });
+      }
+      this->Write(tile, p, sums);
+    }
+    this->CountHidden();
+  }
+  void Group(const TileRect& tile, const std::vector<CachedSample>& recorded)
+  {
+    const int pixels = tile.Pixels();
+    this->Starts.assign(static_cast<size_t>(pixels) + 1, 0);
+    for (const CachedSample& sample : recorded)
+    {
+      ++this->Starts[sample.Pixel + 1];
+    }
+    for (int p = 0; p < pixels; ++p)
+    {
+      this->Starts[p + 1] += this->Starts[p];
+    }
+    this->Grouped.resize(recorded.size());
+    for (const CachedSample& sample : recorded)
+    {
+      this->Grouped[this->Starts[sample.Pixel]++] = { sample.Z, sample.Scalar };
+    }
+    // Starts[p] now holds pixel p's end: shift back to the starts.
+    for (int p = pixels; p > 0; --p)
+    {
+      this->Starts[p] = this->Starts[p - 1];
+    }
+    this->Starts[0] = 0;
+  }
+};
+
+// A pass-1 sample's place along its ray when only the cache holds it: its float depth (as an
+// integer that orders like the float), then the low bits of its lattice index for depths that
+// rounded to the same float. Consecutive samples differ in k by 1, so ties never span a wrap
+// of the 16 bits unless 65536 samples share one float depth.
+inline int64_t ReplayOrder(const CachedSample& sample)
+{
+  uint32_t bits = 0;
+  std::memcpy(&bits, &sample.Z, sizeof(bits));
+  bits = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
+  return (static_cast<int64_t>(bits) << 16) | sample.K16;
+}
+
+// Hybrid pass 2 (apcHybridTransmittance.h): each pixel's own samples collected, sorted by
+// their place along the ray and weighted by alpha T_own T_others, T_own the exact ordered
+// product of the own samples in front, T_others reconstructed from global - own moments.
+template <int N>
+struct HybridColour : NoSegments
+{
+  static constexpr bool StopsWhenOpaque = true;
+  struct OwnSample
+  {
+    int64_t Order; // lattice index k, or ReplayOrder for cached samples
+    double Z;
+    float Absorbance;
+    std::array<float, 3> Colour;
+  };
+
+  double* Output;
+  int Width;
+  const LogDepthWarp* Warp;
+  const double* GlobalMoments;
+  const double* OwnMoments;
+  MomentSettings<N> Settings;
+  std::vector<std::vector<OwnSample>> Pixels;
+
+  HybridColour(double* output, int width, const LogDepthWarp* warp, const double* global,
+    const double* own, const MomentSettings<N>& settings)
+    : Output(output)
+    , Width(width)
+    , Warp(warp)
+    , GlobalMoments(global)
+    , OwnMoments(own)
+    , Settings(settings)
+  {
+  }
+  void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
+  void Sample(int pixel, int64_t k, double t, double, const TransferSample& s)
+  {
+    this->Pixels[pixel].push_back({ k, (*this->Warp)(t), s.Absorbance, s.Colour });
+  }
+  void Replay(const CachedSample& sample, const TransferSample& s)
+  {
+    this->Pixels[sample.Pixel].push_back({ ReplayOrder(sample), sample.Z, s.Absorbance, s.Colour });
+  }
+  void ReplayTile(
+    const TileRect& tile, const std::vector<CachedSample>& recorded, const TransferTable& table)
+  {
+    this->BeginTile(tile);
+    for (const CachedSample& sample : recorded)
+    {
+      this->Replay(sample, table.Lookup(sample.Scalar));
+    }
+    this->EndTile(tile);
+  }
+  void EndTile(const TileRect& tile)
+  {
+    for (int p = 0; p < tile.Pixels(); ++p)
+    {
+      auto& samples = this->Pixels[p];
+      if (samples.empty())
+      {
+        continue;
+      }
+      std::sort(samples.begin(), samples.end(),
+        [](const OwnSample& a, const OwnSample& b) { return a.Order < b.Order; });
+      const size_t at = static_cast<size_t>(tile.ImagePixel(p, this->Width));
+      const OthersTransmittance<N> others(
+        this->GlobalMoments + (N + 1) * at, this->OwnMoments + (N + 1) * at, this->Settings);
+      OwnTransmittance own;
+      ColourSums sums;
+      for (const OwnSample& s : samples)
+      {
+        const double weight = own.Weight(static_cast<double>(s.Absorbance));
+        sums.Add(others.IsEmpty() ? weight : weight * others(s.Z),
+          { static_cast<double>(s.Colour[0]), static_cast<double>(s.Colour[1]),
+            static_cast<double>(s.Colour[2]) });
+      }
+      double* out = this->Output + 4 * at;
+      for (int c = 0; c < 4; ++c)
+      {
+        out[c] += sums.Sums[c];
+      }
+    }
+  }
+};
+
+} // namespace visitors
+} // namespace apc
+
+#endif
