@@ -63,8 +63,12 @@ def last_timings(display):
     "total", and "bytes_sent", "messages_sent", "composited_pixels", "covered_pixels", "mode"
     (0 APC, 1 Exact (segments), 2 Local exact: what Auto chose; -1 skipped), "image_reduction"
     (1 still, more while interacting, 0 skipped), "average_segments_per_pixel" and
-    "max_segments_per_pixel". Pulled from where the frame was rendered (the render server's
-    root when connected)."""
+    "max_segments_per_pixel"; per stage with collectives its wait for the slowest rank and its
+    transfer after the last arrival ("tiles_wait", "tiles_transfer", ...), "wait" and
+    "transfer" (their sums), "render" (the display rank's), "render_mean", "render_max",
+    "render_imbalance" (max / mean), "slowest_rank", "wait_max", and "render_per_rank" (a list
+    of every rank's render seconds). Pulled from where the frame was rendered (the render
+    server's root when connected)."""
     display.UpdatePropertyInformation()
     names = display.GetProperty("APCLastTimingNames").GetData()
     if isinstance(names, (list, tuple)):
@@ -74,7 +78,12 @@ def last_timings(display):
     if len(names) != len(values):
         raise RuntimeError("APCLastTimings holds %d values for %d names: plugin and script "
                            "disagree" % (len(values), len(names)))
-    return dict(zip(names, values))
+    timings = dict(zip(names, values))
+    ranks = display.GetProperty("APCLastRankRenderSeconds").GetData()
+    if isinstance(ranks, (list, tuple)):
+        ranks = " ".join(ranks)
+    timings["render_per_rank"] = [float(v) for v in ranks.split()]
+    return timings
 
 
 def stage_seconds(timings):
@@ -82,5 +91,5 @@ def stage_seconds(timings):
     total: they add up to timings["total"]."""
     stages = ["agree", "depth", "pass1", "tiles", "allreduce", "pass2", "reduce", "resolve",
               "segments", "exchange", "blend_segments", "gather", "statistics", "exact", "auto",
-              "blend"]
+              "ranks", "blend"]
     return [(s, timings[s]) for s in stages if timings.get(s, 0) > 0]
