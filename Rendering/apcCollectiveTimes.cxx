@@ -58,11 +58,13 @@ bool WaitForAll(vtkMultiProcessController* controller)
   }
   MPI_Request request;
   MPI_Ibarrier(*communicator->GetMPIComm()->GetHandle(), &request);
-  // A barrier of processes that are already together completes in a few microseconds: the
-  // first tests only yield, so that it costs no sleep's granularity.
-  constexpr int kYields = 64;
+  // A barrier of processes that are already together completes in microseconds, and on
+  // oversubscribed cores only once each of them has had the core to test it: the first
+  // kYields tests yield the core (to whoever is runnable, so on a busy node they span the
+  // others' time slices), then the tests sleep.
+  constexpr int kYields = 100;
   auto sleep = std::chrono::microseconds(20);
-  for (int tries = 0;; ++tries)
+  for (int tests = 0;; ++tests)
   {
     int done = 0;
     MPI_Test(&request, &done, MPI_STATUS_IGNORE);
@@ -70,7 +72,7 @@ bool WaitForAll(vtkMultiProcessController* controller)
     {
       return true;
     }
-    if (tries < kYields)
+    if (tests < kYields)
     {
       std::this_thread::yield();
     }

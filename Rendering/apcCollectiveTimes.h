@@ -40,9 +40,9 @@ private:
 // Returns once every process of the controller has called it, without keeping a core busy:
 // MPI's blocking collectives poll in a loop, so a process that arrives early would take a
 // core from one still rendering (the ranks of a node share its cores). Here an MPI_Ibarrier
-// is tested with a yield and then sleeps that grow from 20 us to 1 ms: a process that waited
-// long leaves at most ~1 ms after the last arrival. False (and no wait) if the controller is
-// not MPI's or has one process.
+// is tested 100 times with a yield, then with sleeps that grow from 20 us to 1 ms: a process
+// that waited long leaves ~1 ms after the last arrival (plus the time the system takes to
+// give it a core back). False (and no wait) if the controller is not MPI's or has one process.
 bool WaitForAll(vtkMultiProcessController* controller);
 
 } // namespace apc

@@ -40,7 +40,7 @@ class ModelSection:
         get = lambda name: read_csv(os.path.join(source, name))  # noqa: E731
         m = SimpleNamespace(constants=get("constants.csv"), validation=get("validation.csv"),
                             paper=get("paper_scale.csv"), crossover=get("crossover.csv"),
-                            collectives=get("collectives.csv"))
+                            collectives=get("collectives.csv"), waiting=get("waiting.csv"))
         self.add("## 5. Scaling model: compositing at the paper's scale\n")
         if not m.constants or not m.paper:
             self.add("No results (run scaling_model.py: it needs comm.csv and the per-rank "
@@ -55,7 +55,8 @@ class ModelSection:
         m.ranks = sorted({int(r["ranks"]) for r in m.gear})
         m.cases = list(dict.fromkeys(r["case"] for r in paper))
         for part in (self._model_intro, self._model_constants, self._model_collectives,
-                     self._model_validation, self._model_gear, self._model_plots,
+                     self._model_validation, self._model_waiting, self._model_gear,
+                     self._model_plots,
                      self._model_crossover, self._model_validation_headline,
                      self._model_meshes):
             part(m)
@@ -164,6 +165,11 @@ class ModelSection:
                             "MPI alone s", "model vs MPI alone", "pass measured s",
                             "model vs pass", "worst camera vs pass"], body))
             self.add(
+                "The *transfer* rows compare like with like: `vtkAPCCompositePass` starts each "
+                "collective with a barrier, so its time after the barrier (the transfer, max "
+                "over ranks) holds neither the wait for the slowest rank's render nor the "
+                "packing around the collectives, and the model is taken without its packing "
+                "copies. The other rows are the older comparison with whole stages:\n\n"
                 "The pass's stage times are the slowest rank's lap from the end of its render "
                 "to the end of the collective. On the old wire (and for the segments, whose "
                 "counts allgather opens the exchange) that lap includes the wait for the "
@@ -180,6 +186,28 @@ class ModelSection:
                 "barrier) is the model's own error. Above 2 ranks the ranks share 2 cores: "
                 "read the 2-rank rows as the model's accuracy and the 4–8-rank rows as how "
                 "far oversubscription is from it.\n")
+
+    def _model_waiting(self, m):
+        """How much of the compositing is the wait for the slowest rank (waiting.csv)."""
+        if not m.waiting:
+            return
+        body = [[r["ranks"], r["cores"], r["mode"], r["cameras"],
+                 fmt(num(r["compositing_mean_s"])), fmt(num(r["wait_mean_s"])),
+                 fmt(num(r["transfer_s"])), "%.0f %%" % (100 * num(r["wait_share"])),
+                 fmt(num(r["render_imbalance"]))] for r in m.waiting]
+        self.add("How much of the compositing of section 1's runs is waiting (APC: tiles + "
+                 "allreduce + reduce; segments: exchange + gather), per rank count, medians "
+                 "over the cameras: the stages and the wait in them are means over the ranks "
+                 "(the display rank waits for the others, the others for it), the transfer "
+                 "after the last arrival the slowest rank's; render imbalance = slowest / mean "
+                 "render (pass 1 + pass 2, or segments + sort and blend):\n\n")
+        self.add(table(["ranks", "cores", "mode", "cameras", "compositing s (mean over ranks)",
+                        "of it waiting s", "transfer s", "waiting share", "render imbalance"],
+                       body))
+        self.add("Oversubscribed (4 and 8 ranks on 2 cores), a rank's render is spread over "
+                 "the time slices the others leave it, so the ranks finish their renders far "
+                 "apart and the wait grows with the rank count; the transfer itself also waits "
+                 "for ranks to be scheduled, which is why it exceeds the model there.\n")
 
     def _model_gear(self, m):
         constants, crossover, gear = m.constants, m.crossover, m.gear
@@ -319,7 +347,14 @@ class ModelSection:
                     "render): %s." % "; ".join(
                         "%s %s %+.0f %% / %+.0f %%" % (
                             r["mode"], r["model"], 100 * num(r.get("rel_error_vs_mpi_alone")),
-                            100 * num(r["rel_error"])) for r in two))
+                            100 * num(r["rel_error"])) for r in two) +
+                    " (the *transfer* rows: against the collectives' time after every rank "
+                    "arrived).")
+            if m.waiting:
+                self.headline.append(
+                    "Waiting share of the compositing time (APC, mean over ranks): %s." %
+                    ", ".join("%s ranks %.0f %%" % (r["ranks"], 100 * num(r["wait_share"]))
+                              for r in m.waiting if r["mode"] == "APC"))
 
     def _model_meshes(self, m):
         paper, crossover, cluster, at, cases = m.paper, m.crossover, m.cluster, m.at, m.cases
