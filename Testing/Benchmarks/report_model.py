@@ -194,7 +194,8 @@ class ModelSection:
         body = [[r["ranks"], r["cores"], r["mode"], r["cameras"],
                  fmt(num(r["compositing_mean_s"])), fmt(num(r["wait_mean_s"])),
                  fmt(num(r["transfer_s"])), "%.0f %%" % (100 * num(r["wait_share"])),
-                 fmt(num(r["render_imbalance"]))] for r in m.waiting]
+                 fmt(num(r["render_imbalance"])), fmt(num(r.get("smallest_collective_s")))]
+                for r in m.waiting]
         self.add("How much of the compositing of section 1's runs is waiting (APC: tiles + "
                  "allreduce + reduce; segments: exchange + gather), per rank count, medians "
                  "over the cameras: the stages and the wait in them are means over the ranks "
@@ -202,12 +203,19 @@ class ModelSection:
                  "after the last arrival the slowest rank's; render imbalance = slowest / mean "
                  "render (pass 1 + pass 2, or segments + sort and blend):\n\n")
         self.add(table(["ranks", "cores", "mode", "cameras", "compositing s (mean over ranks)",
-                        "of it waiting s", "transfer s", "waiting share", "render imbalance"],
-                       body))
-        self.add("Oversubscribed (4 and 8 ranks on 2 cores), a rank's render is spread over "
-                 "the time slices the others leave it, so the ranks finish their renders far "
-                 "apart and the wait grows with the rank count; the transfer itself also waits "
-                 "for ranks to be scheduled, which is why it exceeds the model there.\n")
+                        "of it waiting s", "transfer s", "waiting share", "render imbalance",
+                        "16-byte gather s"], body))
+        self.add("The last column is the transfer of the frame's smallest collective, the "
+                 "16-byte gather of the ranks' times: one collective's latency on this machine "
+                 "as the pass meets it. A frame runs about 7 collectives (agreement, depth, "
+                 "tiles, two for the moments, colours, the ranks' times), so that latency times "
+                 "7 is a floor under the transfer that the α–β model, calibrated by "
+                 "back-to-back MPI calls, does not see: where the machine is loaded, a "
+                 "collective completes only when every rank has been given a core again. "
+                 "Oversubscribed (4 and 8 ranks on 2 cores), each rank's render is spread over "
+                 "the time slices the others leave it, so the ranks finish far apart and the "
+                 "wait grows with the rank count, and every collective waits for its ranks to be "
+                 "scheduled.\n")
 
     def _model_gear(self, m):
         constants, crossover, gear = m.constants, m.crossover, m.gear
@@ -344,12 +352,11 @@ class ModelSection:
                 self.headline.append(
                     "Scaling model vs measured at 2 ranks (model error vs MPI alone moving the "
                     "same bytes / vs the pass's stage, which includes waiting for the slowest "
-                    "render): %s." % "; ".join(
+                    "render; *transfer* rows: against the collectives' time after every rank "
+                    "arrived): %s." % "; ".join(
                         "%s %s %+.0f %% / %+.0f %%" % (
                             r["mode"], r["model"], 100 * num(r.get("rel_error_vs_mpi_alone")),
-                            100 * num(r["rel_error"])) for r in two) +
-                    " (the *transfer* rows: against the collectives' time after every rank "
-                    "arrived).")
+                            100 * num(r["rel_error"])) for r in two))
             if m.waiting:
                 self.headline.append(
                     "Waiting share of the compositing time (APC, mean over ranks): %s." %

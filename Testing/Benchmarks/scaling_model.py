@@ -606,7 +606,8 @@ def run(results, out):
     from scaling_transfer import waiting_rows  # noqa: E402
     write_csv(os.path.join(out, "waiting.csv"),
               ["ranks", "mode", "cameras", "cores", "compositing_mean_s", "wait_mean_s",
-               "transfer_s", "wait_share", "render_imbalance"], waiting_rows(scaling))
+               "transfer_s", "wait_share", "render_imbalance", "smallest_collective_s"],
+              waiting_rows(scaling))
     paper = paper_rows(analysis, [machine, infiniband])
     write_csv(os.path.join(out, "paper_scale.csv"), PAPER_HEADER, paper)
     write_csv(os.path.join(out, "crossover.csv"),

@@ -47,8 +47,9 @@ def add_transfer_rows(groups, scaling, analysis, constants, comm):
 def waiting_rows(scaling):
     """Per rank count and mode, medians over the cameras: the compositing time (APC: tiles +
     allreduce + reduce; segments: exchange + gather; mean over ranks), the wait for the
-    slowest rank in it, the transfer (max over ranks), the wait's share and the render
-    imbalance (slowest / mean render)."""
+    slowest rank in it, the transfer (max over ranks), the wait's share, the render
+    imbalance (slowest / mean render) and the transfer of the smallest collective (the 16-byte
+    gather of the ranks' times: one collective's latency, whatever its bytes)."""
     groups = {}
     for r in scaling:
         if int(r["ranks"]) >= 2 and has_transfer(r):
@@ -61,7 +62,9 @@ def waiting_rows(scaling):
         transfer = median([sum(num(r[k + "_transfer_s"]) for k in stages) for r in rs])
         share = median([num(r["compositing_wait_mean_s"]) / num(r["compositing_mean_s"])
                         for r in rs if num(r["compositing_mean_s"]) > 0])
+        # The ranks' times: a 16-byte gather, so its transfer is one collective's latency.
+        floor = median([num(r["ranks_transfer_s"]) for r in rs])
         rows.append([p, mode, len(rs), "oversubscribed" if p > 2 else "2 cores", "%.4g" % comp,
                      "%.4g" % wait, "%.4g" % transfer, "%.3f" % share,
-                     "%.3f" % median([num(r["render_imbalance"]) for r in rs])])
+                     "%.3f" % median([num(r["render_imbalance"]) for r in rs]), "%.4g" % floor])
     return rows
