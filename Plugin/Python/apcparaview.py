@@ -66,9 +66,9 @@ def last_timings(display):
     "max_segments_per_pixel"; per stage with collectives its wait for the slowest rank and its
     transfer after the last arrival ("tiles_wait", "tiles_transfer", ...), "wait" and
     "transfer" (their sums), "render" (the display rank's), "render_mean", "render_max",
-    "render_imbalance" (max / mean), "slowest_rank", "wait_max", and "render_per_rank" (a list
-    of every rank's render seconds). Pulled from where the frame was rendered (the render
-    server's root when connected)."""
+    "render_imbalance" (max / mean), "slowest_rank" and "wait_max" (every rank's render seconds:
+    rank_render_seconds). Pulled from where the frame was rendered (the render server's root
+    when connected)."""
     display.UpdatePropertyInformation()
     names = display.GetProperty("APCLastTimingNames").GetData()
     if isinstance(names, (list, tuple)):
@@ -78,12 +78,17 @@ def last_timings(display):
     if len(names) != len(values):
         raise RuntimeError("APCLastTimings holds %d values for %d names: plugin and script "
                            "disagree" % (len(values), len(names)))
-    timings = dict(zip(names, values))
+    return dict(zip(names, values))
+
+
+def rank_render_seconds(display):
+    """The last frame's render seconds of every rank, in rank order (pass 1 + pass 2, or the
+    segments and their sort and blend), as the display rank gathered them: a list (pull
+    last_timings first, or call display.UpdatePropertyInformation())."""
     ranks = display.GetProperty("APCLastRankRenderSeconds").GetData()
     if isinstance(ranks, (list, tuple)):
         ranks = " ".join(ranks)
-    timings["render_per_rank"] = [float(v) for v in ranks.split()]
-    return timings
+    return [float(v) for v in ranks.split()]
 
 
 def stage_seconds(timings):
