@@ -178,10 +178,11 @@ class ModelSection:
                 "second on this loaded machine. The compact wire's tile-mask allreduce takes "
                 "that wait in its own stage (not in the CSV), so its *allreduce stage only* row "
                 "compares transfer with transfer; the reduce still waits for the slowest pass "
-                "2. That allreduce stage is still 10–100× the model and MPI alone here; not "
-                "explained yet (suspects: the render's TBB worker threads spinning on the 2 "
-                "cores while MPI polls, and the other users' load of ~15–20 during the runs; "
-                "re-run `run-evaluation.sh --model-only` on a quiet machine). The model "
+                "2. That allreduce stage, and the transfer alone, are still 10–100× the model "
+                "and MPI alone here: each collective of a frame costs about the latency of the "
+                "smallest one (the 16-byte gather in the table below), the time for every rank "
+                "of a loaded machine to be given a core, which back-to-back MPI calls do not "
+                "pay; re-run `run-evaluation.sh --model-only` on a quiet machine. The model "
                 "against *MPI alone* (the same bytes through the same MPI, each call after a "
                 "barrier) is the model's own error. Above 2 ranks the ranks share 2 cores: "
                 "read the 2-rank rows as the model's accuracy and the 4–8-rank rows as how "
@@ -196,7 +197,8 @@ class ModelSection:
                  fmt(num(r["transfer_s"])), "%.0f %%" % (100 * num(r["wait_share"])),
                  fmt(num(r["render_imbalance"])), fmt(num(r.get("smallest_collective_s")))]
                 for r in m.waiting]
-        self.add("How much of the compositing of section 1's runs is waiting (APC: tiles + "
+        self.add("How much of the compositing is waiting in the weak-scaling runs behind "
+                 "this section (`evaluation/model/scaling.csv`; APC: tiles + "
                  "allreduce + reduce; segments: exchange + gather), per rank count, medians "
                  "over the cameras: the stages and the wait in them are means over the ranks "
                  "(the display rank waits for the others, the others for it), the transfer "
@@ -212,10 +214,11 @@ class ModelSection:
                  "7 is a floor under the transfer that the α–β model, calibrated by "
                  "back-to-back MPI calls, does not see: where the machine is loaded, a "
                  "collective completes only when every rank has been given a core again. "
-                 "Oversubscribed (4 and 8 ranks on 2 cores), each rank's render is spread over "
-                 "the time slices the others leave it, so the ranks finish far apart and the "
-                 "wait grows with the rank count, and every collective waits for its ranks to be "
-                 "scheduled.\n")
+                 "Oversubscribed (4 and 8 ranks on 2 cores), every step of a rank (its render, "
+                 "its packing, each collective) is spread over the time slices the other ranks "
+                 "leave it: the transfer and the ranks' own work in these stages grow with the "
+                 "rank count as well as the wait, so the waiting share is not a measure of "
+                 "imbalance there; at 2 ranks it is.\n")
 
     def _model_gear(self, m):
         constants, crossover, gear = m.constants, m.crossover, m.gear
