@@ -130,6 +130,11 @@ def calibrate(comm, stat="median_s"):
         big = [r for r in pp if int(r["bytes"]) >= 1 << 20]
         big = big if len(big) >= 2 else pp[-3:]  # a quick run stops at 1 MiB
         _, beta = least_squares([int(r["bytes"]) for r in big], [num(r[stat]) for r in big])
+        if not beta > 0:
+            # One descheduled repetition can make a median out of line (a quick run has 3 of
+            # them and stops at 1 MiB): no bandwidth is negative, so fit the minima instead.
+            _, beta = least_squares([int(r["bytes"]) for r in big],
+                                    [num(r["min_s"]) for r in big])
         local = {(r["op"], r["type"]): num(r[stat]) / int(r["bytes"]) for r in rows
                  if r["op"] in ("copy", "sum")}
         constants[p] = {
