@@ -18,9 +18,11 @@
 namespace apc
 {
 
-ProcessGroup::ProcessGroup(vtkMultiProcessController* controller, int displayProcess)
+ProcessGroup::ProcessGroup(
+  vtkMultiProcessController* controller, int displayProcess, CollectiveTimes* times)
   : Controller(controller)
   , Parallel(controller && controller->GetNumberOfProcesses() > 1)
+  , Times(times)
 {
   if (this->Parallel)
   {
@@ -85,8 +87,12 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
     // Each process's framebuffer holds its own opaque geometry only: the composited depth
     // is the nearest over processes, on every process at once.
     std::vector<float> nearest(depth.size());
-    group.Controller->AllReduce(
-      depth.data(), nearest.data(), static_cast<vtkIdType>(depth.size()), vtkCommunicator::MIN_OP);
+    group.Collective("depth",
+      [&]
+      {
+        group.Controller->AllReduce(depth.data(), nearest.data(),
+          static_cast<vtkIdType>(depth.size()), vtkCommunicator::MIN_OP);
+      });
     record.BytesSent += 4.0 * static_cast<double>(depth.size());
     record.MessagesSent += 1;
     return nearest;
@@ -94,13 +100,22 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
   std::vector<unsigned char> opaque = group.IsDisplay()
     ? frame.Tiles.Mark([&](size_t pixel) { return depth[pixel] < 1.0f; })
     : std::vector<unsigned char>(frame.Tiles.Tiles());
-  group.Controller->Broadcast(opaque.data(), static_cast<vtkIdType>(opaque.size()), group.Display);
+  group.Collective("depth",
+    [&]
+    {
+      group.Controller->Broadcast(
+        opaque.data(), static_cast<vtkIdType>(opaque.size()), group.Display);
+    });
   std::vector<float> packed(frame.Tiles.PixelsIn(opaque));
   frame.Tiles.Pack(opaque, depth.data(), 1, packed.data());
   if (!packed.empty())
   {
-    group.Controller->Broadcast(
-      packed.data(), static_cast<vtkIdType>(packed.size()), group.Display);
+    group.Collective("depth",
+      [&]
+      {
+        group.Controller->Broadcast(
+          packed.data(), static_cast<vtkIdType>(packed.size()), group.Display);
+      });
   }
   frame.Tiles.Unpack(opaque, packed.data(), 1, depth.data());
   if (group.IsDisplay())

@@ -6,6 +6,7 @@
 #ifndef apcCompositeFrame_h
 #define apcCompositeFrame_h
 
+#include "apcCollectiveTimes.h"
 #include "apcCoveredTiles.h"
 #include "apcFrameSettings.h"
 #include "apcMomentParameters.h"
@@ -16,6 +17,7 @@
 
 #include "vtkType.h"
 
+#include <chrono>
 #include <vector>
 
 class vtkFloatArray;
@@ -36,8 +38,34 @@ struct ProcessGroup
   int Rank = 0;
   int Display = 0; // the process that shows the image
 
-  ProcessGroup(vtkMultiProcessController* controller, int displayProcess);
+  // Where Collective records its times (none if null).
+  CollectiveTimes* Times = nullptr;
+
+  ProcessGroup(
+    vtkMultiProcessController* controller, int displayProcess, CollectiveTimes* times = nullptr);
   bool IsDisplay() const { return this->Rank == this->Display; }
+
+  // Runs collective (a call every process makes, in the same order) after every process has
+  // arrived (WaitForAll: no busy wait), and adds the two times to stage's in Times. Every
+  // collective of a frame goes through here, so that its stage's time splits into the wait
+  // for the slowest process, the transfer, and this process's own work around them.
+  template <class F>
+  void Collective(const char* stage, F&& collective) const
+  {
+    using Clock = std::chrono::steady_clock;
+    const Clock::time_point start = Clock::now();
+    if (this->Parallel)
+    {
+      WaitForAll(this->Controller);
+    }
+    const Clock::time_point arrived = Clock::now();
+    collective();
+    if (this->Times)
+    {
+      this->Times->Add(stage, std::chrono::duration<double>(arrived - start).count(),
+        std::chrono::duration<double>(Clock::now() - arrived).count());
+    }
+  }
 };
 
 // One agreed frame: the same on every process except Engines (this process's volumes).
@@ -86,6 +114,11 @@ struct CompositeFrame
 struct FrameRecord
 {
   StageClock Clock;
+  CollectiveTimes Collectives; // the wait and transfer inside Clock's stages
+  // Every process's render and wait seconds, by rank, on the display process (this process's
+  // alone elsewhere): apcFrameTimings.h's GatherRankTimes.
+  std::vector<double> RankRender;
+  std::vector<double> RankWait;
   double BytesSent = 0;
   vtkIdType MessagesSent = 0;
   vtkIdType Pixels = 0;           // pixels whose values travel (APC: the covered tiles')

@@ -38,8 +38,12 @@ public:
     std::vector<double> all(this->Values);
     if (group.Parallel)
     {
-      group.Controller->AllReduce(this->Values.data(), all.data(),
-        static_cast<vtkIdType>(this->Values.size()), vtkCommunicator::MAX_OP);
+      group.Collective("agree",
+        [&]
+        {
+          group.Controller->AllReduce(this->Values.data(), all.data(),
+            static_cast<vtkIdType>(this->Values.size()), vtkCommunicator::MAX_OP);
+        });
     }
     this->Values = std::move(all);
     this->Next = 0;

@@ -119,8 +119,12 @@ void ShareInputReports(const ProcessGroup& group, const InputReport& local, vtkO
   InputReport sum = local;
   if (group.Parallel)
   {
-    group.Controller->Reduce(local.Counts.data(), sum.Counts.data(),
-      static_cast<vtkIdType>(sum.Counts.size()), vtkCommunicator::SUM_OP, group.Display);
+    group.Collective("agree",
+      [&]
+      {
+        group.Controller->Reduce(local.Counts.data(), sum.Counts.data(),
+          static_cast<vtkIdType>(sum.Counts.size()), vtkCommunicator::SUM_OP, group.Display);
+      });
   }
   if (group.IsDisplay())
   {

@@ -52,15 +52,19 @@ double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
     std::vector<T> send(count);
     std::vector<T> received(count);
     tiles.Pack(mask, image.data(), components, send.data(), first, last);
-    if (everywhere)
-    {
-      group.Controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
-    }
-    else
-    {
-      group.Controller->Reduce(
-        send.data(), received.data(), count, vtkCommunicator::SUM_OP, group.Display);
-    }
+    group.Collective(everywhere ? "allreduce" : "reduce",
+      [&]
+      {
+        if (everywhere)
+        {
+          group.Controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
+        }
+        else
+        {
+          group.Controller->Reduce(
+            send.data(), received.data(), count, vtkCommunicator::SUM_OP, group.Display);
+        }
+      });
     if (everywhere || group.IsDisplay())
     {
       tiles.Unpack(mask, received.data(), components, image.data(), first, last);
@@ -92,8 +96,12 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
     offset += packed.size() / stride;
   }
   std::vector<unsigned char> agreed(pixels);
-  group.Controller->AllReduce(
-    exponents.data(), agreed.data(), static_cast<vtkIdType>(pixels), vtkCommunicator::MAX_OP);
+  group.Collective("allreduce",
+    [&]
+    {
+      group.Controller->AllReduce(
+        exponents.data(), agreed.data(), static_cast<vtkIdType>(pixels), vtkCommunicator::MAX_OP);
+    });
   exponents = std::vector<unsigned char>();
   ++record.MessagesSent;
 
@@ -124,8 +132,12 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
       }
     }
     std::vector<int32_t> sums(codes.size());
-    group.Controller->AllReduce(
-      codes.data(), sums.data(), static_cast<vtkIdType>(codes.size()), vtkCommunicator::SUM_OP);
+    group.Collective("allreduce",
+      [&]
+      {
+        group.Controller->AllReduce(
+          codes.data(), sums.data(), static_cast<vtkIdType>(codes.size()), vtkCommunicator::SUM_OP);
+      });
     ++record.MessagesSent;
     for (size_t p = 0; p < count; ++p)
     {
@@ -154,8 +166,12 @@ std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGri
     return mine;
   }
   std::vector<unsigned char> all(mine.size());
-  group.Controller->AllReduce(
-    mine.data(), all.data(), static_cast<vtkIdType>(mine.size()), vtkCommunicator::MAX_OP);
+  group.Collective("tiles",
+    [&]
+    {
+      group.Controller->AllReduce(
+        mine.data(), all.data(), static_cast<vtkIdType>(mine.size()), vtkCommunicator::MAX_OP);
+    });
   record.BytesSent += static_cast<double>(mine.size());
   ++record.MessagesSent;
   return all;
@@ -187,8 +203,8 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     record.OwnCoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
   }
 
-  // The mask's allreduce is where a process waits for the slowest one's pass 1; the moments'
-  // allreduce after it is the transfer alone.
+  // The mask's allreduce is where a process waits for the slowest one's pass 1 (its wait);
+  // the moments' allreduce after it is nearly all transfer.
   const std::vector<unsigned char> covered = AgreeOnTiles(group, tiles, moments, stride, record);
   record.Clock.Lap("tiles");
   auto sum = [&](std::vector<double>& image, int components, bool everywhere)

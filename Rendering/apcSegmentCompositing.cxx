@@ -52,7 +52,8 @@ long long ExchangeCounts(const ProcessGroup& group, const std::vector<SegmentIma
   counts.assign(static_cast<size_t>(processes) * (processes + 1), 0);
   if (group.Parallel)
   {
-    group.Controller->AllGather(mine.data(), counts.data(), processes + 1);
+    group.Collective(
+      "exchange", [&] { group.Controller->AllGather(mine.data(), counts.data(), processes + 1); });
     record.BytesSent += sizeof(long long) * mine.size();
     ++record.MessagesSent;
   }
@@ -178,8 +179,12 @@ std::vector<float> GatherStrips(const ProcessGroup& group, const SegmentStrips& 
     offsets[o] = 4 * static_cast<vtkIdType>(rectWidth) * (strips.Begin(o) - strips.RowBegin);
   }
   packed.resize(group.IsDisplay() ? 4 * static_cast<size_t>(rectWidth) * strips.Rows : 1);
-  group.Controller->GatherV(stripImage.data(), packed.data(),
-    static_cast<vtkIdType>(stripImage.size()), lengths.data(), offsets.data(), group.Display);
+  group.Collective("gather",
+    [&]
+    {
+      group.Controller->GatherV(stripImage.data(), packed.data(),
+        static_cast<vtkIdType>(stripImage.size()), lengths.data(), offsets.data(), group.Display);
+    });
   if (!group.IsDisplay() && !stripImage.empty())
   {
     record.BytesSent += sizeof(float) * static_cast<double>(stripImage.size());
@@ -195,7 +200,7 @@ SegmentStatistics AllStatistics(const ProcessGroup& group, const SegmentStatisti
   if (group.Parallel)
   {
     std::vector<long long> gathered(3 * static_cast<size_t>(group.Processes));
-    group.Controller->AllGather(stats, gathered.data(), 3);
+    group.Collective("statistics", [&] { group.Controller->AllGather(stats, gathered.data(), 3); });
     stats[0] = stats[1] = stats[2] = 0;
     for (int p = 0; p < group.Processes; ++p)
     {
@@ -244,7 +249,9 @@ void RunSegmentCompositing(
   const long long kBase = ExchangeCounts(group, images, frame, strips, record, counts);
   Outgoing outgoing = PackForOwners(images, frame, strips, counts, group.Rank, kBase);
   images.clear();
-  Outgoing incoming = DirectSend(group, outgoing, counts, record);
+  // The pairs' rounds are one collective: they start together, after the packing.
+  Outgoing incoming;
+  group.Collective("exchange", [&] { incoming = DirectSend(group, outgoing, counts, record); });
   outgoing.clear();
   record.Clock.Lap("exchange");
 

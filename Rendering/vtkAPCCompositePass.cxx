@@ -20,6 +20,7 @@
 #include "apcFrameAgreement.h"
 #include "apcFrameEngine.h"
 #include "apcFrameSettings.h"
+#include "apcFrameTimings.h"
 #include "apcImageOutput.h"
 #include "apcInputReport.h"
 #include "apcNodeThreads.h"
@@ -179,22 +180,16 @@ vtkIdType vtkAPCCompositePass::GetLastSegmentCount() const
   return static_cast<vtkIdType>(this->Internal->Record.Segments.Segments);
 }
 
+std::vector<double> vtkAPCCompositePass::GetLastRankRenderSeconds() const
+{
+  return this->Internal->Record.RankRender;
+}
+
 vtkAPCCompositePass::Timings vtkAPCCompositePass::GetLastTimings() const
 {
-  const apc::FrameRecord& record = this->Internal->Record;
-  const apc::StageClock& clock = record.Clock;
-  Timings t;
-  // The stages by their names (the other names are no stage: zero, set below).
-  ForEachTiming(t, [&clock](const char* name, double& field) { field = clock.Get(name); });
-  t.Total = clock.Get(nullptr);
-  t.BytesSent = record.BytesSent;
-  t.MessagesSent = static_cast<double>(record.MessagesSent);
-  t.CompositedPixels = static_cast<double>(record.Pixels);
-  t.CoveredPixels = static_cast<double>(record.CoveredPixels);
+  Timings t = apc::TimingsOf(this->Internal->Record);
   t.Mode = this->Internal->LastMode;
   t.ImageReduction = this->Internal->LastReduction;
-  t.AverageSegmentsPerPixel = record.Segments.Average();
-  t.MaxSegmentsPerPixel = static_cast<double>(record.Segments.MaxPerPixel);
   return t;
 }
 
@@ -396,7 +391,8 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   internal.Record.Clock.Restart();
   internal.Image->Initialize();
 
-  const apc::ProcessGroup group(this->Controller, this->DisplayProcess);
+  const apc::ProcessGroup group(
+    this->Controller, this->DisplayProcess, &internal.Record.Collectives);
   if (!internal.ThreadsShared || internal.ThreadsSharedFor != this->Controller)
   {
     apc::ShareNodeCores(this->Controller);
@@ -444,6 +440,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   {
     this->RecordForAuto(group);
   }
+  apc::GatherRankTimes(group, internal.Record);
   this->FinishFrame(group, frame, result);
 }
 
@@ -496,7 +493,8 @@ void vtkAPCCompositePass::RecordForAuto(const apc::ProcessGroup& group)
   long long coveredSum = covered;
   if (group.Parallel)
   {
-    group.Controller->AllReduce(&covered, &coveredSum, 1, vtkCommunicator::SUM_OP);
+    group.Collective("auto",
+      [&] { group.Controller->AllReduce(&covered, &coveredSum, 1, vtkCommunicator::SUM_OP); });
   }
   const bool segments = internal.LastMode == SEGMENTS;
   const double coveredUnion = segments ? static_cast<double>(record.Segments.NonEmptyPixels)
@@ -565,10 +563,7 @@ void vtkAPCCompositePass::FinishFrame(
          << frame.SampleFactor();
   }
   line << "):";
-  for (const auto& entry : internal.Record.Clock.Stages())
-  {
-    line << ' ' << entry.first << ' ' << entry.second << " s,";
-  }
+  line << apc::DescribeStages(internal.Record);
   line << " bytes sent by the display process " << internal.Record.BytesSent << " in "
        << internal.Record.MessagesSent << " messages";
   if (internal.LastMode == SEGMENTS)

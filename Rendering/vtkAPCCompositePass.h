@@ -65,6 +65,7 @@
 #include "vtkImageProcessingPass.h"
 
 #include <memory> // for std::unique_ptr
+#include <vector> // for GetLastRankRenderSeconds
 
 namespace apc
 {
@@ -254,7 +255,8 @@ public:
    * them), "exchange" (counts and direct send to the strip owners), "blend_segments" (sort
    * and blend of the own strip), "gather" (strips to the display process), "statistics"
    * (the segment counts below; not counted in bytes or messages); for LOCAL_EXACT "exact";
-   * and "blend" (into the window, display process).
+   * "auto" (AUTO's covered pixels), "ranks" (every process's render and wait times to the
+   * display process) and "blend" (into the window, display process).
    */
   double GetLastStageSeconds(const char* stage) const;
   double GetLastBytesSent() const;
@@ -281,11 +283,27 @@ public:
   ///@}
 
   /**
+   * The last frame's render seconds of every process (pass 1 + pass 2, or segments + their
+   * sort and blend, or the local exact image), by rank, on the display process; elsewhere
+   * this process's alone. Empty if the frame was skipped.
+   */
+  std::vector<double> GetLastRankRenderSeconds() const;
+
+  /**
    * Everything the GetLast*() methods above say about the last frame on this process, as named
    * fields: seconds of each stage (zero for the stages the mode did not run) and of the whole
    * frame, the counts, the mode that ran and the image reduction. What vtkAPCVolumeRepresentation
    * publishes to ParaView, by these names (ForEachTiming), and apcparaview.last_timings()
    * returns as a dict. Counts are doubles so that the fields travel as one array.
+   *
+   * Every collective of a stage starts with the processes meeting in a barrier: "<stage>_wait"
+   * is this process's time there (waiting for the last process to arrive: the slowest
+   * render), "<stage>_transfer" the collectives' time after it (moving and summing the bytes).
+   * The rest of the stage is this process's own work (packing, marking tiles). "wait" and
+   * "transfer" sum them over stages. "render" is this process's render seconds (see
+   * GetLastRankRenderSeconds); on the display process "render_mean", "render_max",
+   * "render_imbalance" (max / mean), "slowest_rank" and "wait_max" (the longest wait of any
+   * process in the frame) are over all processes.
    */
   struct Timings
   {
@@ -304,6 +322,7 @@ public:
     double Statistics = 0;
     double Exact = 0;
     double Auto = 0;
+    double Ranks = 0;
     double Blend = 0;
     double Total = 0; // all the stages above
     double BytesSent = 0;
@@ -314,6 +333,25 @@ public:
     double ImageReduction = 0;
     double AverageSegmentsPerPixel = 0;
     double MaxSegmentsPerPixel = 0;
+    // Each stage's wait for the last process and transfer after it (see above).
+    double AgreeWait = 0, AgreeTransfer = 0;
+    double DepthWait = 0, DepthTransfer = 0;
+    double TilesWait = 0, TilesTransfer = 0;
+    double AllreduceWait = 0, AllreduceTransfer = 0;
+    double ReduceWait = 0, ReduceTransfer = 0;
+    double ExchangeWait = 0, ExchangeTransfer = 0;
+    double GatherWait = 0, GatherTransfer = 0;
+    double StatisticsWait = 0, StatisticsTransfer = 0;
+    double AutoWait = 0, AutoTransfer = 0;
+    double RanksWait = 0, RanksTransfer = 0;
+    double Wait = 0;
+    double Transfer = 0;
+    double Render = 0;
+    double RenderMean = 0;
+    double RenderMax = 0;
+    double RenderImbalance = 0;
+    double SlowestRank = 0;
+    double WaitMax = 0;
   };
   Timings GetLastTimings() const;
 
@@ -340,6 +378,7 @@ public:
     f("statistics", timings.Statistics);
     f("exact", timings.Exact);
     f("auto", timings.Auto);
+    f("ranks", timings.Ranks);
     f("blend", timings.Blend);
     f("total", timings.Total);
     f("bytes_sent", timings.BytesSent);
@@ -350,8 +389,36 @@ public:
     f("image_reduction", timings.ImageReduction);
     f("average_segments_per_pixel", timings.AverageSegmentsPerPixel);
     f("max_segments_per_pixel", timings.MaxSegmentsPerPixel);
+    f("agree_wait", timings.AgreeWait);
+    f("agree_transfer", timings.AgreeTransfer);
+    f("depth_wait", timings.DepthWait);
+    f("depth_transfer", timings.DepthTransfer);
+    f("tiles_wait", timings.TilesWait);
+    f("tiles_transfer", timings.TilesTransfer);
+    f("allreduce_wait", timings.AllreduceWait);
+    f("allreduce_transfer", timings.AllreduceTransfer);
+    f("reduce_wait", timings.ReduceWait);
+    f("reduce_transfer", timings.ReduceTransfer);
+    f("exchange_wait", timings.ExchangeWait);
+    f("exchange_transfer", timings.ExchangeTransfer);
+    f("gather_wait", timings.GatherWait);
+    f("gather_transfer", timings.GatherTransfer);
+    f("statistics_wait", timings.StatisticsWait);
+    f("statistics_transfer", timings.StatisticsTransfer);
+    f("auto_wait", timings.AutoWait);
+    f("auto_transfer", timings.AutoTransfer);
+    f("ranks_wait", timings.RanksWait);
+    f("ranks_transfer", timings.RanksTransfer);
+    f("wait", timings.Wait);
+    f("transfer", timings.Transfer);
+    f("render", timings.Render);
+    f("render_mean", timings.RenderMean);
+    f("render_max", timings.RenderMax);
+    f("render_imbalance", timings.RenderImbalance);
+    f("slowest_rank", timings.SlowestRank);
+    f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 25;
+  static constexpr int NumberOfTimings = 54;
 
   ///@{
   /**

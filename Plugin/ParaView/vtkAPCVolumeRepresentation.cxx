@@ -25,6 +25,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 vtkStandardNewMacro(vtkAPCVolumeRepresentation);
 
@@ -376,6 +377,19 @@ const char* vtkAPCVolumeRepresentation::GetLastTimingNames()
     [&](const char* name, double)
     { this->LastTimingNames += (this->LastTimingNames.empty() ? "" : " ") + std::string(name); });
   return this->LastTimingNames.c_str();
+}
+
+const char* vtkAPCVolumeRepresentation::GetLastRankRenderSeconds()
+{
+  const vtkAPCCompositePass* pass = apc::FindPass(this);
+  std::ostringstream list;
+  list.precision(17);
+  for (const double seconds : pass ? pass->GetLastRankRenderSeconds() : std::vector<double>())
+  {
+    list << (list.tellp() > 0 ? " " : "") << seconds;
+  }
+  this->LastRankRenderSeconds = list.str();
+  return this->LastRankRenderSeconds.c_str();
 }
 
 //------------------------------------------------------------------------------

@@ -137,11 +137,16 @@ public:
    * them by name, with GetLastTimingNames (apcparaview.last_timings in Python), never by
    * position: fields are added as the pass measures more.
    */
-  double* GetLastTimings() VTK_SIZEHINT(25);
+  double* GetLastTimings() VTK_SIZEHINT(54);
   /**
    * The names of GetLastTimings' values, in their order, separated by spaces.
    */
   const char* GetLastTimingNames();
+  /**
+   * The last frame's render seconds of every rank, in rank order, separated by spaces (on the
+   * display rank; elsewhere the rank's own): vtkAPCCompositePass::GetLastRankRenderSeconds.
+   */
+  const char* GetLastRankRenderSeconds();
 
   vtkAPCVolumeMapper* GetMapper();
 
@@ -166,8 +171,9 @@ protected:
   vtkWeakPointer<vtkPVRenderView> View;
   std::unique_ptr<apc::ViewRequest> ViewRequest; // the view settings above, for the pass
   bool SaidNoArray = false; // that Solid Color draws nothing, until an array is chosen
-  double LastTimings[25] = {};
+  double LastTimings[54] = {};
   std::string LastTimingNames;
+  std::string LastRankRenderSeconds;
 
 private:
   vtkAPCVolumeRepresentation(const vtkAPCVolumeRepresentation&) = delete;

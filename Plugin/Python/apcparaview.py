@@ -63,8 +63,12 @@ def last_timings(display):
     "total", and "bytes_sent", "messages_sent", "composited_pixels", "covered_pixels", "mode"
     (0 APC, 1 Exact (segments), 2 Local exact: what Auto chose; -1 skipped), "image_reduction"
     (1 still, more while interacting, 0 skipped), "average_segments_per_pixel" and
-    "max_segments_per_pixel". Pulled from where the frame was rendered (the render server's
-    root when connected)."""
+    "max_segments_per_pixel"; per stage with collectives its wait for the slowest rank and its
+    transfer after the last arrival ("tiles_wait", "tiles_transfer", ...), "wait" and
+    "transfer" (their sums), "render" (the display rank's), "render_mean", "render_max",
+    "render_imbalance" (max / mean), "slowest_rank" and "wait_max" (every rank's render seconds:
+    rank_render_seconds). Pulled from where the frame was rendered (the render server's root
+    when connected)."""
     display.UpdatePropertyInformation()
     names = display.GetProperty("APCLastTimingNames").GetData()
     if isinstance(names, (list, tuple)):
@@ -77,10 +81,20 @@ def last_timings(display):
     return dict(zip(names, values))
 
 
+def rank_render_seconds(display):
+    """The last frame's render seconds of every rank, in rank order (pass 1 + pass 2, or the
+    segments and their sort and blend), as the display rank gathered them: a list (pull
+    last_timings first, or call display.UpdatePropertyInformation())."""
+    ranks = display.GetProperty("APCLastRankRenderSeconds").GetData()
+    if isinstance(ranks, (list, tuple)):
+        ranks = " ".join(ranks)
+    return [float(v) for v in ranks.split()]
+
+
 def stage_seconds(timings):
     """The stages of last_timings() that ran (nonzero), in the pass's order, without the
     total: they add up to timings["total"]."""
     stages = ["agree", "depth", "pass1", "tiles", "allreduce", "pass2", "reduce", "resolve",
               "segments", "exchange", "blend_segments", "gather", "statistics", "exact", "auto",
-              "blend"]
+              "ranks", "blend"]
     return [(s, timings[s]) for s in stages if timings.get(s, 0) > 0]

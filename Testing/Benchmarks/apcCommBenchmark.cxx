@@ -14,8 +14,14 @@
 // is new): ranks, op, type, bytes (per rank's buffer; ping-pong: one message), repetitions,
 // min_s, median_s (ping-pong: half the round trip; collectives: the max over ranks of one
 // call, each call started after a barrier), load1 (the 1-minute load average at the end).
-// Times are wall clock; take min or median: this machine is shared. Not run by ctest; see
-// run-evaluation.sh.
+// Times are wall clock; take min or median: this machine is shared. Last, the barrier the
+// pass enters every collective through against MPI_Barrier (see Barriers). Not run by ctest;
+// see run-evaluation.sh.
+
+#include "apcCollectiveTimes.h"
+
+#include "vtkMPIController.h"
+#include "vtkNew.h"
 
 #include <mpi.h>
 
@@ -24,8 +30,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace
@@ -90,6 +98,66 @@ double Collective(Call call)
   return slowest;
 }
 
+double ThreadSeconds()
+{
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// 4. The barrier vtkAPCCompositePass enters every collective through (apc::WaitForAll:
+// MPI_Ibarrier tested with yields, then sleeps growing to 1 ms) against MPI_Barrier: rows
+// "barrier" (one call, the ranks together: its cost per collective), "late_overshoot" (the last
+// rank arrives kLate late: how long after its arrival rank 0 leaves) and "late_cpu_share" (the
+// share of its wait rank 0 spends on a core: MPI_Barrier polls, the polled barrier sleeps).
+template <class Row>
+void Barriers(vtkMPIController* controller, int rank, int ranks, int minimum, int repetitions,
+  double budget, Row row)
+{
+  constexpr double kLate = 0.02;
+  for (const bool polled : { false, true })
+  {
+    const char* type = polled ? "polled" : "blocking";
+    auto wait = [&]
+    {
+      if (polled)
+      {
+        apc::WaitForAll(controller);
+      }
+      else
+      {
+        MPI_Barrier(MPI_COMM_WORLD);
+      }
+    };
+    row("barrier", type, 0, Repeat([&] { return Collective(wait); }, minimum, repetitions, budget));
+    // The clock is the machine's monotonic one, the same in every process: rank 0's exit
+    // against the last arrival, whatever the ranks' skew leaving the barrier before.
+    std::vector<double> cpuShare;
+    const Timing overshoot = Repeat(
+      [&]
+      {
+        MPI_Barrier(MPI_COMM_WORLD);
+        if (rank == ranks - 1)
+        {
+          std::this_thread::sleep_for(std::chrono::duration<double>(kLate));
+        }
+        const double arrival = Now();
+        const double startCPU = ThreadSeconds();
+        wait();
+        const double exit = Now();
+        double last = 0;
+        MPI_Allreduce(&arrival, &last, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+        double mine[2] = { exit - last, (ThreadSeconds() - startCPU) / (exit - arrival) };
+        MPI_Bcast(mine, 2, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+        cpuShare.push_back(mine[1]);
+        return mine[0];
+      },
+      minimum, repetitions, budget);
+    row("late_overshoot", type, 0, overshoot);
+    row("late_cpu_share", type, 0, Summarise(cpuShare));
+  }
+}
+
 void Usage(const char* program)
 {
   std::fprintf(stderr,
@@ -101,6 +169,8 @@ void Usage(const char* program)
 int main(int argc, char* argv[])
 {
   MPI_Init(&argc, &argv);
+  vtkNew<vtkMPIController> controller; // for the pass's barrier, apc::WaitForAll
+  controller->Initialize(&argc, &argv, 1);
   int rank = 0;
   int ranks = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -311,6 +381,11 @@ int main(int argc, char* argv[])
     }
   }
 
+  if (ranks > 1)
+  {
+    Barriers(controller, rank, ranks, minimum, repetitions, budget, row);
+  }
+
   if (rank == 0)
   {
     double load[1] = { 0 };
@@ -333,6 +408,7 @@ int main(int argc, char* argv[])
     }
     std::printf("wrote %zu rows to %s (load average %.2f)\n", rows.size(), out.c_str(), load[0]);
   }
+  controller->Finalize(1);
   MPI_Finalize();
   return 0;
 }

@@ -6,7 +6,10 @@
 // over ranks, median over frames), the stage times (max over ranks, median over frames),
 // bytes and messages summed over ranks, pixels composited, the segment statistics, and how
 // far the distributed image is from one process rendering all pieces with the same mapper
-// (MBOIT for APC, EXACT for SEGMENTS): the paper's "APC on N ranks = 1-process MBOIT".
+// (MBOIT for APC, EXACT for SEGMENTS): the paper's "APC on N ranks = 1-process MBOIT"; then
+// per stage with collectives its time, its wait for the slowest rank and its transfer after
+// the last arrival (max over ranks), the compositing time and the wait in it (mean over
+// ranks) and the render imbalance (slowest / mean).
 //
 //   mpirun -np N apcScalingBenchmark [--size S] [--frames F] [--out scaling.csv]
 //
@@ -50,6 +53,47 @@ const char* const APCStages[] = { "pass1", "allreduce", "pass2", "reduce", "reso
 const char* const SegmentStages[] = { "segments", "exchange", "blend_segments", "gather" };
 constexpr int NumberOfAPCStages = 5;
 constexpr int NumberOfSegmentStages = 4;
+// The stages with collectives, whose wait for the slowest rank and transfer after the last
+// arrival the pass times apart (vtkAPCCompositePass::Timings): a column each (max over ranks),
+// both modes.
+const char* const CollectiveStages[] = { "agree", "depth", "tiles", "allreduce", "reduce",
+  "exchange", "gather", "statistics", "ranks" };
+constexpr int NumberOfCollectiveStages = 9;
+// A mode's compositing: APC's tiles, allreduce and reduce; SEGMENTS' exchange and gather.
+bool IsCompositing(const std::string& stage, bool apc)
+{
+  return apc ? stage == "tiles" || stage == "allreduce" || stage == "reduce"
+             : stage == "exchange" || stage == "gather";
+}
+
+// This rank's last frame: every collective stage's time, wait and transfer, then the
+// compositing time and the wait in it, and the render imbalance (the display rank's).
+std::vector<double> CollectiveColumns(const vtkAPCCompositePass* pass, bool apc)
+{
+  const vtkAPCCompositePass::Timings t = pass->GetLastTimings();
+  std::vector<double> values;
+  double compositing = 0;
+  double waiting = 0;
+  for (const char* stage : CollectiveStages)
+  {
+    const std::string name(stage);
+    double parts[3] = { 0, 0, 0 };
+    vtkAPCCompositePass::ForEachTiming(t,
+      [&](const char* field, double value)
+      {
+        parts[0] += name == field ? value : 0.0;
+        parts[1] += name + "_wait" == field ? value : 0.0;
+        parts[2] += name + "_transfer" == field ? value : 0.0;
+      });
+    values.insert(values.end(), parts, parts + 3);
+    compositing += IsCompositing(name, apc) ? parts[0] : 0.0;
+    waiting += IsCompositing(name, apc) ? parts[1] : 0.0;
+  }
+  values.push_back(compositing);
+  values.push_back(waiting);
+  values.push_back(t.RenderImbalance);
+  return values;
+}
 
 // Rank 0's one-process render of all pieces (its own window, no pass) in the given mode.
 vtkSmartPointer<vtkFloatArray> OneProcessImage(int pieces, int size, int camera, int mode)
@@ -173,6 +217,9 @@ int main(int argc, char* argv[])
       apcbench::SetGearTeethCamera(renderer, camera);
       // Per frame: the max over ranks of the frame time and of every stage's time.
       std::vector<std::vector<double>> maxima(1 + numberOfStages);
+      // Per frame: the collective columns, max over ranks and mean over ranks.
+      std::vector<std::vector<double>> collectiveMax;
+      std::vector<std::vector<double>> collectiveMean;
       for (int f = 0; f < frames; ++f)
       {
         controller->Barrier();
@@ -190,6 +237,19 @@ int main(int argc, char* argv[])
         for (size_t v = 0; v < global.size(); ++v)
         {
           maxima[v].push_back(global[v]);
+        }
+        const std::vector<double> columns = CollectiveColumns(pass, apc);
+        std::vector<double> largest(columns.size());
+        std::vector<double> sum(columns.size());
+        const auto n = static_cast<vtkIdType>(columns.size());
+        controller->AllReduce(columns.data(), largest.data(), n, vtkCommunicator::MAX_OP);
+        controller->AllReduce(columns.data(), sum.data(), n, vtkCommunicator::SUM_OP);
+        collectiveMax.resize(columns.size());
+        collectiveMean.resize(columns.size());
+        for (size_t v = 0; v < columns.size(); ++v)
+        {
+          collectiveMax[v].push_back(largest[v]);
+          collectiveMean[v].push_back(sum[v] / ranks);
         }
         failedFrames += pass->GetLastFrameFailed() ? 1 : 0;
       }
@@ -243,7 +303,19 @@ int main(int argc, char* argv[])
             static_cast<long long>(pass->GetLastMaxSegmentsPerPixel()));
           rows << line;
         }
-        std::snprintf(line, sizeof(line), ",%.3g\n", identity);
+        std::snprintf(line, sizeof(line), ",%.3g", identity);
+        rows << line;
+        // The collective stages (max over ranks), the compositing time and its wait (mean
+        // over ranks) and the imbalance; medians over frames.
+        const size_t k = 3 * NumberOfCollectiveStages;
+        for (size_t v = 0; v < k; ++v)
+        {
+          std::snprintf(line, sizeof(line), ",%.6f", apctest::Median(collectiveMax[v], 0));
+          rows << line;
+        }
+        std::snprintf(line, sizeof(line), ",%.6f,%.6f,%.4f\n",
+          apctest::Median(collectiveMean[k], 0), apctest::Median(collectiveMean[k + 1], 0),
+          apctest::Median(collectiveMax[k + 2], 0));
         rows << line;
       }
     }
@@ -272,7 +344,12 @@ int main(int argc, char* argv[])
         csv << "ranks,mode,camera,azimuth,size,frames,frame_s,pass1_s,allreduce_s,pass2_s,"
                "reduce_s,resolve_s,segments_s,exchange_s,blend_segments_s,gather_s,bytes_sent,"
                "messages,pixels_composited,avg_segments_per_pixel,max_segments_per_pixel,"
-               "max_abs_diff_vs_1process\n";
+               "max_abs_diff_vs_1process";
+        for (const char* stage : CollectiveStages)
+        {
+          csv << ',' << stage << "_stage_s," << stage << "_wait_s," << stage << "_transfer_s";
+        }
+        csv << ",compositing_mean_s,compositing_wait_mean_s,render_imbalance\n";
       }
       csv << rows.str();
     }

@@ -16,7 +16,10 @@ section is made from:
                    interconnect figures)
   collectives.csv  the model's allreduce/reduce times against apcCommBenchmark's
   validation.csv   the model's compositing time against apcScalingBenchmark's, per
-                   configuration, with the relative error
+                   configuration, with the relative error: against the stages (wait, packing
+                   and transfer) and, where the run has them, against the transfer alone
+  waiting.csv      per rank count and mode, how much of the compositing time is the wait for
+                   the slowest rank (runs with the pass's wait and transfer columns)
   paper_scale.csv  time and bytes per frame at the paper's 2560^2 for every data set, rank
                    count, method and calibration
   crossover.csv    the smallest rank count from which APC is the cheapest, per data set
@@ -127,6 +130,11 @@ def calibrate(comm, stat="median_s"):
         big = [r for r in pp if int(r["bytes"]) >= 1 << 20]
         big = big if len(big) >= 2 else pp[-3:]  # a quick run stops at 1 MiB
         _, beta = least_squares([int(r["bytes"]) for r in big], [num(r[stat]) for r in big])
+        if not beta > 0:
+            # One descheduled repetition can make a median out of line (a quick run has 3 of
+            # them and stops at 1 MiB): no bandwidth is negative, so fit the minima instead.
+            _, beta = least_squares([int(r["bytes"]) for r in big],
+                                    [num(r["min_s"]) for r in big])
         local = {(r["op"], r["type"]): num(r[stat]) / int(r["bytes"]) for r in rows
                  if r["op"] in ("copy", "sum")}
         constants[p] = {
@@ -455,6 +463,8 @@ def validation_rows(scaling, analysis, constants, comm):
         alone = mpi_alone(comm, p, r["mode"], a, compact_wire(p, a, num(r["bytes_sent"])))
         for name, value in model.items():
             groups.setdefault((p, r["mode"], name), []).append((measured, value, alone))
+    from scaling_transfer import add_transfer_rows  # noqa: E402  (it uses this module)
+    add_transfer_rows(groups, scaling, analysis, constants, comm)
     rows = []
     for (p, mode, name), triples in sorted(groups.items()):
         measured = median([m for m, _, _ in triples])
@@ -598,13 +608,18 @@ def run(results, out):
                "median_rel_error_per_camera", "worst_rel_error_per_camera", "cores",
                "mpi_alone_s", "rel_error_vs_mpi_alone"],
               validation_rows(scaling, analysis, constants, comm))
+    from scaling_transfer import waiting_rows  # noqa: E402
+    write_csv(os.path.join(out, "waiting.csv"),
+              ["ranks", "mode", "cameras", "cores", "compositing_mean_s", "wait_mean_s",
+               "transfer_s", "wait_share", "render_imbalance", "smallest_collective_s"],
+              waiting_rows(scaling))
     paper = paper_rows(analysis, [machine, infiniband])
     write_csv(os.path.join(out, "paper_scale.csv"), PAPER_HEADER, paper)
     write_csv(os.path.join(out, "crossover.csv"),
               ["case", "calibration", "apc", "from_ranks", "to_ranks", "crossover_time",
                "crossover_time_comm", "crossover_bytes", "apc_cheaper_time_at",
                "apc_cheaper_time_comm_at", "apc_cheaper_bytes_at"], crossover_rows(paper))
-    print("scaling_model: wrote constants, collectives, validation, paper_scale, crossover "
+    print("scaling_model: wrote constants, collectives, validation, waiting, paper_scale, crossover "
           "CSVs to %s" % out)
     return 0
 

@@ -233,6 +233,13 @@ def refresh_timings():
     shown = dict(zip(names, values))
     check(shown.get("total", 0) > 0 and shown.get("pass1", 0) > 0,
           "Refresh Timings fills Last Timings (total %s)" % shown.get("total"))
+    # The split of the stages with collectives and the ranks' render times travel too.
+    parts = shown.get("tiles_wait", -1) + shown.get("tiles_transfer", -1)
+    check(0 <= parts <= shown.get("tiles", 0) + 1e-9,
+          "the tiles' wait and transfer are published and within the stage")
+    renders = apcparaview.rank_render_seconds(display)
+    check(len(renders) == 2 and max(renders) == shown.get("render_max"),
+          "every rank's render seconds are published (%s)" % renders)
     expect(0, 0, r"ERROR")
 
 
