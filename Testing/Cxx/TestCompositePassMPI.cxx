@@ -480,6 +480,12 @@ int main(int argc, char* argv[])
   const apctest::Scene wind =
     MakeScene(WindPieces(0, 1), apctest::BlueToRedTF(0.0, 20.0, 20.0), 2.0, windView);
   CompareWithWhole(controller, "wind", wind, WindPieces(rank, ranks), 96, false);
+  // The default sample distance (0: the mean cell size of all ranks' cells together): every
+  // rank must take the one lattice, from the agreed cell count and not from its own.
+  apctest::Scene windDefault = wind;
+  windDefault.SampleDistance = 0;
+  CompareWithWhole(
+    controller, "wind default spacing", windDefault, WindPieces(rank, ranks), 96, false);
   // The jittered lattice depends only on the pixel: still the one-process image, in both modes.
   apctest::Scene jittered = wind;
   jittered.LatticeJitter = true;

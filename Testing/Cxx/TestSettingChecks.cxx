@@ -10,6 +10,7 @@
 #include "apcTestRender.h"
 
 #include "vtkAPCCompositePass.h"
+#include "vtkPoints.h"
 
 #include <gtest/gtest.h>
 
@@ -156,4 +157,33 @@ TEST(SettingChecks, SamplesPerRayCapped)
     },
     {}, view);
   EXPECT_TRUE(log->Warnings.empty()) << log->All();
+}
+
+TEST(SettingChecks, DefaultSampleDistanceCapped)
+{
+  // A slab 4e-8 thick of 8 x 8 x 8 cells: the default (one mean cell size, the cube root of
+  // the box's volume per cell, 3.4e-4) would take 8,300 samples along the diagonal. The cap
+  // holds for the default too, and says so, naming the default.
+  auto grid = apctest::HexBlock(8, [](double x, double, double) { return 0.5 + 0.4 * x; });
+  vtkPoints* points = grid->GetPoints();
+  for (vtkIdType p = 0; p < points->GetNumberOfPoints(); ++p)
+  {
+    double x[3];
+    points->GetPoint(p, x);
+    x[2] *= 2e-8;
+    points->SetPoint(p, x);
+  }
+  vtkNew<MessageLog> log;
+  apctest::View view;
+  view.Width = 24;
+  view.Height = 24;
+  view.Position = { 0, -5, 2 };
+  view.ViewUp = { 0, 0, 1 };
+  const apctest::Frame frame = apctest::Render(
+    grid, [&](vtkAPCVolumeMapper* m) { log->Watch(m); }, {}, view);
+  const double diagonal = std::sqrt(8.0 + 1.6e-15);
+  EXPECT_NEAR(frame.SampleDistance, diagonal / apc::FrameEngine::kMaxSamplesPerRay, 1e-9);
+  EXPECT_EQ(log->Warnings.size(), 1u) << log->All();
+  EXPECT_TRUE(MessageLog::Mentions(log->Warnings, "The default Sample Distance")) << log->All();
+  EXPECT_TRUE(MessageLog::Mentions(log->Warnings, "the limit is 4096")) << log->All();
 }
