@@ -161,16 +161,17 @@ TEST(SettingChecks, SamplesPerRayCapped)
 
 TEST(SettingChecks, DefaultSampleDistanceCapped)
 {
-  // A slab 4e-8 thick of 8 x 8 x 8 cells: the default (one mean cell size, the cube root of
-  // the box's volume per cell, 3.4e-4) would take 8,300 samples along the diagonal. The cap
-  // holds for the default too, and says so, naming the default.
-  auto grid = apctest::HexBlock(8, [](double x, double, double) { return 0.5 + 0.4 * x; });
+  // A slab 6e-6 thick of 48 x 48 x 48 cells (each 1.25e-7 thick, 3e-6 of its width: still a
+  // volume, not a flat cell): the default (one mean cell size, the cube root of the box's
+  // volume per cell, 6.0e-4) would take 4,700 samples along the diagonal. The cap holds for
+  // the default too, and says so, naming the default.
+  auto grid = apctest::HexBlock(48, [](double x, double, double) { return 0.5 + 0.4 * x; });
   vtkPoints* points = grid->GetPoints();
   for (vtkIdType p = 0; p < points->GetNumberOfPoints(); ++p)
   {
     double x[3];
     points->GetPoint(p, x);
-    x[2] *= 2e-8;
+    x[2] *= 3e-6;
     points->SetPoint(p, x);
   }
   vtkNew<MessageLog> log;
@@ -181,7 +182,7 @@ TEST(SettingChecks, DefaultSampleDistanceCapped)
   view.ViewUp = { 0, 0, 1 };
   const apctest::Frame frame = apctest::Render(
     grid, [&](vtkAPCVolumeMapper* m) { log->Watch(m); }, {}, view);
-  const double diagonal = std::sqrt(8.0 + 1.6e-15);
+  const double diagonal = std::sqrt(8.0 + 36e-12);
   EXPECT_NEAR(frame.SampleDistance, diagonal / apc::FrameEngine::kMaxSamplesPerRay, 1e-9);
   EXPECT_EQ(log->Warnings.size(), 1u) << log->All();
   EXPECT_TRUE(MessageLog::Mentions(log->Warnings, "The default Sample Distance")) << log->All();
