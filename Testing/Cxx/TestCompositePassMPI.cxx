@@ -5,6 +5,8 @@
 // sort-last baseline (CompositeMode SEGMENTS) must equal the one-process EXACT image, and
 // on the gear teeth seen down the slab axis its segment count must be the analytic one.
 
+#include "apcCompositeFrame.h"
+#include "apcFrameAgreement.h"
 #include "apcMPITest.h"
 #include "apcTestCompositePass.h"
 #include "apcTestPuzzles.h"
@@ -486,6 +488,16 @@ int main(int argc, char* argv[])
   windDefault.SampleDistance = 0;
   CompareWithWhole(
     controller, "wind default spacing", windDefault, WindPieces(rank, ranks), 96, false);
+  // On the wind the floor of 192 samples along the diagonal decides; where the cells do, each
+  // process needs the cell count of all: the agreement sums it, the same on every process.
+  {
+    apc::LocalFrame local;
+    local.Cells = rank + 1;
+    const apc::FrameAgreement agreed =
+      apc::FrameAgreement::Agree(apc::ProcessGroup(controller, 0), local);
+    Check(agreed.Cells == ranks * (ranks + 1) / 2.0, rank,
+      "agreement: the cells summed over the processes");
+  }
   // The jittered lattice depends only on the pixel: still the one-process image, in both modes.
   apctest::Scene jittered = wind;
   jittered.LatticeJitter = true;
