@@ -140,7 +140,7 @@ void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
   for (size_t v = 0; v < volumes.size(); ++v)
   {
     frame.Engines[v]->Prepare(
-      frame.Renderer, volumes[v]->GetProperty(), frame.Bounds, depth.data(), image);
+      frame.Renderer, volumes[v]->GetProperty(), frame.Bounds, frame.Cells, depth.data(), image);
     // The same on every process (global bounds): said once, by the display process.
     const std::string note = frame.Engines[v]->TakeSpacingNote();
     if (!note.empty() && group.IsDisplay())

@@ -83,6 +83,7 @@ struct CompositeFrame
   bool Interactive = false;
   FrameSettings Settings;                  // as agreed (apcFrameAgreement.h)
   double Bounds[6] = { 0, 0, 0, 0, 0, 0 }; // all processes' cells
+  double Cells = 0;                        // their number
   // The pixels whose rays can meet Bounds: the only ones rendered. Every per-pixel buffer of
   // the frame (depth, moments, colour sums, the result) holds Rect's pixels alone, row by
   // row (RectWidth() long), so memory follows the data's footprint, not the view.

@@ -152,6 +152,13 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   values.Reduce(group);
 
   FrameAgreement agreed;
+  // The cells' total, a sum (the MAX above cannot give it): cell counts are integers, whose
+  // sum in double is exact below 2^53 in any order, so every process gets the same value.
+  agreed.Cells = local.Cells;
+  if (group.Parallel)
+  {
+    group.Controller->AllReduce(&local.Cells, &agreed.Cells, 1, vtkCommunicator::SUM_OP);
+  }
   for (int d = 0; d < 3; ++d)
   {
     const auto extent = values.Take();

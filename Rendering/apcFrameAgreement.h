@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What every process must agree on before a frame's collectives, settled in one small
 // allreduce: the union of the data bounds (depth warp, sample spacing, screen rectangle),
+// the number of cells (with the bounds, the default sample spacing; summed in a second one),
 // failures, the number of visible APC volumes and of moments, the viewport size, whether the
 // frame is interactive, and the pass's settings (apcFrameSettings.h). A process that cannot
 // render, has no volume while others have, or disagrees on a size or a setting makes every
@@ -33,6 +34,7 @@ struct TransferSignature
 struct LocalFrame
 {
   double Bounds[6]; // of this process's renderable cells; empty (min > max) if none
+  double Cells = 0; // their number (the default sample distance is the mean cell size)
   bool Failed = false;
   int Volumes = 0;    // visible APC volumes
   int MinMoments = 0; // over those volumes (0 and 0 if none)
@@ -54,6 +56,7 @@ struct LocalFrame
 struct FrameAgreement
 {
   double Bounds[6]; // union over all processes; empty if no cells anywhere
+  double Cells = 0; // sum over all processes
   bool AnyFailed = false;
   int MinVolumes = 0;
   int MaxVolumes = 0;

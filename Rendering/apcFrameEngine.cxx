@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "apcFrameEngine.h"
 
+#include "apcDefaultSpacing.h"
+
 #include "vtkAbstractMapper.h"
 #include "vtkCamera.h"
 #include "vtkCellArray.h"
@@ -245,7 +247,7 @@ void FrameEngine::BeginFrame(const VolumeSettings& settings)
 
 //------------------------------------------------------------------------------
 bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const double* globalBounds,
-  const float* depthBuffer, const ImageSetup& image)
+  double globalCells, const float* depthBuffer, const ImageSetup& image)
 {
   this->Ready = false;
   this->Crop = image.Crop.value_or(ScreenRect{ 0, 0, image.Width, image.Height });
@@ -258,22 +260,23 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
     return false;
   }
 
-  // Everything that must agree between processes comes from the global bounds: the sample
-  // spacing (the lattice) and the depth range of the warp (the moments' axis).
+  // Everything that must agree between processes comes from the global bounds and cell
+  // count: the sample spacing (the lattice) and the depth range of the warp (the moments' axis).
   std::array<double, 6> bounds = this->Mesh.GetBounds();
+  double cells = static_cast<double>(this->Mesh.GetNumberOfCells());
   if (globalBounds)
   {
     std::copy(globalBounds, globalBounds + 6, bounds.begin());
+    cells = globalCells;
   }
   if (!(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
   {
     return false; // no cells anywhere
   }
-  const double diagonal = std::sqrt((bounds[1] - bounds[0]) * (bounds[1] - bounds[0]) +
-    (bounds[3] - bounds[2]) * (bounds[3] - bounds[2]) +
-    (bounds[5] - bounds[4]) * (bounds[5] - bounds[4]));
+  const double diagonal = BoundsDiagonal(bounds.data());
   const double distance = this->Settings.SampleDistance;
-  this->Spacing = image.SampleFactor * (distance > 0 ? distance : diagonal / 256.0);
+  this->Spacing =
+    image.SampleFactor * (distance > 0 ? distance : DefaultSampleDistance(bounds.data(), cells));
   if (!(this->Spacing > 0))
   {
     return false; // a mesh with no extent
@@ -333,12 +336,19 @@ void FrameEngine::CapSpacing(double distance, double diagonal)
   if (distance != this->CappedDistance || diagonal != this->CappedDiagonal)
   {
     std::ostringstream note;
-    note << "Sample Distance " << distance << " would take up to "
-         << static_cast<long long>(diagonal / this->Spacing)
+    if (distance > 0)
+    {
+      note << "Sample Distance " << distance;
+    }
+    else
+    {
+      note << "The default Sample Distance (" << this->Spacing << ", the data's mean cell size)";
+    }
+    note << " would take up to " << static_cast<long long>(diagonal / this->Spacing)
          << " samples along a ray through the data (its bounding-box diagonal is " << diagonal
          << "); the limit is " << static_cast<long long>(kMaxSamplesPerRay) << ", so " << finest
-         << " is used. Raise Sample Distance to at least " << finest
-         << " (0 picks the diagonal / 256).";
+         << " is used. " << (distance > 0 ? "Raise" : "Set") << " Sample Distance to at least "
+         << finest << " (0 picks the mean cell size, at least diagonal / 192).";
     this->SpacingNote = note.str();
     this->CappedDistance = distance;
     this->CappedDiagonal = diagonal;

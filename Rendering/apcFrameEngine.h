@@ -101,14 +101,15 @@ public:
 
   /**
    * After UpdateInput (once per frame), samples property's transfer functions and sets up the rays
-   * of ren's viewport. globalBounds (xmin..zmax of all processes' cells) fix the depth warp and the
-   * default sample spacing so that every process uses the same ones; null uses this process's
-   * cells. depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops the rays;
-   * null reads ren's window. image is what to render (ImageSetup::FullQuality(ren) by the
+   * of ren's viewport. globalBounds (xmin..zmax of all processes' cells) and globalCells (their
+   * number, summed over the processes) fix the depth warp and the default sample spacing
+   * (apcDefaultSpacing.h) so that every process uses the same ones; null and 0 use this
+   * process's cells. depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops
+   * the rays; null reads ren's window. image is what to render (ImageSetup::FullQuality(ren) by the
    * mapper; the pass's agreed image). False if there is nothing this process can render.
    */
   bool Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const double* globalBounds,
-    const float* depthBuffer, const ImageSetup& image);
+    double globalCells, const float* depthBuffer, const ImageSetup& image);
 
   int GetWidth() const { return this->Crop.Pixels() > 0 ? this->Crop.Width() : 0; }
   int GetHeight() const { return this->Crop.Pixels() > 0 ? this->Crop.Height() : 0; }
@@ -121,7 +122,8 @@ public:
   double GetSampleDistance() const { return this->Spacing; }
   /**
    * The most samples a ray takes through the data (along its bounding-box diagonal; the
-   * default sample distance takes 256): a finer sample distance is raised to diagonal / this,
+   * default sample distance takes 192, more on meshes of over ~10^6 cells): a finer sample
+   * distance, set or default, is raised to diagonal / this,
    * so that a mistyped setting cannot freeze a render for minutes. Prepare then leaves a note
    * saying what to change, once per setting and data extent: TakeSpacingNote hands it over
    * (empty if none) for the caller to say (the pass: on the display process only).
@@ -146,7 +148,7 @@ public:
 
 private:
   FrameEngine(const FrameEngine&) = delete;
-  // Raises Spacing to the limit of kMaxSamplesPerRay (distance: the setting; 0 automatic).
+  // Raises Spacing to the limit of kMaxSamplesPerRay (distance: the setting; 0 the default).
   void CapSpacing(double distance, double diagonal);
   FrameEngine& operator=(const FrameEngine&) = delete;
 

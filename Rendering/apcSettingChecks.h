@@ -20,7 +20,7 @@ namespace apc
 {
 
 // value clamped to [low, high] (NaN: low), with a warning on self if it was outside; meaning,
-// if given, says what the range's ends mean ("0 picks the diagonal / 256").
+// if given, says what the range's ends mean ("0 picks the mean cell size").
 template <class T>
 T CheckedSetting(
   vtkObject* self, const char* name, T value, T low, T high, const char* meaning = nullptr)

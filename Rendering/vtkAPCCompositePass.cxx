@@ -290,6 +290,7 @@ void CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& lo
     double bounds[6];
     local.AddVolume(volumeSettings.Moments.Moments,
       engine->GetLocalBounds(bounds) ? bounds : nullptr, entry.Volume->GetProperty());
+    local.Cells += static_cast<double>(engine->GetNumberOfCells());
     if (mappers.empty())
     {
       // The frame's moment settings: the first volume's beta, bias and resolve.
@@ -367,6 +368,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Moments.Moments = agreed.MaxMoments;
   frame.Volumes = agreed.MaxVolumes;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
+  frame.Cells = agreed.Cells;
   return true;
 }
 

@@ -119,7 +119,7 @@ void vtkAPCVolumeMapper::SetSampleDistance(double distance)
 {
   apc::Assign(this, this->Internal->Settings.SampleDistance,
     apc::CheckedSetting(this, "SampleDistance", distance, 0.0, VTK_DOUBLE_MAX,
-      "0 picks the data's bounding-box diagonal / 256"));
+      "0 picks the mean cell size, at least diagonal / 192"));
 }
 
 double vtkAPCVolumeMapper::GetSampleDistance() const
@@ -246,7 +246,7 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     image.Crop = apc::ScreenRectOf(ren, bounds, image.Width, image.Height);
   }
-  if (!usable || !engine.Prepare(ren, vol->GetProperty(), nullptr, nullptr, image) ||
+  if (!usable || !engine.Prepare(ren, vol->GetProperty(), nullptr, 0, nullptr, image) ||
     engine.GetNumberOfCells() == 0)
   {
     this->Internal->Image->Initialize();

@@ -136,8 +136,9 @@ public:
 
   ///@{
   /**
-   * World distance between samples along a ray. 0 (default) picks the input's bounding-box
-   * diagonal / 256.
+   * World distance between samples along a ray. 0 (default) picks the data's mean cell size
+   * (the cube root of its bounding-box volume per cell, over all processes' cells under
+   * vtkAPCCompositePass), but at least 192 samples along the bounding-box diagonal.
    */
   void SetSampleDistance(double distance);
   double GetSampleDistance() const;

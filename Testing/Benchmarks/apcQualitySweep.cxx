@@ -28,6 +28,12 @@
 // 5):
 // DIR/ranks.csv and DIR/ranks_<scene>_k<k>_m<moments>_<resolve>.png.
 //
+//   apcQualitySweep --spacing [--out DIR] [--data DIR] [--size S] [--scenes ...]
+//
+// instead measures the default sample distance in ParaView's default setup against an exact
+// render at a 4x finer lattice, with projected tetrahedra's own score (apcQualitySpacing.cxx):
+// DIR/spacing.csv and DIR/spacing_<scene>_<case>.png.
+//
 //   apcQualitySweep --defaults [--out DIR]
 //
 // only writes DIR/defaults.csv: the mapper's default beta, moments and resolve, which the
@@ -36,6 +42,8 @@
 #include "apcTestImages.h"
 #include "apcTestPuzzles.h"
 #include "apcTestRender.h"
+
+#include "apcQualitySpacing.h"
 
 #include "apcFrameEngine.h"
 #include "apcImageMetrics.h"
@@ -305,7 +313,8 @@ SplitFrame RenderSplit(const apctest::Scene& scene,
     auto engine = std::make_unique<apc::FrameEngine>();
     engine->BeginFrame(mapper->GetVolumeSettings());
     if (!engine->UpdateInput(mapper->GetInput(), mapper) ||
-      !engine->Prepare(renderer, property, bounds, farDepth.data(), image))
+      !engine->Prepare(renderer, property, bounds,
+        static_cast<double>(scene.Grid->GetNumberOfCells()), farDepth.data(), image))
     {
       std::cerr << "error: a piece of " << scene.Name << " cannot be rendered\n";
       std::exit(3);
@@ -425,12 +434,17 @@ int main(int argc, char* argv[])
   bool lattice = false;
   bool ranks = false;
   bool defaults = false;
+  bool spacing = false;
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
     if (arg == "--lattice")
     {
       lattice = true;
+    }
+    else if (arg == "--spacing")
+    {
+      spacing = true;
     }
     else if (arg == "--defaults")
     {
@@ -450,7 +464,8 @@ int main(int argc, char* argv[])
     }
     else
     {
-      std::cerr << "usage: apcQualitySweep [--lattice | --ranks | --defaults] [--out DIR] [--data "
+      std::cerr << "usage: apcQualitySweep [--lattice | --ranks | --spacing | --defaults] [--out "
+                   "DIR] [--data "
                    "DIR] [--size S >= 16] "
                    "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
       return 1;
@@ -469,6 +484,10 @@ int main(int argc, char* argv[])
   if (ranks)
   {
     return RanksStudy(MakeScenes(data, wanted), out);
+  }
+  if (spacing)
+  {
+    return apcbench::SpacingStudy(data, out, kSize, wanted);
   }
 
   std::ofstream csv(out + "/quality.csv");

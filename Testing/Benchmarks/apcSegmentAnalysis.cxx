@@ -134,13 +134,18 @@ public:
     const auto start = std::chrono::steady_clock::now();
     std::vector<float> depth(static_cast<size_t>(this->Width) * this->Height, 1.0f);
     std::vector<apc::SegmentImage> images(pieces.size());
+    double cells = 0; // of all pieces, as the pass agrees them (the default sample distance)
+    for (const auto& piece : pieces)
+    {
+      cells += static_cast<double>(piece->GetNumberOfCells());
+    }
     for (size_t r = 0; r < pieces.size(); ++r)
     {
       mapper->SetInputData(pieces[r]);
       apc::FrameEngine engine;
       engine.BeginFrame(mapper->GetVolumeSettings());
       if (engine.UpdateInput(mapper->GetInput(), mapper) &&
-        engine.Prepare(this->Renderer, volume->GetProperty(), bounds, depth.data(),
+        engine.Prepare(this->Renderer, volume->GetProperty(), bounds, cells, depth.data(),
           apc::ImageSetup::FullQuality(this->Renderer)))
       {
         engine.RenderSegments(images[r]);

@@ -11,11 +11,12 @@ Inputs (written by run-evaluation.sh):
   realdata/paraview_vs_apc_np*.csv, realdata/*.png, realdata/*.vti   paraview_vs_apc.py
   model/*.csv                  scaling_model.py (section 5)
   quality/defaults.csv         apcQualitySweep --defaults: the mapper's defaults, from the build
+  quality/spacing.csv, *.png   apcQualitySweep --spacing: the default sample distance (4.2)
 Outputs: <docs>/evaluation.md, <docs>/evaluation/*.png and <docs>/evaluation/model/*.csv (the
 model's inputs and outputs, kept next to the report).
 
 One file per section: report_scaling.py (1, 2), report_realdata.py (3), report_quality.py (4),
-report_model.py (5); report_common.py has what they share.
+report_spacing.py (4.2), report_model.py (5); report_common.py has what they share.
 """
 import argparse
 import os
@@ -27,10 +28,12 @@ from report_model import ModelSection  # noqa: E402
 from report_quality import QualitySections  # noqa: E402
 from report_realdata import RealDataSection  # noqa: E402
 from report_scaling import ScalingSections  # noqa: E402
+from report_spacing import SpacingSection  # noqa: E402
 from scaling_model import num  # noqa: E402,F401  (TestEvaluationQuick)
 
 
-class Report(ScalingSections, RealDataSection, QualitySections, ModelSection, ReportBase):
+class Report(ScalingSections, RealDataSection, QualitySections, SpacingSection, ModelSection,
+             ReportBase):
     """The report: one section class per file (report_*.py), ReportBase for the rest."""
 
 
@@ -51,6 +54,7 @@ def main():
     report.realdata()
     report.quality()
     report.hybrid()
+    report.spacing()
     report.model()
     report.write(args.machine, args.seconds)
     return 0

@@ -6,7 +6,9 @@ Renders the bundled OpenFOAM data (Data/windAroundBuildings/wind.pvtu: 331,699 c
 Scotch pieces, field U_mag) at 1024x1024 with the same camera and transfer function:
 
   apc          the APC Volume representation, sample distance --sample-distance;
-  apc-default  the same at its default sample distance (0 = bounding-box diagonal / 256);
+  apc-default  the same at its default sample distance (0: the mean cell size, at least
+               192 samples along the bounding-box diagonal);
+  auto         the APC Volume representation in its "Auto" mode, default sample distance;
   segments     the APC Volume representation in its "Exact (segments)" mode (sort-last
                compositing of ray segments, the exact distributed baseline), default spacing;
   pt      ParaView's Volume representation with its default mapper 'Projected tetra';
@@ -67,6 +69,15 @@ parser.add_argument("--only-rendered-array", action="store_true",
 parser.add_argument("--opacity", choices=["comparison", "ramp"], default="comparison",
                     help="comparison: most of the air transparent (what a user would set to "
                     "see the wakes); ramp: ParaView's default linear ramp, little to skip")
+parser.add_argument("--setup", choices=["evaluation", "paraview"], default="evaluation",
+                    help="evaluation: the transfer function and unit distance above; paraview: "
+                    "ParaView's default setup (its colour map and linear opacity ramp rescaled to "
+                    "the data range, its opacity unit distance, APC properties at their "
+                    "defaults), --cameras instead of --distances, and every later frame after a "
+                    "small camera move")
+parser.add_argument("--cameras", default="fill,overview",
+                    help="with --setup paraview: fill (0.6 x the demo's focal distance: the data "
+                    "fills the view), overview (the demo's direction, the whole data in view)")
 parser.add_argument("--data", default=os.path.join(here, "..", "..", "Data",
                                                    "windAroundBuildings", "wind.pvtu"))
 
@@ -81,7 +92,7 @@ CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
-            "first_frame_s", "frame_s"] +
+            "first_frame_s", "frame_s", "setup", "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel",
@@ -195,6 +206,9 @@ def main(args):
         total_cells, ranks, " ".join(str(s["cells"]) for s in before)), flush=True)
     b = reader.GetDataInformation().GetBounds()
     diagonal = ((b[1] - b[0]) ** 2 + (b[3] - b[2]) ** 2 + (b[5] - b[4]) ** 2) ** 0.5
+    # APC's default sample distance (Rendering/Core/apcDefaultSpacing.h), for the notes.
+    box = (b[1] - b[0]) * (b[3] - b[2]) * (b[5] - b[4])
+    default_spacing = B.min((box / total_cells) ** (1.0 / 3.0), diagonal / 192)
 
     probe_count = [0]
 
@@ -219,8 +233,8 @@ def main(args):
     total_volume = B.sum(r["volume"] for r in own)
     mean_cell = (total_volume / total_cells) ** (1.0 / 3.0)
     print("  domain volume %.4g m^3, mean cell size (volume/cells)^(1/3) = %.2f m, "
-          "diagonal %.1f m (APC default sample distance = diagonal/256 = %.2f m)"
-          % (total_volume, mean_cell, diagonal, diagonal / 256), flush=True)
+          "diagonal %.1f m (APC's default sample distance %.2f m)"
+          % (total_volume, mean_cell, diagonal, default_spacing), flush=True)
 
     # Warm-up: the process's first view pays for the GL context and IceT set-up; render an
     # empty view once so that no case's first frame includes that.
@@ -239,11 +253,14 @@ def main(args):
         "bunyk": ("Volume", "Bunyk ray cast", None),
     }
     rows = []
-    runs = [(d, key) for d in args.distances.split(",") for key in args.cases.split(",")]
+    default_setup = args.setup == "paraview"
+    views = args.cameras if default_setup else args.distances
+    runs = [(d, key) for d in views.split(",") for key in args.cases.split(",")]
     for distance, key in runs:
         representation, mapper, spacing = cases[key]
         camera = dict(CAMERA)
-        camera["CameraPosition"] = [f + float(distance) * (p - f) for p, f in
+        factor = {"fill": 0.6, "overview": 1.0}.get(distance) if default_setup else float(distance)
+        camera["CameraPosition"] = [f + factor * (p - f) for p, f in
                                     zip(CAMERA["CameraPosition"], CAMERA["CameraFocalPoint"])]
         view = CreateView("RenderView")
         view.ViewSize = args.size
@@ -253,23 +270,36 @@ def main(args):
         display = Show(reader, view)
         display.Representation = representation
         ColorBy(display, ("POINTS", FIELD))
-        lut = GetColorTransferFunction(FIELD)
-        lut.ApplyPreset("Cool to Warm", True)
-        lut.RescaleTransferFunction(LO, HI)
-        GetOpacityTransferFunction(FIELD).Points = OPACITY if args.opacity == "comparison" else RAMP
-        display.ScalarOpacityUnitDistance = UNIT
         apc = representation == "APC Volume"
-        if apc:
-            display.APCSampleDistance = spacing
-            display.APCMode = mapper
+        if default_setup:
+            # As the GUI leaves it: the default map and ramp over the data range, the unit
+            # distance of the representation's domain, APC's own defaults except the mode.
+            display.RescaleTransferFunctionToDataRange(False, True)
+            if apc:
+                display.APCMode = mapper
         else:
+            lut = GetColorTransferFunction(FIELD)
+            lut.ApplyPreset("Cool to Warm", True)
+            lut.RescaleTransferFunction(LO, HI)
+            GetOpacityTransferFunction(FIELD).Points = (OPACITY if args.opacity == "comparison"
+                                                        else RAMP)
+            display.ScalarOpacityUnitDistance = UNIT
+            if apc:
+                display.APCSampleDistance = spacing
+                display.APCMode = mapper
+        if not apc:
             display.SelectMapper = mapper
         for k, v in camera.items():  # Show() may have touched the camera
             setattr(view, k, v)
+        if default_setup and distance == "overview":
+            view.ResetCamera(False)
 
         timings = []
 
-        def frame():
+        def frame(move=False):
+            if move:
+                # A small camera move: nothing of the last frame's image can be reused.
+                view.GetActiveCamera().Azimuth(0.5)
             start = time.perf_counter()
             Render(view)
             seconds = time.perf_counter() - start
@@ -278,13 +308,15 @@ def main(args):
             return seconds
 
         first = frame()
-        later = [frame() for _ in range(args.frames)]
+        later = [frame(move=default_setup) for _ in range(args.frames)]
         stem = "%s_d%s_np%d" % (key, distance, ranks)
         name = stem + ".png"
         SaveScreenshot(os.path.join(out, name), view, ImageResolution=args.size)
         row = dict(case=key, representation=representation, mapper=mapper, ranks=ranks,
                    distance=distance, image=name, first_frame_s="%.3f" % first,
-                   frame_s="%.3f" % statistics.median(later))
+                   frame_s="%.3f" % statistics.median(later), setup=args.setup,
+                   camera=distance if default_setup else "", width=args.size[0],
+                   height=args.size[1], load_average=open("/proc/loadavg").read().split()[0])
         if apc and not args.no_float_images:
             display.APCImageFile = os.path.join(out, stem + ".vti")
             Render(view)
@@ -324,7 +356,8 @@ def main(args):
             row["cells_per_rank_after"] = "/".join(str(s["cells"]) for s in after)
             notes.insert(0, "sample distance %.3g m%s; stage times are medians of the later "
                             "frames (pass total %.3f s; first frame's total %.3f s)"
-                         % (spacing or diagonal / 256, " (default 0 = diagonal/256)"
+                         % (spacing or default_spacing, " (default 0: the mean cell size, at "
+                            "least diagonal / 192)"
                             if not spacing else "", statistics.median(t["total"] for t in timings[1:]),
                             timings[0]["total"]))
             notes.append("cells unchanged by rendering" if after == before

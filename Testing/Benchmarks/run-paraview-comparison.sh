@@ -10,8 +10,34 @@
 # --distances ..., --only-rendered-array, --opacity ramp); $APC_COMPARE_OUT (default out/benchmark) is the
 # output folder. run-evaluation.sh uses this script for the real-data experiment. Timings are wall clock on a shared 2-core machine (4 ranks are
 # oversubscribed): the load average is printed around each run; rerun when it is high.
+#
+# ParaView's default setup:
+#   run-paraview-comparison.sh --default-setup [--ranks "1 2 4"] [--sizes "1024x1024 1920x1080"]
+# runs paraview_vs_apc.py --setup paraview (ParaView's colour map and linear opacity ramp,
+# every APC property at its default) for cases apc-default, auto and pt, cameras fill and
+# overview, first frame and later frames after small camera moves, once per rank count and
+# image size, into $APC_COMPARE_OUT (default out/benchmark/paraview-default), one CSV per part
+# (np<N>_<W>x<H>.csv, replaced when that part is rerun, so the set can be run in parts), then
+# writes the table of every part present to docs/evaluation/paraview_default_setup.md and the
+# merged CSV beside it (report_paraview_default.py). Further arguments go to the script.
 set -euo pipefail
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+default_setup=""
+sizes=""
+if [ "${1:-}" = "--default-setup" ]; then
+  default_setup=1
+  shift
+  APC_COMPARE_RANKS=${APC_COMPARE_RANKS:-1 2 4}
+  sizes="1024x1024 1920x1080"
+  while [ $# -gt 0 ]; do
+    case "$1" in
+      --ranks) APC_COMPARE_RANKS=$2; shift 2 ;;
+      --sizes) sizes=$2; shift 2 ;;
+      *) break ;;
+    esac
+  done
+  APC_COMPARE_OUT=${APC_COMPARE_OUT:-$top/out/benchmark/paraview-default}
+fi
 [ -n "${APC_NO_BUILD:-}" ] || bash "$top/.ci/build"
 plugin="$top/build/lib/paraview-5.11/plugins/APC/APC.so"
 [ -f "$plugin" ] || { echo "error: $plugin was not built" >&2; exit 1; }
@@ -23,16 +49,24 @@ ranks=${APC_COMPARE_RANKS:-1 2 4}
 
 parts=()
 for n in $ranks; do
+for size in ${sizes:-default}; do
+  extra=()
   part="$out/paraview_vs_apc_np$n.csv"
   log="$out/paraview_vs_apc_np$n.log"
+  if [ -n "$default_setup" ]; then
+    part="$out/np${n}_$size.csv"
+    log="$out/np${n}_$size.log"
+    extra=(--setup paraview --size "${size%x*}" "${size#*x}" --cases apc-default,auto,pt
+      --frames 3 --no-float-images --only-rendered-array)
+  fi
   rm -f "$part"
-  echo "== $n rank(s); load average before: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores"
+  echo "== $n rank(s) ${sizes:+$size }; load average before: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores"
   start=$(date +%s)
   status=0
-  timeout 900 bash "$top/.ci/with-xvfb" \
+  timeout 2400 bash "$top/.ci/with-xvfb" \
     mpirun --oversubscribe -np "$n" -x APC_PLUGIN -x PYTHONPATH \
     pvbatch --disable-xdisplay-test "$top/Testing/Benchmarks/paraview_vs_apc.py" \
-    --output "$out" --csv "$part" "$@" >"$log" 2>&1 || status=$?
+    --output "$out" --csv "$part" "${extra[@]}" "$@" >"$log" 2>&1 || status=$?
   end=$(date +%s)
   grep -E '^(paraview_vs_apc|  )' "$log" || true
   echo "   $((end - start)) s; load average after: $(cut -d' ' -f1-3 /proc/loadavg);" \
@@ -45,10 +79,16 @@ for n in $ranks; do
   fi
   parts+=("$part")
 done
+done
 
-# Debian's python3 (a pyenv python3 may come first on PATH).
 py=/usr/bin/python3
 [ -x "$py" ] || py=python3
+if [ -n "$default_setup" ]; then
+  "$py" "$top/Testing/Benchmarks/report_paraview_default.py" "$out" "$top/docs/evaluation"
+  exit 0
+fi
+
+# Debian's python3 (a pyenv python3 may come first on PATH): $py above.
 "$py" - "$out" "${parts[@]}" <<'EOF'
 import csv
 import os

@@ -5,6 +5,8 @@
 // sort-last baseline (CompositeMode SEGMENTS) must equal the one-process EXACT image, and
 // on the gear teeth seen down the slab axis its segment count must be the analytic one.
 
+#include "apcCompositeFrame.h"
+#include "apcFrameAgreement.h"
 #include "apcMPITest.h"
 #include "apcTestCompositePass.h"
 #include "apcTestPuzzles.h"
@@ -480,6 +482,22 @@ int main(int argc, char* argv[])
   const apctest::Scene wind =
     MakeScene(WindPieces(0, 1), apctest::BlueToRedTF(0.0, 20.0, 20.0), 2.0, windView);
   CompareWithWhole(controller, "wind", wind, WindPieces(rank, ranks), 96, false);
+  // The default sample distance (0: the mean cell size of all ranks' cells together): every
+  // rank must take the one lattice, from the agreed cell count and not from its own.
+  apctest::Scene windDefault = wind;
+  windDefault.SampleDistance = 0;
+  CompareWithWhole(
+    controller, "wind default spacing", windDefault, WindPieces(rank, ranks), 96, false);
+  // On the wind the floor of 192 samples along the diagonal decides; where the cells do, each
+  // process needs the cell count of all: the agreement sums it, the same on every process.
+  {
+    apc::LocalFrame local;
+    local.Cells = rank + 1;
+    const apc::FrameAgreement agreed =
+      apc::FrameAgreement::Agree(apc::ProcessGroup(controller, 0), local);
+    Check(agreed.Cells == ranks * (ranks + 1) / 2.0, rank,
+      "agreement: the cells summed over the processes");
+  }
   // The jittered lattice depends only on the pixel: still the one-process image, in both modes.
   apctest::Scene jittered = wind;
   jittered.LatticeJitter = true;

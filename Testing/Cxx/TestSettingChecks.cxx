@@ -10,6 +10,7 @@
 #include "apcTestRender.h"
 
 #include "vtkAPCCompositePass.h"
+#include "vtkPoints.h"
 
 #include <gtest/gtest.h>
 
@@ -156,4 +157,34 @@ TEST(SettingChecks, SamplesPerRayCapped)
     },
     {}, view);
   EXPECT_TRUE(log->Warnings.empty()) << log->All();
+}
+
+TEST(SettingChecks, DefaultSampleDistanceCapped)
+{
+  // A slab 6e-6 thick of 48 x 48 x 48 cells (each 1.25e-7 thick, 3e-6 of its width: still a
+  // volume, not a flat cell): the default (one mean cell size, the cube root of the box's
+  // volume per cell, 6.0e-4) would take 4,700 samples along the diagonal. The cap holds for
+  // the default too, and says so, naming the default.
+  auto grid = apctest::HexBlock(48, [](double x, double, double) { return 0.5 + 0.4 * x; });
+  vtkPoints* points = grid->GetPoints();
+  for (vtkIdType p = 0; p < points->GetNumberOfPoints(); ++p)
+  {
+    double x[3];
+    points->GetPoint(p, x);
+    x[2] *= 3e-6;
+    points->SetPoint(p, x);
+  }
+  vtkNew<MessageLog> log;
+  apctest::View view;
+  view.Width = 24;
+  view.Height = 24;
+  view.Position = { 0, -5, 2 };
+  view.ViewUp = { 0, 0, 1 };
+  const apctest::Frame frame = apctest::Render(
+    grid, [&](vtkAPCVolumeMapper* m) { log->Watch(m); }, {}, view);
+  const double diagonal = std::sqrt(8.0 + 36e-12);
+  EXPECT_NEAR(frame.SampleDistance, diagonal / apc::FrameEngine::kMaxSamplesPerRay, 1e-9);
+  EXPECT_EQ(log->Warnings.size(), 1u) << log->All();
+  EXPECT_TRUE(MessageLog::Mentions(log->Warnings, "The default Sample Distance")) << log->All();
+  EXPECT_TRUE(MessageLog::Mentions(log->Warnings, "the limit is 4096")) << log->All();
 }
