@@ -157,7 +157,9 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   agreed.Cells = local.Cells;
   if (group.Parallel)
   {
-    group.Controller->AllReduce(&local.Cells, &agreed.Cells, 1, vtkCommunicator::SUM_OP);
+    group.Collective("agree",
+      [&]
+      { group.Controller->AllReduce(&local.Cells, &agreed.Cells, 1, vtkCommunicator::SUM_OP); });
   }
   for (int d = 0; d < 3; ++d)
   {
