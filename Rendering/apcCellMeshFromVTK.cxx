@@ -52,30 +52,6 @@ bool ShapeOf(int vtkType, CellShape& shape)
   }
 }
 
-// 3D cells vtkDataSetTriangleFilter cuts into tetrahedra over their own points with its
-// ordered triangulator, as for ParaView's Volume. Higher-order Lagrange and Bezier cells are
-// left out: the triangulator would ignore their curvature.
-bool TriangulatedByTheFilter(int vtkType)
-{
-  switch (vtkType)
-  {
-    case VTK_QUADRATIC_TETRA:
-    case VTK_QUADRATIC_PYRAMID:
-    case VTK_QUADRATIC_WEDGE:
-    case VTK_QUADRATIC_HEXAHEDRON:
-    case VTK_TRIQUADRATIC_HEXAHEDRON:
-    case VTK_TRIQUADRATIC_PYRAMID:
-    case VTK_QUADRATIC_LINEAR_WEDGE:
-    case VTK_BIQUADRATIC_QUADRATIC_WEDGE:
-    case VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON:
-    case VTK_PENTAGONAL_PRISM:
-    case VTK_HEXAGONAL_PRISM:
-      return true;
-    default:
-      return false;
-  }
-}
-
 // Appends the tetrahedra of one decomposed cell (4 point ids each), leaving out the flat ones
 // a triangulation makes of coplanar points: they hold no volume. Returns how many it added.
 int AddTetrahedra(

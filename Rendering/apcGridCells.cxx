@@ -18,6 +18,30 @@
 
 namespace apc
 {
+// 3D cells vtkDataSetTriangleFilter cuts into tetrahedra over their own points with its
+// ordered triangulator, as for ParaView's Volume. Higher-order Lagrange and Bezier cells are
+// left out: the triangulator would ignore their curvature.
+bool TriangulatedByTheFilter(int vtkType)
+{
+  switch (vtkType)
+  {
+    case VTK_QUADRATIC_TETRA:
+    case VTK_QUADRATIC_PYRAMID:
+    case VTK_QUADRATIC_WEDGE:
+    case VTK_QUADRATIC_HEXAHEDRON:
+    case VTK_TRIQUADRATIC_HEXAHEDRON:
+    case VTK_TRIQUADRATIC_PYRAMID:
+    case VTK_QUADRATIC_LINEAR_WEDGE:
+    case VTK_BIQUADRATIC_QUADRATIC_WEDGE:
+    case VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON:
+    case VTK_PENTAGONAL_PRISM:
+    case VTK_HEXAGONAL_PRISM:
+      return true;
+    default:
+      return false;
+  }
+}
+
 namespace
 {
 // Cells per block: blocks are the unit of parallel work and of the join in cell order.
@@ -39,28 +63,6 @@ int CornersOf(unsigned char type)
       return 8;
     default:
       return 0;
-  }
-}
-
-// Whether vtkDataSetTriangleFilter cuts the type (CellMeshFromVTK's list).
-bool ForTheFilter(unsigned char type)
-{
-  switch (type)
-  {
-    case VTK_QUADRATIC_TETRA:
-    case VTK_QUADRATIC_PYRAMID:
-    case VTK_QUADRATIC_WEDGE:
-    case VTK_QUADRATIC_HEXAHEDRON:
-    case VTK_TRIQUADRATIC_HEXAHEDRON:
-    case VTK_TRIQUADRATIC_PYRAMID:
-    case VTK_QUADRATIC_LINEAR_WEDGE:
-    case VTK_BIQUADRATIC_QUADRATIC_WEDGE:
-    case VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON:
-    case VTK_PENTAGONAL_PRISM:
-    case VTK_HEXAGONAL_PRISM:
-      return true;
-    default:
-      return false;
   }
 }
 
@@ -111,7 +113,7 @@ void CountBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, Block& b
     {
       block.Polyhedra = true;
     }
-    else if (ForTheFilter(type))
+    else if (TriangulatedByTheFilter(type))
     {
       block.ForTheFilter.push_back(c);
     }

@@ -20,6 +20,10 @@ class CellMesh;
 class ScalarReader;
 struct InputReport;
 
+// True for the 3D cell types vtkDataSetTriangleFilter cuts into tetrahedra (quadratic cells,
+// pentagonal and hexagonal prisms): both conversion paths hand them to the filter.
+bool TriangulatedByTheFilter(int vtkType);
+
 // Fills mesh.Points and, for point scalars, mesh.PointScalars (parallel where the arrays can be
 // read from any thread).
 void CopyPointsAndScalars(
