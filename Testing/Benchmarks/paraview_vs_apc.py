@@ -66,9 +66,12 @@ parser.add_argument("--no-float-images", action="store_true",
                     help="do not write the APC cases' float images")
 parser.add_argument("--only-rendered-array", action="store_true",
                     help="read only U_mag (default: every array, as the reader does in the GUI)")
-parser.add_argument("--opacity", choices=["comparison", "ramp"], default="comparison",
+parser.add_argument("--opacity", choices=["comparison", "ramp", "lower60"], default=None,
                     help="comparison: most of the air transparent (what a user would set to "
-                    "see the wakes); ramp: ParaView's default linear ramp, little to skip")
+                    "see the wakes); ramp: ParaView's default linear ramp, little to skip; "
+                    "lower60: the ramp with the lower 60 %% of the range transparent (zero "
+                    "up to 60 %% of the range, then linear to 1). Default: comparison, or with "
+                    "--setup paraview the ramp ParaView sets")
 parser.add_argument("--setup", choices=["evaluation", "paraview"], default="evaluation",
                     help="evaluation: the transfer function and unit distance above; paraview: "
                     "ParaView's default setup (its colour map and linear opacity ramp rescaled to "
@@ -87,12 +90,19 @@ OPACITY = [0, 0.5, 0.5, 0, 2, 0.15, 0.5, 0, 5, 0, 0.5, 0, 12, 0, 0.5, 0,
            16, 0.03, 0.5, 0, 20, 0.2, 0.5, 0]
 # ParaView's default opacity: a linear ramp over the colour range.
 RAMP = [LO, 0, 0.5, 0, HI, 1, 0.5, 0]
+
+
+def lower60(lo, hi):
+    """The linear ramp over [lo, hi] with its lower 60 % transparent."""
+    return [lo, 0, 0.5, 0, lo + 0.6 * (hi - lo), 0, 0.5, 0, hi, 1, 0.5, 0]
+
+
 CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
               CameraViewUp=[0, 0, 1], CameraViewAngle=30, CameraParallelProjection=0)
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
-            "first_frame_s", "frame_s", "setup", "camera", "width", "height", "load_average"] +
+            "first_frame_s", "frame_s", "setup", "opacity", "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel",
@@ -275,14 +285,18 @@ def main(args):
             # As the GUI leaves it: the default map and ramp over the data range, the unit
             # distance of the representation's domain, APC's own defaults except the mode.
             display.RescaleTransferFunctionToDataRange(False, True)
+            if args.opacity == "lower60":
+                xs = GetColorTransferFunction(FIELD).RGBPoints[0::4]
+                GetOpacityTransferFunction(FIELD).Points = lower60(xs[0], xs[-1])
             if apc:
                 display.APCMode = mapper
         else:
             lut = GetColorTransferFunction(FIELD)
             lut.ApplyPreset("Cool to Warm", True)
             lut.RescaleTransferFunction(LO, HI)
-            GetOpacityTransferFunction(FIELD).Points = (OPACITY if args.opacity == "comparison"
-                                                        else RAMP)
+            GetOpacityTransferFunction(FIELD).Points = (
+                OPACITY if args.opacity in (None, "comparison") else
+                lower60(LO, HI) if args.opacity == "lower60" else RAMP)
             display.ScalarOpacityUnitDistance = UNIT
             if apc:
                 display.APCSampleDistance = spacing
@@ -315,6 +329,7 @@ def main(args):
         row = dict(case=key, representation=representation, mapper=mapper, ranks=ranks,
                    distance=distance, image=name, first_frame_s="%.3f" % first,
                    frame_s="%.3f" % statistics.median(later), setup=args.setup,
+                   opacity=args.opacity or ("ramp" if default_setup else "comparison"),
                    camera=distance if default_setup else "", width=args.size[0],
                    height=args.size[1], load_average=open("/proc/loadavg").read().split()[0])
         if apc and not args.no_float_images:

@@ -28,8 +28,10 @@ def main(out, docs):
         w = csv.DictWriter(fh, fieldnames=list(rows[0].keys()))
         w.writeheader()
         w.writerows(rows)
-    by = {(r["ranks"], r["width"], r["height"], r["camera"], r["case"]): r for r in rows}
-    keys = sorted({k[:4] for k in by}, key=lambda k: (int(k[0]), int(k[1]), k[3]))
+    by = {(r["ranks"], r["width"], r["height"], r["camera"], r.get("opacity") or "ramp",
+           r["case"]): r for r in rows}
+    keys = sorted({k[:5] for k in by}, key=lambda k: (k[4] != "ramp", k[4], int(k[0]),
+                                                      int(k[1]), k[3]))
     lines = [
         "# APC Volume against ParaView's Volume in ParaView's default setup",
         "",
@@ -46,11 +48,13 @@ def main(out, docs):
         "data. First frame = the view's first render (the reader already updated; ParaView's "
         "Volume tetrahedralises and redistributes then); later = median of the following "
         "frames, each after a 0.5° azimuth move. Wall clock on the display rank, one run per "
-        "row; ranks above 2 share the machine's cores. Ratios < 1: APC faster.",
+        "row; ranks above 2 share the machine's cores. Ratios < 1: APC faster. Opacity "
+        "**ramp**: ParaView's default linear ramp; **lower60**: the same with the lower 60 % "
+        "of the range transparent.",
         "",
-        "| ranks | size | camera | APC first s | APC later s | Auto first s | Auto later s "
+        "| opacity | ranks | size | camera | APC first s | APC later s | Auto first s | Auto later s "
         "| PT first s | PT later s | APC/PT first | APC/PT later | Auto/PT later | load |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
 
     def cell(row, column):
@@ -64,13 +68,14 @@ def main(out, docs):
     for k in keys:
         apc, auto, pt = (by.get(k + (c,)) for c in ("apc-default", "auto", "pt"))
         load = "/".join(r["load_average"] for r in (apc, auto, pt) if r)
-        lines.append("| %s | %s×%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
-            k[0], k[1], k[2], k[3], cell(apc, "first_frame_s"), cell(apc, "frame_s"),
+        lines.append("| %s | %s | %s×%s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+            k[4], k[0], k[1], k[2], k[3], cell(apc, "first_frame_s"), cell(apc, "frame_s"),
             cell(auto, "first_frame_s"), cell(auto, "frame_s"), cell(pt, "first_frame_s"),
             cell(pt, "frame_s"), ratio(apc, pt, "first_frame_s"), ratio(apc, pt, "frame_s"),
             ratio(auto, pt, "frame_s"), load))
     missing = [(r, s) for r in ("1", "2", "4") for s in ("1024x1024", "1920x1080")
-               if not any(k[0] == r and "%sx%s" % (k[1], k[2]) == s for k in keys)]
+               if not any(k[0] == r and k[4] == "ramp" and "%sx%s" % (k[1], k[2]) == s
+                           for k in keys)]
     if missing:
         lines += ["", "Not run yet: " + ", ".join("%s rank(s) at %s" % m for m in missing) +
                   " (`--ranks N --sizes WxH` runs one part)."]

@@ -13,17 +13,20 @@
 #
 # ParaView's default setup:
 #   run-paraview-comparison.sh --default-setup [--ranks "1 2 4"] [--sizes "1024x1024 1920x1080"]
+#   run-paraview-comparison.sh --default-setup --opacity lower60 [...]
 # runs paraview_vs_apc.py --setup paraview (ParaView's colour map and linear opacity ramp,
 # every APC property at its default) for cases apc-default, auto and pt, cameras fill and
 # overview, first frame and later frames after small camera moves, once per rank count and
 # image size, into $APC_COMPARE_OUT (default out/benchmark/paraview-default), one CSV per part
-# (np<N>_<W>x<H>.csv, replaced when that part is rerun, so the set can be run in parts), then
+# (np<N>_<W>x<H>.csv; np<N>_<W>x<H>_lower60.csv with --opacity lower60, ParaView's ramp with the
+# lower 60 % of the range transparent; replaced when that part is rerun, so the set can be run in parts), then
 # writes the table of every part present to docs/evaluation/paraview_default_setup.md and the
 # merged CSV beside it (report_paraview_default.py). Further arguments go to the script.
 set -euo pipefail
 top=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 default_setup=""
 sizes=""
+opacity=""
 if [ "${1:-}" = "--default-setup" ]; then
   default_setup=1
   shift
@@ -33,6 +36,7 @@ if [ "${1:-}" = "--default-setup" ]; then
     case "$1" in
       --ranks) APC_COMPARE_RANKS=$2; shift 2 ;;
       --sizes) sizes=$2; shift 2 ;;
+      --opacity) opacity=$2; shift 2 ;;
       *) break ;;
     esac
   done
@@ -54,9 +58,9 @@ for size in ${sizes:-default}; do
   part="$out/paraview_vs_apc_np$n.csv"
   log="$out/paraview_vs_apc_np$n.log"
   if [ -n "$default_setup" ]; then
-    part="$out/np${n}_$size.csv"
-    log="$out/np${n}_$size.log"
-    extra=(--setup paraview --size "${size%x*}" "${size#*x}" --cases apc-default,auto,pt
+    part="$out/np${n}_$size${opacity:+_$opacity}.csv"
+    log="$out/np${n}_$size${opacity:+_$opacity}.log"
+    extra=(--setup paraview ${opacity:+--opacity "$opacity"} --size "${size%x*}" "${size#*x}" --cases apc-default,auto,pt
       --frames 3 --no-float-images --only-rendered-array)
   fi
   rm -f "$part"
