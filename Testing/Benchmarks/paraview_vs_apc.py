@@ -78,6 +78,9 @@ parser.add_argument("--setup", choices=["evaluation", "paraview"], default="eval
 parser.add_argument("--cameras", default="fill,overview",
                     help="with --setup paraview: fill (0.6 x the demo's focal distance: the data "
                     "fills the view), overview (the demo's direction, the whole data in view)")
+parser.add_argument("--apc-property", action="append", default=[], metavar="NAME=VALUE",
+                    help="set an APC Volume property on the APC cases (repeatable), e.g. "
+                    "APCStopWhereOpaque=1")
 parser.add_argument("--data", default=os.path.join(here, "..", "..", "Data",
                                                    "windAroundBuildings", "wind.pvtu"))
 
@@ -287,6 +290,11 @@ def main(args):
             if apc:
                 display.APCSampleDistance = spacing
                 display.APCMode = mapper
+        if apc:
+            for setting in args.apc_property:
+                name, value = setting.split("=", 1)
+                setattr(display, name, type(getattr(display, name))(value)
+                        if not isinstance(getattr(display, name), str) else value)
         if not apc:
             display.SelectMapper = mapper
         for k, v in camera.items():  # Show() may have touched the camera
