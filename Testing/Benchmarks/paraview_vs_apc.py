@@ -95,7 +95,7 @@ CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
-            "first_frame_s", "frame_s", "setup", "camera", "width", "height", "load_average"] +
+            "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s", "setup", "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel",
@@ -304,13 +304,17 @@ def main(args):
 
         timings = []
 
+        cpu = []
+
         def frame(move=False):
             if move:
                 # A small camera move: nothing of the last frame's image can be reused.
                 view.GetActiveCamera().Azimuth(0.5)
             start = time.perf_counter()
+            start_cpu = time.process_time()
             Render(view)
             seconds = time.perf_counter() - start
+            cpu.append(time.process_time() - start_cpu)
             if apc:
                 timings.append(apcparaview.last_timings(display))
             return seconds
@@ -323,6 +327,7 @@ def main(args):
         row = dict(case=key, representation=representation, mapper=mapper, ranks=ranks,
                    distance=distance, image=name, first_frame_s="%.3f" % first,
                    frame_s="%.3f" % statistics.median(later), setup=args.setup,
+                   first_frame_cpu_s="%.3f" % cpu[0], frame_cpu_s="%.3f" % statistics.median(cpu[1:]),
                    camera=distance if default_setup else "", width=args.size[0],
                    height=args.size[1], load_average=open("/proc/loadavg").read().split()[0])
         if apc and not args.no_float_images:
