@@ -163,7 +163,8 @@ public:
    * ln 10^4 (a transmittance of 1e-4), leaving out samples nobody can see; a pixel's opacity
    * changes by less than 1e-4 against marching every sample. Faster on opaque views, but the
    * samples a process leaves out depend on its cells, so N processes no longer render exactly
-   * what one process renders (docs/sampler.md). Off by default. Exact modes never stop.
+   * what one process renders (docs/sampler.md). Off by default. EXACT and HYBRID march every
+   * sample.
    */
   void SetStopWhereOpaque(bool stop);
   bool GetStopWhereOpaque() const;
