@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -313,6 +314,9 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
   this->Marcher.SetLatticeJitter(this->Settings.LatticeJitter);
+  this->Marcher.SetOpaqueAbsorbance(this->Settings.StopWhereOpaque
+      ? VolumeRayMarcher::kRecommendedOpaqueAbsorbance
+      : std::numeric_limits<double>::infinity());
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
   this->Marcher.SetMesh(&this->Mesh);
   depth = std::vector<float>();

@@ -33,6 +33,8 @@ struct VolumeSettings
   MomentParameters Moments;    // MBOIT's number of moments, beta, bias and resolve
   double SampleDistance = 0.0; // world units; 0: the bounding-box diagonal / 256
   bool LatticeJitter = false;
+  // MBOIT stops a ray at VolumeRayMarcher::kRecommendedOpaqueAbsorbance of its own samples.
+  bool StopWhereOpaque = false;
   int SampleCacheMiB = 1024;
   int NumberOfThreads = 0; // 0: the process's share of its node (apcNodeThreads.h)
   bool ComputeSegmentCount = false;

@@ -137,6 +137,16 @@ bool vtkAPCVolumeMapper::GetLatticeJitter() const
   return this->Internal->Settings.LatticeJitter;
 }
 
+void vtkAPCVolumeMapper::SetStopWhereOpaque(bool stop)
+{
+  apc::Assign(this, this->Internal->Settings.StopWhereOpaque, stop);
+}
+
+bool vtkAPCVolumeMapper::GetStopWhereOpaque() const
+{
+  return this->Internal->Settings.StopWhereOpaque;
+}
+
 void vtkAPCVolumeMapper::SetSampleCacheSize(int megabytes)
 {
   apc::Assign(this, this->Internal->Settings.SampleCacheMiB,
@@ -317,6 +327,7 @@ void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "SampleDistance: " << settings.SampleDistance << "\n";
   os << indent << "LatticeJitter: " << settings.LatticeJitter << "\n";
+  os << indent << "StopWhereOpaque: " << settings.StopWhereOpaque << "\n";
   os << indent << "SampleCacheSize: " << settings.SampleCacheMiB << " MiB\n";
   os << indent << "NumberOfThreads: " << settings.NumberOfThreads << "\n";
   os << indent << "ComputeSegmentCount: " << settings.ComputeSegmentCount << "\n";

@@ -159,6 +159,20 @@ public:
 
   ///@{
   /**
+   * MBOIT only: stop a ray once the absorbance of this process's own samples along it reaches
+   * ln 10^4 (a transmittance of 1e-4), leaving out samples nobody can see; a pixel's opacity
+   * changes by less than 1e-4 against marching every sample. Faster on opaque views, but the
+   * samples a process leaves out depend on its cells, so N processes no longer render exactly
+   * what one process renders (docs/sampler.md). Off by default. EXACT and HYBRID march every
+   * sample.
+   */
+  void SetStopWhereOpaque(bool stop);
+  bool GetStopWhereOpaque() const;
+  vtkBooleanMacro(StopWhereOpaque, bool);
+  ///@}
+
+  ///@{
+  /**
    * Memory (MiB, per process) for the first pass's samples, which the second pass re-weights
    * instead of clipping and interpolating again (12 bytes a sample; on the wind data it cut
    * the second pass from 1.2 s to 0.02 s at 512^2). The screen tiles beyond it are marched

@@ -256,6 +256,12 @@ void vtkAPCVolumeRepresentation::SetLatticeJitter(bool jitter)
   this->MarkModified();
 }
 
+void vtkAPCVolumeRepresentation::SetStopWhereOpaque(bool stop)
+{
+  this->Mapper->SetStopWhereOpaque(stop);
+  this->MarkModified();
+}
+
 void vtkAPCVolumeRepresentation::SetSampleCacheSize(int megabytes)
 {
   this->Mapper->SetSampleCacheSize(megabytes);

@@ -91,10 +91,13 @@ def rank_render_seconds(display):
     return [float(v) for v in ranks.split()]
 
 
+# The pass's stages in their order (they add up to last_timings()["total"]).
+STAGES = ["agree", "depth", "pass1", "tiles", "allreduce", "pass2", "reduce", "resolve",
+          "segments", "exchange", "blend_segments", "gather", "statistics", "exact", "auto",
+          "ranks", "blend"]
+
+
 def stage_seconds(timings):
     """The stages of last_timings() that ran (nonzero), in the pass's order, without the
     total: they add up to timings["total"]."""
-    stages = ["agree", "depth", "pass1", "tiles", "allreduce", "pass2", "reduce", "resolve",
-              "segments", "exchange", "blend_segments", "gather", "statistics", "exact", "auto",
-              "ranks", "blend"]
-    return [(s, timings[s]) for s in stages if timings.get(s, 0) > 0]
+    return [(s, timings[s]) for s in STAGES if timings.get(s, 0) > 0]

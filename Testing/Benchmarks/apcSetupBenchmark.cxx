@@ -1,18 +1,26 @@
 // What a data change costs before the first sample, part by part, on the bundled wind data (or
 // --data FILE.pvtu/.vtu): the conversion to the ray marcher's mesh (CellMeshFromVTK, which
 // ends with CellMesh::Finalize), Finalize alone, and the per-view binning (BinCells) at
-// --size pixels. Prints one CSV row per part: the smallest CPU time (all threads) and wall
+// --size pixels, then pass 1 on a new ray marcher ("pass1_first": its memory is touched for
+// the first time, as in a first frame) and on the same marcher again ("pass1_again", a later
+// frame), with the sample cache at its default and off, one thread (as a rank under
+// `mpirun -np 1`), ParaView's default linear opacity ramp over the scalar range and the default
+// sample distance. Prints one CSV row per part: the smallest CPU time (all threads) and wall
 // time over --repeats, and a checksum of the mesh, so that two builds run side by side show
 // both their costs and that they make the same mesh. Uses only interfaces that older builds
 // have, so the same source measures a baseline.
 //
-//   apcSetupBenchmark [--data FILE] [--array U_mag] [--size 1024] [--repeats 3]
+//   apcSetupBenchmark [--data FILE] [--array U_mag] [--size 1024] [--repeats 3] [--no-pass1]
 
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
+#include "apcDefaultSpacing.h"
+#include "apcDepthWarp.h"
 #include "apcInputReport.h"
 #include "apcRayCamera.h"
 #include "apcTileBins.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
 
 #include "vtkDataArray.h"
 #include "vtkNew.h"
@@ -27,7 +35,9 @@
 #include <cstring>
 #include <ctime>
 #include <functional>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace
 {
@@ -89,6 +99,58 @@ unsigned long long Checksum(const apc::CellMesh& mesh)
   }
   return hash;
 }
+
+// Pass 1 on a new marcher (first) and on the same marcher again, cacheMiB of sample cache.
+void TimePass1(const apc::CellMesh& mesh, const apc::RayCamera& camera, int cacheMiB)
+{
+  const auto& b = mesh.GetBounds();
+  const double spacing =
+    apc::DefaultSampleDistance(b.data(), static_cast<double>(mesh.GetNumberOfCells()));
+  double lo = 1e300;
+  double hi = -1e300;
+  for (float v : mesh.PointScalars)
+  {
+    lo = std::min(lo, static_cast<double>(v));
+    hi = std::max(hi, static_cast<double>(v));
+  }
+  constexpr int kEntries = 256;
+  std::vector<std::array<float, 3>> colours(kEntries, { 1.0f, 1.0f, 1.0f });
+  std::vector<double> alphas(kEntries);
+  for (int i = 0; i < kEntries; ++i)
+  {
+    alphas[i] = static_cast<double>(i) / (kEntries - 1); // ParaView's default ramp
+  }
+  // ParaView's unit distance is about the mean cell length: the default spacing here.
+  const apc::TransferTable table(lo, hi, colours, alphas, spacing, spacing);
+  double tmin = 0;
+  double tmax = 0;
+  camera.DistanceRange(b, tmin, tmax);
+  const apc::LogDepthWarp warp(tmin, tmax);
+  std::vector<double> moments(static_cast<size_t>(camera.GetWidth()) * camera.GetHeight() * 5);
+  auto marcher = std::make_unique<apc::VolumeRayMarcher>();
+  auto pass1 = [&]
+  {
+    marcher->SetView(camera, nullptr);
+    std::fill(moments.begin(), moments.end(), 0.0);
+    marcher->AccumulateMoments<4>(table, warp, moments.data());
+  };
+  auto fresh = [&]
+  {
+    marcher = std::make_unique<apc::VolumeRayMarcher>();
+    marcher->SetNumberOfThreads(1);
+    marcher->SetMaxSampleCacheBytes(static_cast<size_t>(cacheMiB) << 20);
+    marcher->SetMesh(&mesh);
+  };
+  const std::string suffix = cacheMiB > 0 ? "_cache" : "_nocache";
+  double cpu, wall;
+  // One repeat each: a repeat of "first" would need a new marcher, whose memory the allocator
+  // may hand back already touched.
+  fresh();
+  Time(("pass1_first" + suffix).c_str(), 1, pass1, cpu, wall);
+  Time(("pass1_again" + suffix).c_str(), 1, pass1, cpu, wall);
+  std::printf("# pass 1%s: %lld samples, spacing %g\n", suffix.c_str(),
+    static_cast<long long>(marcher->GetLastSampleCount()), spacing);
+}
 }
 
 int main(int argc, char* argv[])
@@ -97,9 +159,17 @@ int main(int argc, char* argv[])
   std::string arrayName = "U_mag";
   int size = 1024;
   int repeats = 3;
-  for (int i = 1; i + 1 < argc; i += 2)
+  bool timePass1 = true;
+  for (int i = 1; i < argc; ++i)
   {
     const std::string option = argv[i];
+    if (option == "--no-pass1")
+    {
+      timePass1 = false;
+      continue;
+    }
+    if (i + 1 >= argc)
+      break;
     if (option == "--data")
       data = argv[i + 1];
     else if (option == "--array")
@@ -108,6 +178,7 @@ int main(int argc, char* argv[])
       size = std::atoi(argv[i + 1]);
     else if (option == "--repeats")
       repeats = std::max(1, std::atoi(argv[i + 1]));
+    ++i;
   }
   vtkSmartPointer<vtkUnstructuredGrid> grid;
   if (data.size() > 5 && data.compare(data.size() - 5, 5, ".pvtu") == 0)
@@ -158,5 +229,10 @@ int main(int argc, char* argv[])
     "bins", repeats, [&] { apc::BinCells(&mesh, camera, 16, 0, bins); }, cpu, wall);
   std::printf("# mesh checksum %016llx, %lld cells, %zu tile entries\n", Checksum(mesh),
     static_cast<long long>(mesh.GetNumberOfCells()), bins.Cells.size());
+  if (timePass1)
+  {
+    TimePass1(mesh, camera, 1024);
+    TimePass1(mesh, camera, 0);
+  }
   return 0;
 }

@@ -81,6 +81,9 @@ parser.add_argument("--setup", choices=["evaluation", "paraview"], default="eval
 parser.add_argument("--cameras", default="fill,overview",
                     help="with --setup paraview: fill (0.6 x the demo's focal distance: the data "
                     "fills the view), overview (the demo's direction, the whole data in view)")
+parser.add_argument("--apc-property", action="append", default=[], metavar="NAME=VALUE",
+                    help="set an APC Volume property on the APC cases (repeatable), e.g. "
+                    "APCStopWhereOpaque=1")
 parser.add_argument("--data", default=os.path.join(here, "..", "..", "Data",
                                                    "windAroundBuildings", "wind.pvtu"))
 
@@ -102,7 +105,8 @@ CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
-            "first_frame_s", "frame_s", "setup", "opacity", "camera", "width", "height", "load_average"] +
+            "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s", "setup", "opacity",
+            "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel",
@@ -301,6 +305,11 @@ def main(args):
             if apc:
                 display.APCSampleDistance = spacing
                 display.APCMode = mapper
+        if apc:
+            for setting in args.apc_property:
+                name, value = setting.split("=", 1)
+                setattr(display, name, type(getattr(display, name))(value)
+                        if not isinstance(getattr(display, name), str) else value)
         if not apc:
             display.SelectMapper = mapper
         for k, v in camera.items():  # Show() may have touched the camera
@@ -310,13 +319,17 @@ def main(args):
 
         timings = []
 
+        cpu = []
+
         def frame(move=False):
             if move:
                 # A small camera move: nothing of the last frame's image can be reused.
                 view.GetActiveCamera().Azimuth(0.5)
             start = time.perf_counter()
+            start_cpu = time.process_time()
             Render(view)
             seconds = time.perf_counter() - start
+            cpu.append(time.process_time() - start_cpu)
             if apc:
                 timings.append(apcparaview.last_timings(display))
             return seconds
@@ -330,6 +343,8 @@ def main(args):
                    distance=distance, image=name, first_frame_s="%.3f" % first,
                    frame_s="%.3f" % statistics.median(later), setup=args.setup,
                    opacity=args.opacity or ("ramp" if default_setup else "comparison"),
+                   first_frame_cpu_s="%.3f" % cpu[0],
+                   frame_cpu_s="%.3f" % statistics.median(cpu[1:]),
                    camera=distance if default_setup else "", width=args.size[0],
                    height=args.size[1], load_average=open("/proc/loadavg").read().split()[0])
         if apc and not args.no_float_images:

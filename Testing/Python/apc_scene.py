@@ -57,6 +57,12 @@ parser.add_argument("--expect-blank", action="store_true",
 parser.add_argument("--interactive", help="folder: interactive renders (camera moving) run "
                     "reduced, the next still render is bit-identical to the one before, and "
                     "the interactive picture reads as the still one (SSIM)")
+parser.add_argument("--stop-where-opaque", help="folder: render with APCStopWhereOpaque off, "
+                    "then on, on a nearly opaque transfer function; the stop must drop samples "
+                    "and leave no pixel farther from --compare (an exact reference of the same "
+                    "opaque scene) than 1/255 beyond where marching every sample leaves it")
+parser.add_argument("--opaque", action="store_true",
+                    help="a nearly opaque transfer function (what the stop is for)")
 parser.add_argument("--offset", type=float, default=0.0,
                     help="move the data (and the camera) by this much along x, y and z, in "
                     "double precision: precision must not depend on where the mesh sits")
@@ -107,6 +113,51 @@ def float_rgba(path):
     reader.Update()
     image = reader.GetOutput()
     return image.GetDimensions(), vtk_to_numpy(image.GetPointData().GetArray("RGBA")).copy()
+
+
+def sample_count(path):
+    from vtkmodules.vtkIOXML import vtkXMLImageDataReader
+
+    reader = vtkXMLImageDataReader()
+    reader.SetFileName(path)
+    reader.Update()
+    return reader.GetOutput().GetFieldData().GetArray("SampleCount").GetValue(0)
+
+
+def check_opaque_stop(view, display, check):
+    """APCStopWhereOpaque set through ParaView reaches the ray marcher: fewer samples, and
+    against the exact reference no pixel moves farther than 1/255 beyond the unstopped
+    image's error."""
+    import numpy
+
+    os.makedirs(args.stop_where_opaque, exist_ok=True)
+    check(display.APCStopWhereOpaque == 0, "APCStopWhereOpaque is off by default")
+    images = {}
+    for stop in (0, 1):
+        display.APCStopWhereOpaque = stop
+        images[stop] = os.path.join(args.stop_where_opaque, "stop%d.vti" % stop)
+        display.APCImageFile = images[stop]
+        Render(view)
+    display.APCImageFile = ""
+    display.APCStopWhereOpaque = 0
+    if apcparaview.number_of_ranks() > 1 and not os.path.exists(images[0]):
+        return  # only the display rank writes and checks the images
+    every, stopped = sample_count(images[0]), sample_count(images[1])
+    print("samples: %d marching every sample, %d with the stop (%.3f)"
+          % (every, stopped, stopped / max(every, 1)))
+    check(stopped < 0.9 * every, "the stop drops samples on the opaque scene")
+    (_, a), (_, b), (_, ref) = (float_rgba(images[0]), float_rgba(images[1]),
+                                float_rgba(args.compare))
+    check(a.shape == ref.shape and b.shape == ref.shape, "image sizes agree")
+    if a.shape == ref.shape and b.shape == ref.shape:
+        err_all = numpy.abs(a - ref).max(axis=1)
+        err_stop = numpy.abs(b - ref).max(axis=1)
+        worse = float((err_stop - err_all).max())
+        print("largest |image - exact|: %.4f every sample, %.4f stopped; largest growth %.5f"
+              % (float(err_all.max()), float(err_stop.max()), worse))
+        check(worse <= 1.0 / 255, "no pixel farther from the exact image than 1/255 beyond "
+              "the unstopped image's error")
+        check(float(ref[:, 3].max()) > 0.99, "the reference is opaque somewhere")
 
 
 def ssim_of(a_png, b_png):
@@ -291,6 +342,9 @@ def main():
     pwf = GetOpacityTransferFunction(scene_array)
     pwf.Points = [lo, 0.05, 0.5, 0.0, hi, 0.6, 0.5, 0.0]
     display.ScalarOpacityUnitDistance = unit
+    if args.opaque:
+        pwf.Points = [lo, 0.5, 0.5, 0.0, hi, 0.9, 0.5, 0.0]
+        display.ScalarOpacityUnitDistance = 0.1 * unit
     display.APCSampleDistance = (args.sample_distance * args.scale if args.sample_distance > 0
                                  else spacing)
     display.APCMode = args.mode
@@ -337,6 +391,8 @@ def main():
         check_tiled(view, check)
     if args.interactive:
         check_interactive(view, display, check)
+    if args.stop_where_opaque:
+        check_opaque_stop(view, display, check)
 
     t = apcparaview.last_timings(display)
     print("APC timings on the display rank: " + ", ".join(
