@@ -234,8 +234,9 @@ std::array<double, 2> CompareWithWhole(vtkMPIController* controller, const char*
       // double, against the exact image's one rounding: a few float ulps (1.2e-7 on the
       // puzzle). Where the wind data's cells overlap, a few lattice points are sampled by
       // two or three cells with different colours; both images blend those in one fixed
-      // order (SampleBefore), so they differ by rounding there too.
-      Check(maxDiff <= 1e-5, 0, std::string(name) + ": segments equal one-process EXACT");
+      // order (SampleBefore), so they differ by rounding there too (at most 1.5e-7 measured
+      // over these scenes on 1-4 ranks).
+      Check(maxDiff <= 1e-6, 0, std::string(name) + ": segments equal one-process EXACT");
     }
     else
     {
