@@ -14,6 +14,7 @@
 #include "apcTransferTable.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -56,6 +57,32 @@ struct SampleRecord
   std::array<float, 3> Colour;
 };
 
+// Depth order, and a fixed order among samples of one lattice point. Where cells overlap
+// (faces that are not planar, pieces that overlap by rounding), two or three cells can sample
+// the same lattice point, each with its own interpolated value. Blended in arrival order,
+// which depends on the threads and on which cells a rank holds, such a pixel's colour changed
+// from run to run and with the number of ranks; ordered by their values, such samples blend
+// the same way on every run and rank count. The values are compared as bit patterns: a strict
+// weak order even for NaN.
+inline bool SampleBefore(const SampleRecord& a, const SampleRecord& b)
+{
+  if (a.K != b.K)
+  {
+    return a.K < b.K;
+  }
+  auto bits = [](float v)
+  {
+    uint32_t u;
+    std::memcpy(&u, &v, sizeof u);
+    return u;
+  };
+  const std::array<uint32_t, 4> x = { bits(a.Absorbance), bits(a.Colour[0]), bits(a.Colour[1]),
+    bits(a.Colour[2]) };
+  const std::array<uint32_t, 4> y = { bits(b.Absorbance), bits(b.Colour[0]), bits(b.Colour[1]),
+    bits(b.Colour[2]) };
+  return x < y;
+}
+
 // Each pixel's samples of one tile, in arrival order; the base of the visitors that need
 // whole rays in depth order.
 struct PixelSampleLists : NoSegments
@@ -67,12 +94,11 @@ struct PixelSampleLists : NoSegments
   {
     this->Pixels[pixel].push_back({ k, s.Absorbance, s.Colour });
   }
-  // Pixel p's samples in depth (lattice) order.
+  // Pixel p's samples in depth (lattice) order, SampleBefore's.
   std::vector<SampleRecord>& Sorted(int p)
   {
     auto& samples = this->Pixels[p];
-    std::sort(samples.begin(), samples.end(),
-      [](const SampleRecord& a, const SampleRecord& b) { return a.K < b.K; });
+    std::sort(samples.begin(), samples.end(), SampleBefore);
     return samples;
   }
 };

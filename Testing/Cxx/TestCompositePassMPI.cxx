@@ -232,11 +232,11 @@ std::array<double, 2> CompareWithWhole(vtkMPIController* controller, const char*
         pass->GetLastStageSeconds("blend_segments"), pass->GetLastStageSeconds("gather"));
       // Each segment's colour and transmittance are rounded to float once and blended in
       // double, against the exact image's one rounding: a few float ulps (1.2e-7 on the
-      // puzzle). The wind pieces overlap by rounding at their interfaces, where their point
-      // data differ: a few lattice points lie in two cells with different colours, and even
-      // the one-process EXACT image blends such a pair in whichever order its sort leaves
-      // them (measured 2e-6 from that; 1e-5 leaves room).
-      Check(maxDiff <= 1e-5, 0, std::string(name) + ": segments equal one-process EXACT");
+      // puzzle). Where the wind data's cells overlap, a few lattice points are sampled by
+      // two or three cells with different colours; both images blend those in one fixed
+      // order (SampleBefore), so they differ by rounding there too (at most 1.5e-7 measured
+      // over these scenes on 1-4 ranks).
+      Check(maxDiff <= 1e-6, 0, std::string(name) + ": segments equal one-process EXACT");
     }
     else
     {

@@ -73,6 +73,11 @@ parser.add_argument("--client-timings", action="store_true",
                     help="the timings must reach this client (total > 0): client-server")
 parser.add_argument("--tiled", help="folder: a screenshot at twice the view size (ParaView "
                     "renders it in tiles) must equal one render of a view of that size")
+parser.add_argument("--evaluation-setup", action="store_true",
+                    help="the evaluation's transfer function (Testing/Benchmarks/"
+                    "paraview_vs_apc.py: Cool to Warm, opacity on still air and the fast stream, "
+                    "unit distance 5 on the wind data) at APC's default sample distance; it "
+                    "makes the wakes behind the buildings, where cells overlap, visible")
 args = parser.parse_args()
 
 def check_tiled(view, check):
@@ -347,6 +352,13 @@ def main():
         display.ScalarOpacityUnitDistance = 0.1 * unit
     display.APCSampleDistance = (args.sample_distance * args.scale if args.sample_distance > 0
                                  else spacing)
+    if args.evaluation_setup:
+        lut.ApplyPreset("Cool to Warm", True)
+        lut.RescaleTransferFunction(lo, hi)
+        pwf.Points = [0, 0.5, 0.5, 0, 2, 0.15, 0.5, 0, 5, 0, 0.5, 0, 12, 0, 0.5, 0,
+                      16, 0.03, 0.5, 0, 20, 0.2, 0.5, 0]
+        display.ScalarOpacityUnitDistance = 5.0 * args.scale
+        display.APCSampleDistance = 0.0
     display.APCMode = args.mode
     if args.band_megapixels > 0:
         display.APCBandMegapixels = args.band_megapixels
