@@ -45,8 +45,9 @@ static_assert(sizeof(CachedSample) == 8, "a cached sample is two floats");
 // the order pass 1 took them. K16, kept only for a pass 1 that keeps its own moments
 // (Hybrid), holds the low 16 bits of each sample's lattice index, which order the samples of
 // a pixel whose float depths tie, for the Hybrid resolve's exact own transmittance. The
-// vectors are sized exactly and keep their memory from frame to frame: a static view's
-// samples are written without reallocation or page faults.
+// vectors keep their memory from frame to frame (a tile that outgrows it gets a quarter
+// more): a static or slowly moving view's samples are written without reallocation or page
+// faults.
 struct CachedTile
 {
   UninitializedVector<uint32_t> Starts;
@@ -79,6 +80,16 @@ struct RecordedSample
 
 struct SampleCache
 {
+  template <class Vector>
+  static void Reserve(Vector& v, size_t n)
+  {
+    if (v.capacity() < n)
+    {
+      v = Vector();
+      v.reserve(n + n / 4);
+    }
+  }
+
   std::vector<CachedTile> Tiles;
   // Kept[t]: tile t's samples are all in the cache. The tiles recorded before the budget ran
   // out stay cached; pass 2 replays them and marches only the others again.
@@ -130,8 +141,19 @@ struct SampleCache
   {
     CachedTile& cached = this->Tiles[tile];
     const size_t n = recorded.size();
+    if (n == 0)
+    {
+      // Nothing to replay: no memory (a tile of transparent or no cells, on every mesh).
+      cached.Free();
+      this->Kept[tile] = 1;
+      return;
+    }
     cached.Clear();
-    // Sized exactly: from empty vectors a resize allocates what it is asked for, no more.
+    // A tile that outgrows last frame's memory gets a quarter more than it needs: after a
+    // small camera move half the tiles take a few more samples, and reallocating them exactly
+    // every frame cost pass 1 fresh pages (page faults) for half the cache.
+    Reserve(cached.Samples, n);
+    Reserve(cached.K16, withOrder ? n : 0);
     cached.Starts.resize(static_cast<size_t>(pixels) + 1);
     cached.Samples.resize(n);
     cached.K16.resize(withOrder ? n : 0);
