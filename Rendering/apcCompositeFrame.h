@@ -125,6 +125,12 @@ struct FrameRecord
   vtkIdType Pixels = 0;           // pixels whose values travel (APC: the covered tiles')
   vtkIdType CoveredPixels = 0;    // pixels some process's volume covers (APC)
   vtkIdType OwnCoveredPixels = 0; // pixels this process's volumes cover (APC, SEGMENTS)
+  // This process's APC samples: pass 1's, pass 2's, and of pass 2's those replayed from the
+  // sample cache and those skipped as hidden.
+  int64_t Pass1Samples = 0;
+  int64_t Pass2Samples = 0;
+  int64_t Pass2Replayed = 0;
+  int64_t Pass2Hidden = 0;
   SegmentStatistics Segments;
   bool Failed = false;
 };

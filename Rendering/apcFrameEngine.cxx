@@ -322,6 +322,9 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   depth = std::vector<float>();
   this->Marcher.SetView(*this->Camera, std::move(rayEnds));
   this->Samples = 0;
+  this->ColourSamples = 0;
+  this->ReplayedSamples = 0;
+  this->HiddenSamples = 0;
   this->Ready = true;
   this->Clock.Lap("setup");
   return true;
@@ -396,6 +399,9 @@ void FrameEngine::RenderColour(const MomentParameters& parameters, const double*
       this->Marcher.AccumulateColour<n()>(*this->Table, *this->Warp, moments,
         parameters.Settings<n()>(), colourSums, parameters.Resolve == ResolveMode::Hybrid, band);
     });
+  this->ColourSamples += this->Marcher.GetLastSampleCount();
+  this->ReplayedSamples += this->Marcher.GetLastReplayedCount();
+  this->HiddenSamples += this->Marcher.GetLastHiddenCount();
   this->Clock.Lap("colour");
 }
 

@@ -133,6 +133,11 @@ public:
   /// Lattice samples taken since Prepare by pass 1 (all its bands), or by the exact or
   /// segment stage.
   int64_t GetSampleCount() const { return this->Samples; }
+  /// Pass 2's samples since Prepare (all its bands), those of them replayed from the sample
+  /// cache and those skipped as hidden.
+  int64_t GetColourSampleCount() const { return this->ColourSamples; }
+  int64_t GetReplayedSampleCount() const { return this->ReplayedSamples; }
+  int64_t GetHiddenSampleCount() const { return this->HiddenSamples; }
   StageClock& GetClock() { return this->Clock; }
   const StageClock& GetClock() const { return this->Clock; }
 
@@ -179,6 +184,9 @@ private:
   std::unique_ptr<RayCamera> Camera;
   std::unique_ptr<LogDepthWarp> Warp;
   int64_t Samples = 0;
+  int64_t ColourSamples = 0;
+  int64_t ReplayedSamples = 0;
+  int64_t HiddenSamples = 0;
   StageClock Clock;
 };
 

@@ -104,6 +104,13 @@ vtkAPCCompositePass::Timings TimingsOf(const FrameRecord& record)
   t.CoveredPixels = static_cast<double>(record.CoveredPixels);
   t.AverageSegmentsPerPixel = record.Segments.Average();
   t.MaxSegmentsPerPixel = static_cast<double>(record.Segments.MaxPerPixel);
+  t.Pass1Samples = static_cast<double>(record.Pass1Samples);
+  if (record.Pass2Samples > 0)
+  {
+    const double pass2 = static_cast<double>(record.Pass2Samples);
+    t.Pass2CachedShare = static_cast<double>(record.Pass2Replayed) / pass2;
+    t.Pass2HiddenShare = static_cast<double>(record.Pass2Hidden) / pass2;
+  }
   t.Wait = collectives.Wait(nullptr);
   t.Transfer = collectives.Transfer(nullptr);
   t.Render = RenderSeconds(clock);

@@ -304,6 +304,13 @@ void RunMomentCompositing(
   {
     CompositeBand(group, frame, band, record, result);
   }
+  for (const FrameEngine* engine : frame.Engines)
+  {
+    record.Pass1Samples += engine->GetSampleCount();
+    record.Pass2Samples += engine->GetColourSampleCount();
+    record.Pass2Replayed += engine->GetReplayedSampleCount();
+    record.Pass2Hidden += engine->GetHiddenSampleCount();
+  }
 }
 
 } // namespace apc

@@ -2,11 +2,14 @@
 #include "apcNodeThreads.h"
 
 #include "apcParallel.h"
+#include "apcSampleCache.h"
 
 #include "vtkMPI.h"
 #include "vtkMPICommunicator.h"
 #include "vtkMultiProcessController.h"
 
+#include <atomic>
+#include <cstdint>
 #include <sched.h>
 #include <thread>
 #include <unistd.h>
@@ -29,6 +32,18 @@ int CoresInAffinityMask()
   CPU_ZERO(&set);
   return sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 0;
 }
+
+// The node's physical memory in bytes (0 if unknown).
+uint64_t MemoryOfNode()
+{
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long pageSize = sysconf(_SC_PAGESIZE);
+  return pages > 0 && pageSize > 0 ? static_cast<uint64_t>(pages) * static_cast<uint64_t>(pageSize)
+                                   : 0;
+}
+
+// ShareNodeMemory's budget; 0 until it runs.
+std::atomic<size_t> NodeCacheBytes{ 0 };
 }
 
 //------------------------------------------------------------------------------
@@ -64,6 +79,20 @@ int ShareNodeCores(vtkMultiProcessController* controller)
     NodeShareOfThreads(CoresOfNode(), CoresInAffinityMask(), ProcessesOnThisNode(controller));
   SetDefaultThreads(threads);
   return threads;
+}
+
+//------------------------------------------------------------------------------
+size_t ShareNodeMemory(vtkMultiProcessController* controller)
+{
+  const size_t bytes = NodeShareOfMemory(MemoryOfNode(), ProcessesOnThisNode(controller));
+  NodeCacheBytes.store(bytes);
+  return bytes;
+}
+
+size_t DefaultSampleCacheBytes()
+{
+  const size_t shared = NodeCacheBytes.load();
+  return shared > 0 ? shared : NodeShareOfMemory(MemoryOfNode(), 1);
 }
 
 }

@@ -8,6 +8,8 @@
 
 #include "APCRenderingModule.h" // for export macro
 
+#include <cstddef>
+
 class vtkMultiProcessController;
 
 namespace apc
@@ -26,6 +28,17 @@ APCRENDERING_EXPORT int ShareNodeCores(vtkMultiProcessController* controller);
 
 /// The processes of controller on this process's node (1 without MPI). A collective.
 APCRENDERING_EXPORT int ProcessesOnThisNode(vtkMultiProcessController* controller);
+
+/**
+ * Sets this process's default sample cache budget (DefaultSampleCacheBytes) by
+ * apc::NodeShareOfMemory: a quarter of the node's physical memory divided among the processes
+ * of controller on its node. A collective, as ShareNodeCores. Returns the budget set.
+ */
+APCRENDERING_EXPORT size_t ShareNodeMemory(vtkMultiProcessController* controller);
+
+/// The sample cache budget of a volume whose Sample Cache (MB) is automatic (-1): the one
+/// ShareNodeMemory set, or, before any, the node's share for a process alone on it.
+APCRENDERING_EXPORT size_t DefaultSampleCacheBytes();
 
 }
 

@@ -7,6 +7,7 @@
 #define apcVolumeSettings_h
 
 #include "apcMomentParameters.h"
+#include "apcNodeThreads.h"
 
 #include <cstddef>
 #include <string>
@@ -31,15 +32,19 @@ struct VolumeSettings
   ScalarChoice Scalars;
   bool Exact = false;          // vtkAPCVolumeMapper::EXACT; MBOIT otherwise
   MomentParameters Moments;    // MBOIT's number of moments, beta, bias and resolve
-  double SampleDistance = 0.0; // world units; 0: the bounding-box diagonal / 256
+  double SampleDistance = 0.0; // world units; 0: from the cells (apcDefaultSpacing.h)
   bool LatticeJitter = false;
   // MBOIT stops a ray at VolumeRayMarcher::kRecommendedOpaqueAbsorbance of its own samples.
   bool StopWhereOpaque = false;
-  int SampleCacheMiB = 1024;
+  int SampleCacheMiB = -1; // -1: the process's share of its node's memory (apcNodeThreads.h)
   int NumberOfThreads = 0; // 0: the process's share of its node (apcNodeThreads.h)
   bool ComputeSegmentCount = false;
 
-  size_t SampleCacheBytes() const { return static_cast<size_t>(this->SampleCacheMiB) << 20; }
+  size_t SampleCacheBytes() const
+  {
+    return this->SampleCacheMiB < 0 ? DefaultSampleCacheBytes()
+                                    : static_cast<size_t>(this->SampleCacheMiB) << 20;
+  }
 };
 
 } // namespace apc

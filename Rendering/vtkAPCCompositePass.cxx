@@ -398,6 +398,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   if (!internal.ThreadsShared || internal.ThreadsSharedFor != this->Controller)
   {
     apc::ShareNodeCores(this->Controller);
+    apc::ShareNodeMemory(this->Controller);
     internal.ThreadsShared = true;
     internal.ThreadsSharedFor = this->Controller;
   }

@@ -333,6 +333,12 @@ public:
     double ImageReduction = 0;
     double AverageSegmentsPerPixel = 0;
     double MaxSegmentsPerPixel = 0;
+    // This process's APC samples in pass 1, and the shares of pass 2's samples replayed from
+    // the sample cache and skipped as hidden (0 to 1): with "pass1" and "pass2", the cost of
+    // a sample.
+    double Pass1Samples = 0;
+    double Pass2CachedShare = 0;
+    double Pass2HiddenShare = 0;
     // Each stage's wait for the last process and transfer after it (see above).
     double AgreeWait = 0, AgreeTransfer = 0;
     double DepthWait = 0, DepthTransfer = 0;
@@ -389,6 +395,9 @@ public:
     f("image_reduction", timings.ImageReduction);
     f("average_segments_per_pixel", timings.AverageSegmentsPerPixel);
     f("max_segments_per_pixel", timings.MaxSegmentsPerPixel);
+    f("pass1_samples", timings.Pass1Samples);
+    f("pass2_cached_share", timings.Pass2CachedShare);
+    f("pass2_hidden_share", timings.Pass2HiddenShare);
     f("agree_wait", timings.AgreeWait);
     f("agree_transfer", timings.AgreeTransfer);
     f("depth_wait", timings.DepthWait);
@@ -418,7 +427,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 54;
+  static constexpr int NumberOfTimings = 57;
 
   ///@{
   /**

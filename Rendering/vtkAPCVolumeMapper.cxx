@@ -150,8 +150,9 @@ bool vtkAPCVolumeMapper::GetStopWhereOpaque() const
 void vtkAPCVolumeMapper::SetSampleCacheSize(int megabytes)
 {
   apc::Assign(this, this->Internal->Settings.SampleCacheMiB,
-    apc::CheckedSetting(
-      this, "SampleCacheSize", megabytes, 0, VTK_INT_MAX, "MiB per process; 0 turns it off"));
+    apc::CheckedSetting(this, "SampleCacheSize", megabytes, -1, VTK_INT_MAX,
+      "MiB per process; 0 turns it off, -1 takes a quarter of the node's memory shared among its "
+      "processes"));
 }
 
 int vtkAPCVolumeMapper::GetSampleCacheSize() const

@@ -174,9 +174,11 @@ public:
   ///@{
   /**
    * Memory (MiB, per process) for the first pass's samples, which the second pass re-weights
-   * instead of clipping and interpolating again (12 bytes a sample; on the wind data it cut
+   * instead of clipping and interpolating again (8 bytes a sample; on the wind data it cut
    * the second pass from 1.2 s to 0.02 s at 512^2). The screen tiles beyond it are marched
-   * again. 0 turns the cache off. Default 1024. Lowering it frees the memory held.
+   * again. 0 turns the cache off. Default -1: a quarter of the node's physical memory divided
+   * among the processes on the node (apc::NodeShareOfMemory). Lowering it frees the memory
+   * held.
    */
   void SetSampleCacheSize(int megabytes);
   int GetSampleCacheSize() const;

@@ -63,7 +63,9 @@ def last_timings(display):
     "total", and "bytes_sent", "messages_sent", "composited_pixels", "covered_pixels", "mode"
     (0 APC, 1 Exact (segments), 2 Local exact: what Auto chose; -1 skipped), "image_reduction"
     (1 still, more while interacting, 0 skipped), "average_segments_per_pixel" and
-    "max_segments_per_pixel"; per stage with collectives its wait for the slowest rank and its
+    "max_segments_per_pixel", "pass1_samples", "pass2_cached_share" and "pass2_hidden_share"
+    (this rank's pass-1 samples and the shares of its pass-2 samples replayed from the sample
+    cache and skipped as hidden); per stage with collectives its wait for the slowest rank and its
     transfer after the last arrival ("tiles_wait", "tiles_transfer", ...), "wait" and
     "transfer" (their sums), "render" (the display rank's), "render_mean", "render_max",
     "render_imbalance" (max / mean), "slowest_rank" and "wait_max" (every rank's render seconds:

@@ -30,12 +30,6 @@ template <int N>
 struct Colour : NoSegments
 {
   static constexpr bool StopsWhenOpaque = true;
-  // A cached sample as pass 2 reads it, grouped by pixel.
-  struct DepthAndScalar
-  {
-    float Z;
-    float Scalar;
-  };
 
   double* Output;
   int Width;
@@ -48,9 +42,6 @@ struct Colour : NoSegments
   std::vector<double> HiddenFrom; // per pixel of a marched tile; NaN until its first sample
   std::vector<ColourSums> Sums;
   int64_t TileHidden = 0;
-  // ReplayTile's pixel grouping, kept from tile to tile.
-  std::vector<uint32_t> Starts;
-  std::vector<DepthAndScalar> Grouped;
   // One pixel's visible samples for MomentTransmittance::Weights.
   std::vector<double> Depths;
   std::vector<double> Absorbances;
@@ -135,18 +126,17 @@ struct Colour : NoSegments
     this->TileHidden = 0;
   }
 
-  // Pass 2 of a tile from pass 1's cached samples. They are grouped by pixel first (a stable
-  // counting sort, so each pixel sums in the order it did before), so that a pixel's
-  // reconstruction is set up once, only for pixels with samples, and stays in registers.
-  void ReplayTile(
-    const TileRect& tile, const std::vector<CachedSample>& recorded, const TransferTable& table)
+  // Pass 2 of a tile from pass 1's cached samples, grouped by pixel (in the order each pixel
+  // took them, so it sums in the order it would marching again): a pixel's reconstruction is
+  // set up once, only for pixels with samples, and its hidden depth found once.
+  void ReplayTile(const TileRect& tile, const CachedTile& recorded, const TransferTable& table)
   {
-    this->Group(tile, recorded);
     this->TileHidden = 0;
+    const uint32_t* starts = recorded.Starts.data();
     for (int p = 0; p < tile.Pixels(); ++p)
     {
-      const uint32_t begin = this->Starts[p];
-      const uint32_t end = this->Starts[p + 1];
+      const uint32_t begin = starts[p];
+      const uint32_t end = starts[p + 1];
       if (begin == end)
       {
         continue;
@@ -163,15 +153,16 @@ struct Colour : NoSegments
         this->Weights.resize(most);
       }
       int count = 0;
-      for (uint32_t i = begin; i < end; ++i)
+      for (const CachedSample *sample = recorded.Samples.data() + begin,
+                              *last = recorded.Samples.data() + end;
+           sample != last; ++sample)
       {
-        const DepthAndScalar sample = this->Grouped[i];
-        if (sample.Z >= hiddenFrom)
+        if (sample->Z >= hiddenFrom)
         {
           continue;
         }
-        const TransferSample s = table.Lookup(sample.Scalar);
-        this->Depths[count] = sample.Z;
+        const TransferSample s = table.Lookup(sample->Scalar);
+        this->Depths[count] = sample->Z;
         this->Absorbances[count] = s.Absorbance;
         this->Colours[count] = s.Colour;
         ++count;
@@ -190,42 +181,18 @@ struct Colour : NoSegments
     }
     this->CountHidden();
   }
-  void Group(const TileRect& tile, const std::vector<CachedSample>& recorded)
-  {
-    const int pixels = tile.Pixels();
-    this->Starts.assign(static_cast<size_t>(pixels) + 1, 0);
-    for (const CachedSample& sample : recorded)
-    {
-      ++this->Starts[sample.Pixel + 1];
-    }
-    for (int p = 0; p < pixels; ++p)
-    {
-      this->Starts[p + 1] += this->Starts[p];
-    }
-    this->Grouped.resize(recorded.size());
-    for (const CachedSample& sample : recorded)
-    {
-      this->Grouped[this->Starts[sample.Pixel]++] = { sample.Z, sample.Scalar };
-    }
-    // Starts[p] now holds pixel p's end: shift back to the starts.
-    for (int p = pixels; p > 0; --p)
-    {
-      this->Starts[p] = this->Starts[p - 1];
-    }
-    this->Starts[0] = 0;
-  }
 };
 
 // A pass-1 sample's place along its ray when only the cache holds it: its float depth (as an
 // integer that orders like the float), then the low bits of its lattice index for depths that
 // rounded to the same float. Consecutive samples differ in k by 1, so ties never span a wrap
 // of the 16 bits unless 65536 samples share one float depth.
-inline int64_t ReplayOrder(const CachedSample& sample)
+inline int64_t ReplayOrder(float z, uint16_t k16)
 {
   uint32_t bits = 0;
-  std::memcpy(&bits, &sample.Z, sizeof(bits));
+  std::memcpy(&bits, &z, sizeof(bits));
   bits = (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
-  return (static_cast<int64_t>(bits) << 16) | sample.K16;
+  return (static_cast<int64_t>(bits) << 16) | k16;
 }
 
 // Hybrid pass 2 (apcHybridTransmittance.h): each pixel's own samples collected, sorted by
@@ -266,17 +233,21 @@ struct HybridColour : NoSegments
   {
     this->Pixels[pixel].push_back({ k, (*this->Warp)(t), s.Absorbance, s.Colour });
   }
-  void Replay(const CachedSample& sample, const TransferSample& s)
-  {
-    this->Pixels[sample.Pixel].push_back({ ReplayOrder(sample), sample.Z, s.Absorbance, s.Colour });
-  }
-  void ReplayTile(
-    const TileRect& tile, const std::vector<CachedSample>& recorded, const TransferTable& table)
+  // A cache recorded without the lattice bits (never by a pass 1 that kept its own moments)
+  // orders tied depths as they were taken.
+  void ReplayTile(const TileRect& tile, const CachedTile& recorded, const TransferTable& table)
   {
     this->BeginTile(tile);
-    for (const CachedSample& sample : recorded)
+    const bool ordered = recorded.K16.size() == recorded.Samples.size();
+    for (int p = 0; p < tile.Pixels(); ++p)
     {
-      this->Replay(sample, table.Lookup(sample.Scalar));
+      for (uint32_t i = recorded.Starts[p]; i < recorded.Starts[p + 1]; ++i)
+      {
+        const CachedSample& sample = recorded.Samples[i];
+        const TransferSample s = table.Lookup(sample.Scalar);
+        this->Pixels[p].push_back({ ReplayOrder(sample.Z, ordered ? recorded.K16[i] : 0), sample.Z,
+          s.Absorbance, s.Colour });
+      }
     }
     this->EndTile(tile);
   }

@@ -167,12 +167,13 @@ struct Moments : NoSegments
   const LogDepthWarp* Warp;
   SampleCache* Cache;
   std::vector<double> Sums;
-  // The tile's samples are recorded here, in the tile's own vector from the last frame taken
-  // out of the cache at BeginTile and put back at EndTile: its capacity fits a static view's
-  // samples, so recording neither grows nor copies. Pushing into the cache's vectors in place
-  // made threads on neighbouring tiles write the same cache lines (the vectors' ends), which
-  // cost pass 1 a sixth of its speed on 2 threads.
-  std::vector<CachedSample> Recorded;
+  // The tile's samples are recorded here, in this thread's own buffer reused from tile to
+  // tile (it grows only until it holds the largest tile), with each pixel's count, and
+  // grouped by pixel into the cache at EndTile. Pushing into the cache's vectors in place made
+  // threads on neighbouring tiles write the same cache lines (the vectors' ends), which cost
+  // pass 1 a sixth of its speed on 2 threads.
+  std::vector<RecordedSample> Recorded;
+  std::vector<uint32_t> Counts;
   bool Recording = false;
 
   Moments(double* output, int width, const LogDepthWarp* warp, SampleCache* cache)
@@ -186,11 +187,11 @@ struct Moments : NoSegments
   {
     this->Sums.assign(tile.Pixels() * (N + 1), 0.0);
     this->Recording = this->Cache && this->Cache->Record;
+    this->Recorded.clear();
     if (this->Recording)
     {
-      this->Recorded.swap(this->Cache->Tiles[tile.Index]);
+      this->Counts.assign(tile.Pixels(), 0);
     }
-    this->Recorded.clear();
   }
   void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
@@ -200,26 +201,28 @@ struct Moments : NoSegments
     {
       // Written field by field in place: a record built on the stack and copied was read
       // back across its two 16-bit stores, which stalls store forwarding (a tenth of pass 1).
-      CachedSample& record = this->Recorded.emplace_back();
+      RecordedSample& record = this->Recorded.emplace_back();
       record.Z = static_cast<float>(z);
       record.Scalar = static_cast<float>(scalar);
       record.Pixel = static_cast<uint16_t>(pixel);
       record.K16 = static_cast<uint16_t>(k);
+      ++this->Counts[pixel];
     }
   }
   void EndTile(const TileRect& tile)
   {
     if (this->Recording)
     {
-      this->Cache->Tiles[tile.Index].swap(this->Recorded);
       if (this->Cache->Record)
       {
-        this->Cache->Keep(tile.Index);
+        // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
+        this->Cache->Keep(
+          tile.Index, this->Recorded, this->Counts.data(), tile.Pixels(), this->Own != nullptr);
       }
       else
       {
         // Another tile found the budget spent: this one is not kept (and keeps no memory).
-        this->Cache->Tiles[tile.Index] = std::vector<CachedSample>();
+        this->Cache->Tiles[tile.Index].Free();
       }
     }
     for (int p = 0; p < tile.Pixels(); ++p)

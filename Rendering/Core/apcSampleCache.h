@@ -1,8 +1,10 @@
-// Pass 1's samples kept for pass 2, per screen tile, so that pass 2 only re-weights them
-// instead of clipping and interpolating again (re-weighting a cached sample costs a small
-// fraction of finding and interpolating it).
+// Pass 1's samples kept for pass 2, per screen tile and grouped by pixel, so that pass 2 only
+// re-weights them instead of clipping and interpolating again (re-weighting a cached sample
+// costs a small fraction of finding and interpolating it).
 #ifndef apcSampleCache_h
 #define apcSampleCache_h
+
+#include "apcUninitialized.h"
 
 #include <algorithm>
 #include <atomic>
@@ -15,21 +17,80 @@ namespace apc
 
 class TransferTable;
 
-// One pass-1 sample: its warped depth, its scalar, its pixel in the tile, and the low 16 bits
-// of its lattice index (in what was padding), which order the samples of a pixel whose float
-// depths tie, for the Hybrid resolve's exact own transmittance.
+// The budget of a process whose user set none: a quarter of its node's physical memory,
+// divided among the processes on the node (at least one), so that the ranks of a node
+// together never let their caches take more than that. A quarter leaves the meshes, the
+// buffers and other programs room, and holds a 1024^2 view of a million-cell mesh on one
+// rank of a small workstation. Unknown memory (0): 1 GiB.
+inline size_t NodeShareOfMemory(uint64_t nodeBytes, int processesOnNode)
+{
+  if (nodeBytes == 0)
+  {
+    return size_t(1) << 30;
+  }
+  return static_cast<size_t>(nodeBytes / 4 / static_cast<uint64_t>(std::max(1, processesOnNode)));
+}
+
+// One pass-1 sample as the cache keeps it: its warped depth and its scalar (the transfer
+// table interpolates between entries, so the scalar itself, not an entry index, is what pass
+// 2 needs to look up the same colour and absorbance). Its pixel is its place in the tile.
 struct CachedSample
+{
+  float Z;
+  float Scalar;
+};
+static_assert(sizeof(CachedSample) == 8, "a cached sample is two floats");
+
+// A tile's samples grouped by pixel: pixel p's are Samples[Starts[p] .. Starts[p + 1]), in
+// the order pass 1 took them. K16, kept only for a pass 1 that keeps its own moments
+// (Hybrid), holds the low 16 bits of each sample's lattice index, which order the samples of
+// a pixel whose float depths tie, for the Hybrid resolve's exact own transmittance. The
+// vectors keep their memory from frame to frame (a tile that outgrows it gets a quarter
+// more): a static or slowly moving view's samples are written without reallocation or page
+// faults.
+struct CachedTile
+{
+  UninitializedVector<uint32_t> Starts;
+  UninitializedVector<CachedSample> Samples;
+  UninitializedVector<uint16_t> K16;
+
+  size_t Bytes() const
+  {
+    return this->Starts.capacity() * sizeof(uint32_t) +
+      this->Samples.capacity() * sizeof(CachedSample) + this->K16.capacity() * sizeof(uint16_t);
+  }
+  void Clear()
+  {
+    this->Starts.clear();
+    this->Samples.clear();
+    this->K16.clear();
+  }
+  void Free() { *this = CachedTile(); }
+};
+
+// A sample as pass 1 records it while its tile is marched, before the tile's samples are
+// grouped by pixel into the cache.
+struct RecordedSample
 {
   float Z;
   float Scalar;
   uint16_t Pixel;
   uint16_t K16;
 };
-static_assert(sizeof(CachedSample) == 12, "the lattice bits must not make the cache bigger");
 
 struct SampleCache
 {
-  std::vector<std::vector<CachedSample>> Tiles;
+  template <class Vector>
+  static void Reserve(Vector& v, size_t n)
+  {
+    if (v.capacity() < n)
+    {
+      v = Vector();
+      v.reserve(n + n / 4);
+    }
+  }
+
+  std::vector<CachedTile> Tiles;
   // Kept[t]: tile t's samples are all in the cache. The tiles recorded before the budget ran
   // out stay cached; pass 2 replays them and marches only the others again.
   std::vector<uint8_t> Kept;
@@ -51,7 +112,7 @@ struct SampleCache
     this->Valid = false;
     for (auto& tile : this->Tiles)
     {
-      tile.clear();
+      tile.Clear();
     }
     std::fill(this->Kept.begin(), this->Kept.end(), uint8_t(0));
   }
@@ -63,28 +124,71 @@ struct SampleCache
     this->Tiles.resize(tiles);
     for (size_t t = 0; t < tiles; ++t)
     {
-      if ((t < first || t >= last) && this->Tiles[t].capacity() > 0)
+      if ((t < first || t >= last) && this->Tiles[t].Bytes() > 0)
       {
-        this->Tiles[t] = std::vector<CachedSample>();
+        this->Tiles[t].Free();
       }
     }
     this->Kept.assign(tiles, 0);
     this->Bytes = 0;
     this->Record = this->MaxBytes > 0;
   }
-  // Called by a tile that recorded all its samples into Tiles[tile]: keeps them if they fit
-  // in the budget, else drops them and stops the recording.
-  void Keep(size_t tile)
+  // Groups a marched tile's recorded samples by pixel into Tiles[tile] (counts[p]: pixel p's
+  // samples among them; withOrder: keep the lattice bits) if they fit in the budget; else
+  // frees the tile's memory and stops the recording.
+  void Keep(size_t tile, const std::vector<RecordedSample>& recorded, const uint32_t* counts,
+    int pixels, bool withOrder)
   {
-    std::vector<CachedSample>& recorded = this->Tiles[tile];
-    const size_t bytes = recorded.capacity() * sizeof(CachedSample);
+    CachedTile& cached = this->Tiles[tile];
+    const size_t n = recorded.size();
+    if (n == 0)
+    {
+      // Nothing to replay: no memory (a tile of transparent or no cells, on every mesh).
+      cached.Free();
+      this->Kept[tile] = 1;
+      return;
+    }
+    cached.Clear();
+    // A tile that outgrows last frame's memory gets a quarter more than it needs: after a
+    // small camera move half the tiles take a few more samples, and reallocating them exactly
+    // every frame cost pass 1 fresh pages (page faults) for half the cache.
+    Reserve(cached.Samples, n);
+    Reserve(cached.K16, withOrder ? n : 0);
+    cached.Starts.resize(static_cast<size_t>(pixels) + 1);
+    cached.Samples.resize(n);
+    cached.K16.resize(withOrder ? n : 0);
+    const size_t bytes = cached.Bytes();
     if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes)
     {
       this->Bytes.fetch_sub(bytes);
       this->Record = false;
-      recorded = std::vector<CachedSample>();
+      cached.Free();
       return;
     }
+    // A stable counting sort: each pixel's samples stay in the order they were taken.
+    uint32_t* starts = cached.Starts.data();
+    starts[0] = 0;
+    for (int p = 0; p < pixels; ++p)
+    {
+      starts[p + 1] = starts[p] + counts[p];
+    }
+    CachedSample* samples = cached.Samples.data();
+    uint16_t* order = cached.K16.data();
+    for (const RecordedSample& r : recorded)
+    {
+      const uint32_t at = starts[r.Pixel]++;
+      samples[at] = { r.Z, r.Scalar };
+      if (withOrder)
+      {
+        order[at] = r.K16;
+      }
+    }
+    // starts[p] now holds pixel p's end: shift back to the starts.
+    for (int p = pixels; p > 0; --p)
+    {
+      starts[p] = starts[p - 1];
+    }
+    starts[0] = 0;
     this->Kept[tile] = 1;
   }
 };

@@ -301,7 +301,7 @@ void VolumeRayMarcher::SetMaxSampleCacheBytes(size_t bytes)
   if (bytes < this->Cache->MaxBytes)
   {
     // The memory kept from frame to frame may exceed the new budget: give it back.
-    this->Cache->Tiles = std::vector<std::vector<CachedSample>>();
+    this->Cache->Tiles = std::vector<CachedTile>();
     this->Cache->Kept.clear();
     this->Cache->Valid = false;
   }
@@ -488,6 +488,8 @@ void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDep
     replayed = run(visitor);
   }
   this->LastSamples += replayed;
+  this->LastReplayed = replayed;
+  this->LastHidden = hidden.load();
   this->LastColourCacheShare =
     this->LastSamples > 0 ? static_cast<double>(replayed) / this->LastSamples : (usable ? 1 : 0);
   this->LastHiddenShare =
@@ -515,13 +517,13 @@ int64_t VolumeRayMarcher::ReplayColour(
       Visitor& visitor = perThread.local();
       for (int64_t t = first + begin; t < first + end; ++t)
       {
-        const std::vector<CachedSample>& recorded = cache.Tiles[t];
-        if (!cache.Kept[t] || recorded.empty())
+        const CachedTile& recorded = cache.Tiles[t];
+        if (!cache.Kept[t] || recorded.Samples.empty())
         {
           continue;
         }
         visitor.ReplayTile(Walker::Shifted(grid.Tile(t), rows.J0), recorded, table);
-        samples.local() += static_cast<int64_t>(recorded.size());
+        samples.local() += static_cast<int64_t>(recorded.Samples.size());
       }
     });
   return samples.combine(std::plus<int64_t>());

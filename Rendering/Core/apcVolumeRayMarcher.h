@@ -105,16 +105,21 @@ public:
   // 1e-4: far below one step of an 8-bit colour (1/255) in the Paper Sum resolve's weights,
   // and below it in Renormalised's (which divides by the weights' sum W) unless W < 0.026.
   static constexpr double kDefaultHiddenSampleWeight = 1e-4;
-  // The share of the last AccumulateColour's samples skipped as hidden (0 to 1).
+  // The share of the last AccumulateColour's samples skipped as hidden (0 to 1), and their
+  // number.
   double GetLastHiddenShare() const { return this->LastHiddenShare; }
+  int64_t GetLastHiddenCount() const { return this->LastHidden; }
 
-  // Pass 1 keeps its samples (depth and scalar, 12 bytes each) for pass 2 up to this many
-  // bytes, so that pass 2 only re-weights them instead of clipping and interpolating again;
-  // the tiles beyond the budget are marched again. 0 disables. Default 1 GiB. Lowering it
-  // frees the memory the cache holds.
+  // Pass 1 keeps its samples (depth and scalar, 8 bytes each, 10 with keepOwn) for pass 2 up
+  // to this many bytes, so that pass 2 only re-weights them instead of clipping and
+  // interpolating again; the tiles beyond the budget are marched again. 0 disables. Default
+  // 1 GiB (the frame engine sets the node's share, apc::NodeShareOfMemory). Lowering it frees
+  // the memory the cache holds.
   void SetMaxSampleCacheBytes(size_t bytes);
-  // The share of the last AccumulateColour's samples replayed from the cache (0 to 1).
+  // The share of the last AccumulateColour's samples replayed from the cache (0 to 1), and
+  // their number.
   double GetLastColourCacheShare() const { return this->LastColourCacheShare; }
+  int64_t GetLastReplayedCount() const { return this->LastReplayed; }
 
   // Exact ordered blending: premultiplied RGBA, W*H*4.
   void RenderExact(const TransferTable& table, float* rgba);
@@ -183,6 +188,8 @@ private:
   // The stop of the last pass 1, which its pass 2 must use too.
   double FrameStop = std::numeric_limits<double>::infinity();
   int64_t LastSamples = 0;
+  int64_t LastReplayed = 0;
+  int64_t LastHidden = 0;
 };
 
 } // namespace apc

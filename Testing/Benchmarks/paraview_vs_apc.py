@@ -110,7 +110,8 @@ COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "f
             "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
-            "covered_pixels", "bytes_per_covered_pixel",
+            "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
+            "pass2_cached_share", "pass2_hidden_share",
             "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
             "cells_per_rank_after", "note"])
 
@@ -382,6 +383,12 @@ def main(args):
                 if covered > 0:
                     row["bytes_per_covered_pixel"] = "%.2f" % (
                         statistics.median(t["bytes_sent"] for t in same) / covered)
+                # The display rank's samples: with pass1_s and pass2_s, ns per sample.
+                if "pass1_samples" in same[0]:
+                    row["pass1_samples"] = "%d" % statistics.median(
+                        t["pass1_samples"] for t in same)
+                    for share in ("pass2_cached_share", "pass2_hidden_share"):
+                        row[share] = "%.4f" % statistics.median(t[share] for t in same)
             row["messages_display_rank"] = "%d" % timings[-1]["messages_sent"]
             row["bytes_display_rank"] = "%d" % statistics.median(t["bytes_sent"] for t in same)
             row["pixels_composited"] = "%d" % statistics.median(

@@ -57,7 +57,7 @@ TEST(SettingChecks, MapperSetters)
     m, log, "MomentBias", [&] { m->SetMomentBias(-3); }, [&] { return m->GetMomentBias(); }, -1.0);
   ExpectChecked(
     m, log, "SampleCacheSize", [&] { m->SetSampleCacheSize(-5); },
-    [&] { return m->GetSampleCacheSize(); }, 0);
+    [&] { return m->GetSampleCacheSize(); }, -1);
   ExpectChecked(
     m, log, "NumberOfThreads", [&] { m->SetNumberOfThreads(-2); },
     [&] { return m->GetNumberOfThreads(); }, 0);

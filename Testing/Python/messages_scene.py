@@ -116,7 +116,7 @@ def ranges():
     bad = [("APCSampleDistance", -1.0, r"SampleDistance must be in \[0,"),
            ("APCBandMegapixels", 0.0, r"Band Size \(megapixels\) must be in \[0.01, 1024\]"),
            ("APCOverestimation", 5.0, r"Overestimation must be in \[0, 1\]"),
-           ("APCSampleCacheSize", -5, r"SampleCacheSize must be in \[0,"),
+           ("APCSampleCacheSize", -5, r"SampleCacheSize must be in \[-1,"),
            ("APCInteractiveImageReduction", 0, r"Interactive Image Reduction must be in \[1, 16\]"),
            ("APCInteractiveSampleDistanceFactor", 0.5,
             r"Interactive Sample Distance Factor must be in \[1, 16\]"),
