@@ -127,6 +127,7 @@ void CoefficientSizes(const double c[8][3], double& linear, double& nonlinear)
 void CellInterpolator::Set(const CellCorners& cell)
 {
   this->CellType = cell.Shape;
+  this->PyramidInverse = false; // set by SetLinearPyramid
   const int n = NumberOfCorners(cell.Shape);
   for (int i = 0; i < 8; ++i)
   {

@@ -32,6 +32,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 namespace apc
@@ -193,6 +194,53 @@ public:
     return a[0] + q[2] * a[3] + q[0] * a[1] + q[1] * a[2] + twist * a[4];
   }
 
+  // Pyramids whose twist keeps them off the linear inverse: the exact inverse in closed form.
+  // With a = M^-1 (x - C0) (LinearRay's coordinates of a pyramid) and g = M^-1 C4, the point's
+  // (u, v, t) is a - g w, where w = u v / (1-t) = r s (1-t) solves the quadratic
+  // (g2 - g0 g1) w^2 + (1 - a2 + a0 g1 + a1 g0) w - a0 a1 = 0: no Newton search. False for
+  // other shapes and for a pyramid whose M is singular.
+  bool HasPyramidInverse() const { return this->PyramidInverse; }
+
+  // The exact (u, v, t) and w of a pyramid's point from its coordinates a (above): of the
+  // quadratic's roots, the one whose point lies in the pyramid (or nearest to it). Only for
+  // HasPyramidInverse() cells.
+  void PyramidCoordinates(const double a[3], double q[3], double& w) const
+  {
+    const double* g = this->PyramidG;
+    const double A = g[2] - g[0] * g[1];
+    const double B = 1.0 - a[2] + a[0] * g[1] + a[1] * g[0];
+    const double C = a[0] * a[1];
+    const double root = std::sqrt(std::max(B * B + 4.0 * A * C, 0.0));
+    // The root that tends to C / B as the twist vanishes, in the form without cancellation.
+    const double denom = B >= 0 ? B + root : B - root;
+    w = denom != 0 ? 2.0 * C / denom : 0.0;
+    PyramidPoint(a, g, w, q);
+    const double outside = PyramidOutside(q);
+    if (outside > kPyramidInside && A != 0)
+    {
+      // A strongly twisted pyramid: the other root may be the one inside.
+      const double other = -denom / (2.0 * A);
+      double q2[3];
+      PyramidPoint(a, g, other, q2);
+      if (PyramidOutside(q2) < outside)
+      {
+        w = other;
+        std::copy(q2, q2 + 3, q);
+      }
+    }
+  }
+
+  // The scalar at a pyramid's point with coordinates a (above): S0 + SC1 u + SC2 v + SC3 t +
+  // SC4 w, VTK's interpolant at the exact inverse.
+  double PyramidScalarAt(const double a[3]) const
+  {
+    double q[3];
+    double w = 0;
+    this->PyramidCoordinates(a, q, w);
+    const auto& c = this->SC;
+    return c[0] + q[0] * c[1] + q[1] * c[2] + q[2] * c[3] + w * c[4];
+  }
+
   // Sum of VTK's weights times the corner scalars: exact at the corners.
   double InterpolateScalar(const double pcoords[3]) const;
 
@@ -250,6 +298,25 @@ private:
   double LinearP[3] = {};
   double LinearX[3] = {};
   double LinearScalarError = 0.0;
+  // Pyramids: M^-1 C4, and whether the closed-form inverse applies (HasPyramidInverse).
+  double PyramidG[3] = {};
+  bool PyramidInverse = false;
+
+  // Below this distance outside the pyramid (in (u, v, t)) a root is taken as the one inside.
+  static constexpr double kPyramidInside = 1e-9;
+  static void PyramidPoint(const double a[3], const double g[3], double w, double q[3])
+  {
+    q[0] = a[0] - g[0] * w;
+    q[1] = a[1] - g[1] * w;
+    q[2] = a[2] - g[2] * w;
+  }
+  // How far (u, v, t) lies outside the pyramid u, v >= 0, u, v <= 1 - t, t >= 0.
+  static double PyramidOutside(const double q[3])
+  {
+    const double below = 1.0 - q[2];
+    return std::max(
+      std::max(std::max(-q[0], q[0] - below), std::max(-q[1], q[1] - below)), std::max(-q[2], 0.0));
+  }
 
   void SetLinear(const double centre[3], const double offset[3], const double cr[3],
     const double cs[3], const double ct[3], double det);

@@ -22,6 +22,11 @@ namespace
 // affine its faces are nearly planar, so those points lie within about the bound's own
 // parametric error of the reference cell, which the bound only accepts below this.
 constexpr double kLinearMargin = 0.05;
+
+bool IsFinite3(const double v[3])
+{
+  return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+}
 }
 
 void CellInterpolator::SetLinear(const double centre[3], const double offset[3], const double cr[3],
@@ -128,6 +133,11 @@ void CellInterpolator::SetLinearPyramid()
     this->LinearP[d] = 0.0;
     this->LinearX[d] = c[0][d];
   }
+  for (int d = 0; d < 3; ++d)
+  {
+    this->PyramidG[d] = Dot(this->Inverse[d], c[4]);
+  }
+  this->PyramidInverse = IsFinite3(this->PyramidG);
   const double grown = 1.0 + kLinearMargin;
   const double wMax = grown * grown * grown;
   const auto& a = this->SC;

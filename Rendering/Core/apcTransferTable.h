@@ -34,8 +34,9 @@ public:
     double sampleSpacing, double unitDistance);
 
   // Non-finite scalars (NaN, +-inf) give a fully transparent sample: one rule for all of
-  // them, as CellMesh's scalar ranges have.
-  TransferSample Lookup(double scalar) const
+  // them, as CellMesh's scalar ranges have. Always inlined: the marcher looks up every
+  // sample, and a call per sample costs pass 1 about a twentieth.
+  [[gnu::always_inline]] TransferSample Lookup(double scalar) const
   {
     if (!std::isfinite(scalar))
     {

@@ -46,11 +46,13 @@ struct VolumeRayMarcher::Walker
   // Largest scalar error (scalar units) of a cell sampled by its linear inverse.
   double LinearTolerance;
 
-  // A cell's scalars: its own (or none needed), linear along the ray, or by Newton.
+  // A cell's scalars: its own (or none needed), linear along the ray, a twisted pyramid's
+  // closed-form inverse, or by Newton.
   enum class Sampling
   {
     Constant,
     Linear,
+    Pyramid,
     Follow
   };
 
@@ -190,6 +192,10 @@ struct VolumeRayMarcher::Walker
     {
       return this->Samples<Sampling::Linear>(local, ray, tin, tout, visitor, state, progress);
     }
+    if (state.Interpolator.HasPyramidInverse())
+    {
+      return this->Samples<Sampling::Pyramid>(local, ray, tin, tout, visitor, state, progress);
+    }
     return this->Samples<Sampling::Follow>(local, ray, tin, tout, visitor, state, progress);
   }
 
@@ -202,7 +208,7 @@ struct VolumeRayMarcher::Walker
     double p0[3] = { 0, 0, 0 };
     double dp[3] = { 0, 0, 0 };
     NewtonMemory memory;
-    if (How == Sampling::Linear)
+    if (How == Sampling::Linear || How == Sampling::Pyramid)
     {
       state.Interpolator.LinearRay(ray.O, ray.D, p0, dp);
     }
@@ -218,7 +224,7 @@ struct VolumeRayMarcher::Walker
     {
       TransferSample s = state.CellSample;
       double scalar = state.CellScalar;
-      if (How == Sampling::Linear)
+      if (How == Sampling::Linear || How == Sampling::Pyramid)
       {
         for (int d = 0; d < 3; ++d)
         {
@@ -243,7 +249,8 @@ struct VolumeRayMarcher::Walker
         // and it is what makes skipping by range exact.
         const double interpolated = How == Sampling::Linear
           ? state.Interpolator.LinearScalarAt(pcoords)
-          : state.Interpolator.ScalarAt(pcoords);
+          : (How == Sampling::Pyramid ? state.Interpolator.PyramidScalarAt(pcoords)
+                                      : state.Interpolator.ScalarAt(pcoords));
         scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
         s = this->Table.Lookup(scalar);
       }

@@ -178,3 +178,58 @@ TEST(LinearInverse, MonomialScalarMatchesShapeFunctions)
     }
   }
 }
+
+// Twisted pyramids (too far from affine for the linear inverse) take the closed-form inverse:
+// it must give the exact interpolant and (u, v, t) = ((1-t) r, (1-t) s, t), up to rounding,
+// at every point of the cell, the apex region included.
+TEST(LinearInverse, PyramidClosedFormIsExact)
+{
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int checked = 0;
+  for (double distortion : { 1e-3, 0.05, 0.15, 0.3 })
+  {
+    for (int c = 0; c < 40; ++c)
+    {
+      const CellInterpolator cell(NearlyAffineCell(CellShape::Pyramid, distortion, rng));
+      if (cell.IsDegenerate())
+      {
+        continue;
+      }
+      ASSERT_TRUE(cell.HasPyramidInverse());
+      for (int k = 0; k < 200; ++k)
+      {
+        double p[3];
+        RandomPCoords(CellShape::Pyramid, rng, p);
+        if (k % 10 == 0)
+        {
+          p[2] = 1.0 - 1e-6 * (k + 1); // near the apex
+        }
+        double x[3];
+        cell.WorldPosition(p, x);
+        // The walker's coordinates a, reached along a ray through x.
+        const double d[3] = { u(rng), u(rng), u(rng) };
+        const double t = 3.0 + u(rng);
+        const double o[3] = { x[0] - t * d[0], x[1] - t * d[1], x[2] - t * d[2] };
+        double a0[3], da[3];
+        cell.LinearRay(o, d, a0, da);
+        const double a[3] = { a0[0] + t * da[0], a0[1] + t * da[1], a0[2] + t * da[2] };
+        double q[3];
+        double w = 0;
+        cell.PyramidCoordinates(a, q, w);
+        const double below = 1.0 - p[2];
+        EXPECT_NEAR(q[0], below * p[0], 1e-9) << "distortion " << distortion;
+        EXPECT_NEAR(q[1], below * p[1], 1e-9) << "distortion " << distortion;
+        EXPECT_NEAR(q[2], p[2], 1e-9) << "distortion " << distortion;
+        EXPECT_NEAR(w, p[0] * p[1] * below, 1e-9) << "distortion " << distortion;
+        EXPECT_NEAR(cell.PyramidScalarAt(a), cell.InterpolateScalar(p), 1e-8)
+          << "distortion " << distortion;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 20000);
+  // Other shapes never take it.
+  EXPECT_FALSE(
+    CellInterpolator(NearlyAffineCell(CellShape::Hexahedron, 0.1, rng)).HasPyramidInverse());
+}
