@@ -106,11 +106,11 @@ class RealDataSection:
         if ident:
             self.add("\nThe display rank's float RGBA on N ranks against 1 rank (max |Δ| over "
                      "all pixels). APC must be identical to one-process MBOIT (a one-rank "
-                     "frame whose pass-1 sample cache exceeds its 1 GiB budget re-marches pass 2 "
+                     "frame whose pass-1 sample cache exceeds its budget re-marches pass 2 "
                      "instead of replaying it, which differs by float rounding). The segments "
-                     "should match to rounding; differences of 1e-4 and more on this data are "
-                     "not understood yet (samples on the pieces' shared faces are the suspect) "
-                     "and are listed as found:\n\n")
+                     "must match to float rounding (<= 1e-5; samples that overlapping cells take "
+                     "at one lattice point blend in a fixed order, docs/architecture.md); the "
+                     "differences are listed as measured by the run that wrote this report:\n\n")
             self.add(table(["case", "ranks", "distance", "max |Δ| vs 1 rank"], ident))
 
 
