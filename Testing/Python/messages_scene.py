@@ -47,7 +47,11 @@ def check(ok, what):
 
 
 def expect(low, high, pattern):
-    print("APC-EXPECT %d %d %s" % (low, high, pattern), flush=True)
+    # One write of the whole line: pvbatch's Python writes unbuffered, so print() would send
+    # the text and its newline apart, and a message another rank or thread prints between the
+    # two would end up on the expectation's line.
+    sys.stdout.write("APC-EXPECT %d %d %s\n" % (low, high, pattern))
+    sys.stdout.flush()
 
 
 def step(what):
