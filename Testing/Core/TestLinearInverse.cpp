@@ -56,8 +56,10 @@ void RandomPCoords(CellShape shape, std::mt19937& rng, double p[3])
     (shape == CellShape::Wedge && p[0] + p[1] > 1.0));
 }
 
-// The scalar the linear inverse gives at x, reached along a ray through x.
-double LinearScalar(const CellInterpolator& cell, const double x[3], std::mt19937& rng)
+// The coordinates the linear inverse gives at x, reached along a random ray through x (as the
+// walker reaches them: linearly from the ray's origin).
+void LinearCoordinates(
+  const CellInterpolator& cell, const double x[3], std::mt19937& rng, double p[3])
 {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double d[3] = { u(rng), u(rng), u(rng) };
@@ -65,7 +67,17 @@ double LinearScalar(const CellInterpolator& cell, const double x[3], std::mt1993
   const double o[3] = { x[0] - t * d[0], x[1] - t * d[1], x[2] - t * d[2] };
   double p0[3], dp[3];
   cell.LinearRay(o, d, p0, dp);
-  const double p[3] = { p0[0] + t * dp[0], p0[1] + t * dp[1], p0[2] + t * dp[2] };
+  for (int i = 0; i < 3; ++i)
+  {
+    p[i] = p0[i] + t * dp[i];
+  }
+}
+
+// The scalar the linear inverse gives at x, reached along a ray through x.
+double LinearScalar(const CellInterpolator& cell, const double x[3], std::mt19937& rng)
+{
+  double p[3];
+  LinearCoordinates(cell, x, rng, p);
   return cell.LinearScalarAt(p);
 }
 
@@ -185,7 +197,6 @@ TEST(LinearInverse, MonomialScalarMatchesShapeFunctions)
 TEST(LinearInverse, PyramidClosedFormIsExact)
 {
   std::mt19937 rng(13);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   int checked = 0;
   for (double distortion : { 1e-3, 0.05, 0.15, 0.3 })
   {
@@ -208,12 +219,8 @@ TEST(LinearInverse, PyramidClosedFormIsExact)
         double x[3];
         cell.WorldPosition(p, x);
         // The walker's coordinates a, reached along a ray through x.
-        const double d[3] = { u(rng), u(rng), u(rng) };
-        const double t = 3.0 + u(rng);
-        const double o[3] = { x[0] - t * d[0], x[1] - t * d[1], x[2] - t * d[2] };
-        double a0[3], da[3];
-        cell.LinearRay(o, d, a0, da);
-        const double a[3] = { a0[0] + t * da[0], a0[1] + t * da[1], a0[2] + t * da[2] };
+        double a[3];
+        LinearCoordinates(cell, x, rng, a);
         double q[3];
         double w = 0;
         cell.PyramidCoordinates(a, q, w);
