@@ -42,7 +42,7 @@ uint64_t MemoryOfNode()
                                    : 0;
 }
 
-// ShareNodeMemory's budget; 0 until it runs.
+// ShareNode's budget; 0 until it runs.
 std::atomic<size_t> NodeCacheBytes{ 0 };
 }
 
@@ -73,22 +73,14 @@ int ProcessesOnThisNode(vtkMultiProcessController* controller)
 }
 
 //------------------------------------------------------------------------------
-int ShareNodeCores(vtkMultiProcessController* controller)
+void ShareNode(vtkMultiProcessController* controller)
 {
-  const int threads =
-    NodeShareOfThreads(CoresOfNode(), CoresInAffinityMask(), ProcessesOnThisNode(controller));
-  SetDefaultThreads(threads);
-  return threads;
+  const int processes = ProcessesOnThisNode(controller);
+  SetDefaultThreads(NodeShareOfThreads(CoresOfNode(), CoresInAffinityMask(), processes));
+  NodeCacheBytes.store(NodeShareOfMemory(MemoryOfNode(), processes));
 }
 
 //------------------------------------------------------------------------------
-size_t ShareNodeMemory(vtkMultiProcessController* controller)
-{
-  const size_t bytes = NodeShareOfMemory(MemoryOfNode(), ProcessesOnThisNode(controller));
-  NodeCacheBytes.store(bytes);
-  return bytes;
-}
-
 size_t DefaultSampleCacheBytes()
 {
   const size_t shared = NodeCacheBytes.load();

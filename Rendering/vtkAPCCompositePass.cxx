@@ -397,8 +397,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
     this->Controller, this->DisplayProcess, &internal.Record.Collectives);
   if (!internal.ThreadsShared || internal.ThreadsSharedFor != this->Controller)
   {
-    apc::ShareNodeCores(this->Controller);
-    apc::ShareNodeMemory(this->Controller);
+    apc::ShareNode(this->Controller);
     internal.ThreadsShared = true;
     internal.ThreadsSharedFor = this->Controller;
   }
