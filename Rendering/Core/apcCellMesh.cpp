@@ -25,7 +25,7 @@ bool Precedes(const std::vector<std::array<double, 3>>& points, int64_t a, int64
 // sharing the face get the same numbers (see the header). Returns false for a face with no
 // area (collapsed corners), which then constrains nothing.
 bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int64_t* ids, int size,
-  double normal[3], double& offset)
+  std::array<float, 3>& normal, double& offset)
 {
   int first = 0;
   for (int i = 1; i < size; ++i)
@@ -65,12 +65,17 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
   // normal is stored in float: the offset is taken with the rounded normal, so that the
   // stored plane passes through the centroid (to double rounding) and is only tilted by the
   // normal's rounding, an error relative to the face's size, not to its distance from the
-  // origin.
+  // origin. The rounded normal goes through float storage: GCC 12's -O3 vectoriser dropped
+  // the rounding of a double -> float -> double round trip held in doubles for two of the
+  // three components, so the offset belonged to the unrounded normal and the stored plane
+  // missed the face by the rounding times the distance from the origin (0.1 m at 1e7).
   for (int d = 0; d < 3; ++d)
   {
     normal[d] = static_cast<float>(n[d] / length);
   }
-  offset = (normal[0] * c[0] + normal[1] * c[1] + normal[2] * c[2]) / size;
+  offset = (static_cast<double>(normal[0]) * c[0] + static_cast<double>(normal[1]) * c[1] +
+             static_cast<double>(normal[2]) * c[2]) /
+    size;
   return true;
 }
 }
@@ -226,18 +231,17 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, std::vector<FacePlane>& pl
     {
       faceIds[i] = ids[faces.Corner[f][i]];
     }
-    double n[3];
+    std::array<float, 3> n;
     double offset;
     if (!CanonicalPlane(this->Points, faceIds, faces.Size[f], n, offset))
     {
       continue;
     }
     // Flipping the sign is exact, so the neighbour's copy stays bit-identical.
-    const double side = n[0] * centroid[0] + n[1] * centroid[1] + n[2] * centroid[2] - offset;
-    const double sign = side > 0 ? -1.0 : 1.0;
-    planes.push_back({ { static_cast<float>(sign * n[0]), static_cast<float>(sign * n[1]),
-                         static_cast<float>(sign * n[2]) },
-      sign * offset });
+    const double side = static_cast<double>(n[0]) * centroid[0] +
+      static_cast<double>(n[1]) * centroid[1] + static_cast<double>(n[2]) * centroid[2] - offset;
+    const float sign = side > 0 ? -1.0f : 1.0f;
+    planes.push_back({ { sign * n[0], sign * n[1], sign * n[2] }, sign * offset });
   }
   // A cell needs at least four faces with area to enclose anything; with fewer (collapsed
   // corners, a flat cell) its planes would leave rays unbounded, so it is left out.

@@ -196,8 +196,9 @@ inline int64_t ReplayOrder(float z, uint16_t k16)
 }
 
 // Hybrid pass 2 (apcHybridTransmittance.h): each pixel's own samples collected, sorted by
-// their place along the ray and weighted by alpha T_own T_others, T_own the exact ordered
-// product of the own samples in front, T_others reconstructed from global - own moments.
+// their place along the ray (ties by their values) and weighted by alpha T_own T_others,
+// T_own the exact ordered product of the own samples in front, T_others reconstructed from
+// global - own moments.
 template <int N>
 struct HybridColour : NoSegments
 {
@@ -260,8 +261,14 @@ struct HybridColour : NoSegments
       {
         continue;
       }
+      // Samples of one lattice point (overlapping cells) in SampleBefore's order, so that the
+      // exact product T_own does not depend on the order the cells delivered them in.
       std::sort(samples.begin(), samples.end(),
-        [](const OwnSample& a, const OwnSample& b) { return a.Order < b.Order; });
+        [](const OwnSample& a, const OwnSample& b)
+        {
+          return a.Order != b.Order ? a.Order < b.Order
+                                    : ValuesBefore(a.Absorbance, a.Colour, b.Absorbance, b.Colour);
+        });
       const size_t at = static_cast<size_t>(tile.ImagePixel(p, this->Width));
       const OthersTransmittance<N> others(
         this->GlobalMoments + (N + 1) * at, this->OwnMoments + (N + 1) * at, this->Settings);

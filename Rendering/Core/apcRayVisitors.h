@@ -63,24 +63,31 @@ struct SampleRecord
 // which depends on the threads and on which cells a rank holds, such a pixel's colour changed
 // from run to run and with the number of ranks; ordered by their values, such samples blend
 // the same way on every run and rank count. The values are compared as bit patterns: a strict
-// weak order even for NaN.
-inline bool SampleBefore(const SampleRecord& a, const SampleRecord& b)
+// weak order even for NaN. ValuesBefore orders two samples of one lattice point (the exact
+// blend's, the segments' and Hybrid's own samples), SampleBefore any two samples of a ray.
+inline bool ValuesBefore(float absorbanceA, const std::array<float, 3>& colourA, float absorbanceB,
+  const std::array<float, 3>& colourB)
 {
-  if (a.K != b.K)
-  {
-    return a.K < b.K;
-  }
   auto bits = [](float v)
   {
     uint32_t u;
     std::memcpy(&u, &v, sizeof u);
     return u;
   };
-  const std::array<uint32_t, 4> x = { bits(a.Absorbance), bits(a.Colour[0]), bits(a.Colour[1]),
-    bits(a.Colour[2]) };
-  const std::array<uint32_t, 4> y = { bits(b.Absorbance), bits(b.Colour[0]), bits(b.Colour[1]),
-    bits(b.Colour[2]) };
+  const std::array<uint32_t, 4> x = { bits(absorbanceA), bits(colourA[0]), bits(colourA[1]),
+    bits(colourA[2]) };
+  const std::array<uint32_t, 4> y = { bits(absorbanceB), bits(colourB[0]), bits(colourB[1]),
+    bits(colourB[2]) };
   return x < y;
+}
+
+inline bool SampleBefore(const SampleRecord& a, const SampleRecord& b)
+{
+  if (a.K != b.K)
+  {
+    return a.K < b.K;
+  }
+  return ValuesBefore(a.Absorbance, a.Colour, b.Absorbance, b.Colour);
 }
 
 // Each pixel's samples of one tile, in arrival order; the base of the visitors that need

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <vector>
 
@@ -148,5 +149,55 @@ TEST(FacePlanes, PassThroughTheirFacesFarFromTheOrigin)
           << "scale " << scale << ", shift " << shift;
       }
     }
+  }
+}
+
+TEST(FacePlanes, TiltedFacesPassThroughTheirCornersFarFromTheOrigin)
+{
+  // Faces in no axis direction, so that their float normals are rounded: each plane's offset
+  // must be the rounded normal's, or the plane misses its face by the rounding (6e-8) times
+  // the distance from the origin, a tenth of a metre at 1e7.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double size = 3.0;
+  for (const double shift : { 0.0, 1e4, 1e7 })
+  {
+    double worst = 0;
+    for (int trial = 0; trial < 50; ++trial)
+    {
+      apc::CellMesh mesh;
+      for (int i = 0; i < 4; ++i)
+      {
+        mesh.Points.push_back({ shift + size * unit(random), shift + size * unit(random),
+          shift + size * unit(random) });
+      }
+      mesh.PointScalars.assign(4, 1.0f);
+      const int64_t ids[4] = { 0, 1, 2, 3 };
+      mesh.AddCell(apc::CellShape::Tetra, ids);
+      ASSERT_TRUE(mesh.Finalize());
+      int count = 0;
+      const apc::FacePlane* planes = mesh.GetPlanes(0, count);
+      if (count != 4)
+      {
+        continue; // a flat draw
+      }
+      for (int p = 0; p < count; ++p)
+      {
+        // A face's three corners lie on its plane, the opposite corner off it.
+        std::vector<double> distances;
+        for (const Point& x : mesh.Points)
+        {
+          distances.push_back(std::abs(planes[p].Normal[0] * (x[0] - shift) +
+            planes[p].Normal[1] * (x[1] - shift) + planes[p].Normal[2] * (x[2] - shift) -
+            (planes[p].Offset -
+              shift * (double(planes[p].Normal[0]) + planes[p].Normal[1] + planes[p].Normal[2]))));
+        }
+        std::sort(distances.begin(), distances.end());
+        worst = std::max(worst, distances[2]);
+      }
+    }
+    std::cout << "shift " << shift << ": largest distance of a face's corner from its plane "
+              << worst << "\n";
+    EXPECT_LE(worst, 1e-6 * size) << "shift " << shift;
   }
 }

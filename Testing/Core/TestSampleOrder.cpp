@@ -1,7 +1,9 @@
 // Samples of one lattice point blend in one fixed order: where cells overlap, two or three of
 // them sample the same lattice point with different values, and the exact blend and the
 // segments' runs must not depend on the order in which the cells delivered them (threads,
-// and the cells each rank holds).
+// and the cells each rank holds). Hybrid's pass 2 blends a rank's own samples exactly too,
+// and is held to the same.
+#include "apcColourVisitors.h"
 #include "apcRayVisitors.h"
 
 #include <gtest/gtest.h>
@@ -90,4 +92,54 @@ TEST(SampleOrder, StrictWeakOrderEvenForNaN)
   EXPECT_NE(apc::visitors::SampleBefore(a, b), apc::visitors::SampleBefore(b, a));
   EXPECT_TRUE(apc::visitors::SampleBefore(c, a)) << "depth first";
   EXPECT_TRUE(apc::visitors::SampleBefore(c, b));
+}
+
+TEST(SampleOrder, HybridOwnSamplesOfOneLatticePointWeighTheSameInAnyArrivalOrder)
+{
+  // Hybrid's own samples are blended exactly (T_own, the ordered product in front of each):
+  // the three samples of k = 235 must get the same weights whatever order they arrive in.
+  const std::vector<SampleRecord> samples = TracedRay();
+  std::array<SampleRecord, 3> triple = { samples[5], samples[11], samples[12] };
+  std::sort(triple.begin(), triple.end(), apc::visitors::SampleBefore);
+  const apc::LogDepthWarp warp(100.0, 1000.0);
+  // The other ranks add nothing here (global = own): the weights are the own ones alone.
+  const std::array<double, 5> moments = { 0, 0, 0, 0, 0 };
+  const apc::TileRect tile{ 0, 0, 1, 1, 0 };
+  bool first = true;
+  std::array<double, 4> reference{};
+  int orders = 0;
+  do
+  {
+    std::array<double, 4> sums = { 0, 0, 0, 0 };
+    apc::visitors::HybridColour<4> visitor(
+      sums.data(), 1, &warp, moments.data(), moments.data(), apc::MomentSettings<4>());
+    visitor.BeginTile(tile);
+    auto add = [&visitor](const SampleRecord& r)
+    {
+      const double t = 2.0 * static_cast<double>(r.K);
+      visitor.Sample(0, r.K, t, 0.0, apc::TransferSample{ r.Colour, r.Absorbance });
+    };
+    for (size_t i = 0; i < samples.size(); ++i)
+    {
+      if (i != 5 && i != 11 && i != 12)
+      {
+        add(samples[i]);
+      }
+      if (i == 5 || i == 11 || i == 12)
+      {
+        add(triple[i == 5 ? 0 : (i == 11 ? 1 : 2)]);
+      }
+    }
+    visitor.EndTile(tile);
+    ++orders;
+    if (first)
+    {
+      reference = sums;
+      first = false;
+      EXPECT_GT(reference[3], 0.5);
+      continue;
+    }
+    EXPECT_EQ(sums, reference) << "arrival order " << orders;
+  } while (std::next_permutation(triple.begin(), triple.end(), apc::visitors::SampleBefore));
+  EXPECT_EQ(orders, 6);
 }

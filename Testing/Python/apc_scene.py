@@ -23,6 +23,8 @@ parser.add_argument("--size", type=int, nargs=2, default=[160, 120])
 parser.add_argument("--out", help="float image (.vti or .exr) written by the display rank")
 parser.add_argument("--png", help="screenshot")
 parser.add_argument("--compare", help="reference .vti: the RGBA must match within --tolerance")
+parser.add_argument("--compare-also", action="append", default=[],
+                    help="another reference .vti held to the same tolerance (repeatable)")
 # The moments travel in 32-bit fixed point and the colour sums in float: N ranks match one to
 # ~1e-6 here.
 parser.add_argument("--tolerance", type=float, default=1e-5)
@@ -438,7 +440,8 @@ def main():
                   % (int(diff.max()), int((diff > 0).sum())))
             check(int(diff.max()) <= args.png_tolerance,
                   "the screenshot matches the reference to %d/255" % args.png_tolerance)
-    if args.compare and args.out and os.path.exists(args.out):
+    references = ([args.compare] if args.compare else []) + args.compare_also
+    if references and args.out and os.path.exists(args.out):
         from vtkmodules.vtkIOXML import vtkXMLImageDataReader
         from vtkmodules.util.numpy_support import vtk_to_numpy
         import numpy
@@ -449,21 +452,24 @@ def main():
             reader.Update()
             return vtk_to_numpy(reader.GetOutput().GetPointData().GetArray("RGBA")).astype(numpy.float64)
 
-        a, b = rgba(args.out), rgba(args.compare)
-        check(a.shape == b.shape, "image sizes %s vs %s" % (a.shape, b.shape))
-        if a.shape == b.shape:
+        a = rgba(args.out)
+        for reference in references:
+            b = rgba(reference)
+            check(a.shape == b.shape, "image sizes %s vs %s" % (a.shape, b.shape))
+            if a.shape != b.shape:
+                continue
             per_pixel = numpy.abs(a - b).max(axis=1)
             diff = float(per_pixel.max())
             beyond = int((per_pixel > args.tolerance).sum())
             print("max |distributed - reference| = %.3g over %d pixels (max alpha %.3f), "
-                  "%d pixels beyond %g" % (diff, a.shape[0], float(b[:, 3].max()), beyond,
-                                           args.tolerance))
+                  "%d pixels beyond %g (%s)" % (diff, a.shape[0], float(b[:, 3].max()), beyond,
+                                                args.tolerance, os.path.basename(reference)))
             if args.outliers:
                 check(beyond <= args.outliers and diff <= 0.05,
-                      "within %g of the reference but for %d pixels within 0.05"
-                      % (args.tolerance, args.outliers))
+                      "within %g of %s but for %d pixels within 0.05"
+                      % (args.tolerance, reference, args.outliers))
             else:
-                check(diff <= args.tolerance, "within %g of the reference" % args.tolerance)
+                check(diff <= args.tolerance, "within %g of %s" % (args.tolerance, reference))
             check(float(b[:, 3].max()) > 0.2, "the reference shows something")
     return failures
 
