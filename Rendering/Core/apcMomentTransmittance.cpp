@@ -124,11 +124,6 @@ APC_ALWAYS_INLINE double OpacityOfAbsorbance(double a)
   return small * (a * series) + (1.0 - small) * (1.0 - ExpNonPositive(-a));
 }
 
-struct FourMomentPixel
-{
-  double L3, L4, L6, L7, L8, D0, D1, D2, B0, Beta;
-};
-
 // Query's 4-moment arithmetic for n samples, every branch turned into a select so that the loop
 // vectorises; full[i] is set where Query's fast path would not answer (it then gives the
 // sample's transmittance). Compiled twice, for the build's baseline and for AVX2 with FMA, and
@@ -211,8 +206,8 @@ void MomentTransmittance<N>::Weights(
     if (this->State == PixelState::Valid)
     {
       constexpr int kChunk = 256;
-      const FourMomentPixel px{ this->LInv[3], this->LInv[4], this->LInv[6], this->LInv[7],
-        this->LInv[8], this->InvD[0], this->InvD[1], this->InvD[2], this->B0, this->Beta };
+      FourMomentPixel px;
+      this->GetFourMomentPixel(px);
       uint8_t full[kChunk];
       for (int begin = 0; begin < n; begin += kChunk)
       {
