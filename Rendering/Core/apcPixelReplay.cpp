@@ -193,7 +193,11 @@ APC_AVX2_INLINE Looked Lookup4(const TransferTable::Layout& table, __m256d scala
     const __m128 a = _mm_loadu_ps(entries + 4 * ii[k]);
     const __m128 b = _mm_loadu_ps(entries + 4 * jj[k]);
     const __m128 fk = _mm_permutevar_ps(f, _mm_set1_epi32(k));
-    e[k] = _mm_add_ps(a, _mm_mul_ps(fk, _mm_sub_ps(b, a)));
+    __m128 step = _mm_mul_ps(fk, _mm_sub_ps(b, a));
+    // Rounded before the add, as Lookup's baseline code does: no contraction into an FMA,
+    // so that the colours and absorbances are Lookup's to the bit.
+    __asm__("" : "+x"(step));
+    e[k] = _mm_add_ps(a, step);
   }
   _MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
   return { _mm256_cvtps_pd(e[0]), _mm256_cvtps_pd(e[1]), _mm256_cvtps_pd(e[2]),
