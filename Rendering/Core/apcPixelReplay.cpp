@@ -210,66 +210,126 @@ APC_AVX2_INLINE double Total(__m256d v)
   return _mm_cvtsd_f64(_mm_add_sd(pairs, _mm_unpackhi_pd(pairs, pairs)));
 }
 
+// Up to 4 records (depth, scalar) of a run from samples on: the depths and scalars widened to
+// double, and which lanes hold a sample in front of the hidden depth. Past the run's end, the
+// load is masked (nothing read) and the lanes are left out.
+struct Group
+{
+  __m256d Z;
+  __m256d Scalar;
+  __m256d Visible;
+  int Hidden;
+};
+
+APC_AVX2_INLINE Group Load(const CachedSample* samples, int lanes, __m256d hiddenFrom)
+{
+  const float* record = reinterpret_cast<const float*>(samples);
+  __m256 raw;
+  if (lanes >= 4)
+  {
+    lanes = 4;
+    raw = _mm256_loadu_ps(record);
+  }
+  else
+  {
+    const __m256i mask =
+      _mm256_cmpgt_epi32(_mm256_set1_epi32(2 * lanes), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    raw = _mm256_maskload_ps(record, mask);
+  }
+  const __m256 split = _mm256_permutevar8x32_ps(raw, _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
+  Group g;
+  g.Z = _mm256_cvtps_pd(_mm256_castps256_ps128(split));
+  g.Scalar = _mm256_cvtps_pd(_mm256_extractf128_ps(split, 1));
+  const __m256d valid =
+    _mm256_cmp_pd(_mm256_setr_pd(0, 1, 2, 3), _mm256_set1_pd(lanes), _CMP_LT_OQ);
+  g.Visible = _mm256_and_pd(valid, _mm256_cmp_pd(g.Z, hiddenFrom, _CMP_NGE_UQ));
+  g.Hidden = lanes - __builtin_popcount(_mm256_movemask_pd(g.Visible));
+  return g;
+}
+
+// The group's weights alpha T(z), 0 where a lane is hidden, past the run or (as
+// ColourSums::Add skips them) NaN or not positive; what the vector arithmetic cannot answer
+// comes from the pixel's query.
+APC_AVX2_INLINE __m256d Weigh(
+  const MomentTransmittance<4>& t, const FourMomentPixel& px, const Group& g, const Looked& s)
+{
+  Lanes l = Weights4(px, g.Z, s.Absorbance);
+  const int fallback = _mm256_movemask_pd(_mm256_and_pd(l.Fallback, g.Visible));
+  if (fallback != 0)
+  {
+    alignas(32) double weight[4];
+    alignas(32) double depth[4];
+    alignas(32) double absorbance[4];
+    _mm256_store_pd(weight, l.Weight);
+    _mm256_store_pd(depth, g.Z);
+    _mm256_store_pd(absorbance, s.Absorbance);
+    for (int k = 0; k < 4; ++k)
+    {
+      if (fallback & (1 << k))
+      {
+        weight[k] = -std::expm1(-absorbance[k]) * t.Query(depth[k]).Transmittance;
+      }
+    }
+    l.Weight = _mm256_load_pd(weight);
+  }
+  const __m256d take =
+    _mm256_and_pd(g.Visible, _mm256_cmp_pd(l.Weight, _mm256_setzero_pd(), _CMP_GT_OQ));
+  return _mm256_and_pd(l.Weight, take);
+}
+
+struct Sums4
+{
+  __m256d R, G, B, W;
+
+  APC_AVX2_INLINE void Add(__m256d weight, const Looked& s)
+  {
+    this->R = _mm256_fmadd_pd(weight, s.R, this->R);
+    this->G = _mm256_fmadd_pd(weight, s.G, this->G);
+    this->B = _mm256_fmadd_pd(weight, s.B, this->B);
+    this->W = _mm256_add_pd(this->W, weight);
+  }
+};
+
+// 8 samples a step, as two independent groups of 4: a group's arithmetic is one long chain
+// of dependent operations (divisions, a square root, two polynomials), and two of them in
+// flight keep the units busy where one leaves them waiting.
 APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& px,
   double hiddenFrom, const TransferTable::Layout& table, const CachedSample* samples, int n,
   double sums[4])
 {
   const __m256d hidden = _mm256_set1_pd(hiddenFrom);
-  const __m256i even = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
-  __m256d r = _mm256_setzero_pd(), g = r, b = r, w = r;
+  const __m256d zero = _mm256_setzero_pd();
+  Sums4 a{ zero, zero, zero, zero };
+  Sums4 b = a;
   int skipped = 0;
-  for (int at = 0; at < n; at += 4)
+  for (int at = 0; at < n; at += 8)
   {
-    // 4 records (depth, scalar); past the run's end, masked to zeros.
-    const int lanes = n - at < 4 ? n - at : 4;
-    const __m256i loadMask =
-      _mm256_cmpgt_epi32(_mm256_set1_epi32(2 * lanes), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
-    const float* record = reinterpret_cast<const float*>(samples + at);
-    const __m256 raw = lanes == 4 ? _mm256_loadu_ps(record) : _mm256_maskload_ps(record, loadMask);
-    const __m256 split = _mm256_permutevar8x32_ps(raw, even);
-    const __m256d z = _mm256_cvtps_pd(_mm256_castps256_ps128(split));
-    const __m256d scalar = _mm256_cvtps_pd(_mm256_extractf128_ps(split, 1));
-    const __m256d valid =
-      _mm256_cmp_pd(_mm256_setr_pd(0, 1, 2, 3), _mm256_set1_pd(lanes), _CMP_LT_OQ);
-    const __m256d visible = _mm256_and_pd(valid, _mm256_cmp_pd(z, hidden, _CMP_NGE_UQ));
-    skipped += lanes - __builtin_popcount(_mm256_movemask_pd(visible));
-    if (_mm256_movemask_pd(visible) == 0)
+    const Group first = Load(samples + at, n - at, hidden);
+    skipped += first.Hidden;
+    if (n - at <= 4)
+    {
+      if (_mm256_movemask_pd(first.Visible) != 0)
+      {
+        const Looked s = Lookup4(table, first.Scalar);
+        a.Add(Weigh(t, px, first, s), s);
+      }
+      break;
+    }
+    const Group second = Load(samples + at + 4, n - at - 4, hidden);
+    skipped += second.Hidden;
+    if ((_mm256_movemask_pd(first.Visible) | _mm256_movemask_pd(second.Visible)) == 0)
     {
       continue;
     }
-    const Looked s = Lookup4(table, scalar);
-    Lanes l = Weights4(px, z, s.Absorbance);
-    const int fallback = _mm256_movemask_pd(_mm256_and_pd(l.Fallback, visible));
-    if (fallback != 0)
-    {
-      alignas(32) double weight[4];
-      alignas(32) double depth[4];
-      alignas(32) double absorbance[4];
-      _mm256_store_pd(weight, l.Weight);
-      _mm256_store_pd(depth, z);
-      _mm256_store_pd(absorbance, s.Absorbance);
-      for (int k = 0; k < 4; ++k)
-      {
-        if (fallback & (1 << k))
-        {
-          weight[k] = -std::expm1(-absorbance[k]) * t.Query(depth[k]).Transmittance;
-        }
-      }
-      l.Weight = _mm256_load_pd(weight);
-    }
-    // ColourSums::Add: NaN or non-positive weights add nothing.
-    const __m256d take =
-      _mm256_and_pd(visible, _mm256_cmp_pd(l.Weight, _mm256_setzero_pd(), _CMP_GT_OQ));
-    const __m256d weight = _mm256_and_pd(l.Weight, take);
-    r = _mm256_fmadd_pd(weight, s.R, r);
-    g = _mm256_fmadd_pd(weight, s.G, g);
-    b = _mm256_fmadd_pd(weight, s.B, b);
-    w = _mm256_add_pd(w, weight);
+    const Looked s1 = Lookup4(table, first.Scalar);
+    const Looked s2 = Lookup4(table, second.Scalar);
+    a.Add(Weigh(t, px, first, s1), s1);
+    b.Add(Weigh(t, px, second, s2), s2);
   }
-  sums[0] += Total(r);
-  sums[1] += Total(g);
-  sums[2] += Total(b);
-  sums[3] += Total(w);
+  sums[0] += Total(_mm256_add_pd(a.R, b.R));
+  sums[1] += Total(_mm256_add_pd(a.G, b.G));
+  sums[2] += Total(_mm256_add_pd(a.B, b.B));
+  sums[3] += Total(_mm256_add_pd(a.W, b.W));
   return skipped;
 }
 
