@@ -437,12 +437,23 @@ double MomentTransmittance<N>::HiddenDepth(double maxWeight) const
   }
   // T(hi) <= limit throughout; T non-increasing carries it to every z >= hi. 2^-9 of the
   // warped range: a sample or two of a ray's front lie between the true crossing and hi.
+  // Two steps a round: the middle and both points the next step may query, three queries
+  // independent of each other, which the CPU overlaps (a query is a chain of dependent
+  // divisions, a square root and an exponential); the same points, hence the same answer,
+  // as one step at a time, in about half the time.
   double lo = -1.0;
   double hi = 1.0;
-  for (int step = 0; step < 10; ++step)
+  for (int step = 0; step < 10; step += 2)
   {
     const double mid = 0.5 * (lo + hi);
-    (hidden(mid) ? hi : lo) = mid;
+    const double left = 0.5 * (lo + mid);
+    const double right = 0.5 * (mid + hi);
+    const bool atMid = hidden(mid);
+    const bool atLeft = hidden(left);
+    const bool atRight = hidden(right);
+    (atMid ? hi : lo) = mid;
+    const double next = atMid ? left : right;
+    ((atMid ? atLeft : atRight) ? hi : lo) = next;
   }
   return hi;
 }
