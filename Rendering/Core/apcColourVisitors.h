@@ -6,6 +6,7 @@
 
 #include "apcHybridTransmittance.h"
 #include "apcMomentTransmittance.h"
+#include "apcPixelReplay.h"
 #include "apcRayVisitors.h"
 #include "apcResolve.h"
 
@@ -143,6 +144,18 @@ struct Colour : NoSegments
       }
       const MomentTransmittance<N> transmittance(this->MomentsOf(tile, p), this->Settings);
       const double hiddenFrom = this->HiddenDepth(transmittance);
+      if constexpr (N == 4)
+      {
+        // Looked up, weighted and summed 4 samples at a time (apcPixelReplay.h).
+        ColourSums sums;
+        if (ReplayFourMomentPixel(transmittance, hiddenFrom, table.GetLayout(),
+              recorded.Samples.data() + begin, static_cast<int>(end - begin), sums.Data(),
+              this->TileHidden))
+        {
+          this->Write(tile, p, sums);
+          continue;
+        }
+      }
       // The pixel's visible samples looked up, then weighted all at once (vectorised).
       const size_t most = end - begin;
       if (this->Depths.size() < most)

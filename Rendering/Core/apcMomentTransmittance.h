@@ -102,6 +102,13 @@ struct MomentSettings
   std::array<double, N> BiasVector = DefaultBiasVector<N>();
 };
 
+// The 4-moment reconstruction's per-pixel constants as a query reads them: entries 3, 4, 6, 7
+// and 8 of L^-1 (row major), D^-1, b0 and the overestimation.
+struct FourMomentPixel
+{
+  double L3, L4, L6, L7, L8, D0, D1, D2, B0, Beta;
+};
+
 struct TransmittanceQuery
 {
   double Transmittance = 1.0;
@@ -140,6 +147,19 @@ public:
   // process holds them. Found by bisection on a fixed grid of [-1,1] from the moments alone,
   // hence the same on every process. +inf where no depth qualifies.
   double HiddenDepth(double maxWeight) const;
+
+  // For 4 moments and a valid pixel, its constants for kernels that weight many samples at
+  // once (pass 2's replay); false otherwise (then query sample by sample).
+  bool GetFourMomentPixel(FourMomentPixel& px) const
+  {
+    if (M != 2 || this->State != PixelState::Valid)
+    {
+      return false;
+    }
+    px = { this->LInv[3], this->LInv[4], this->LInv[6], this->LInv[7], this->LInv[8], this->InvD[0],
+      this->InvD[1], this->InvD[2], this->B0, this->Beta };
+    return true;
+  }
 
   bool IsEmpty() const { return this->State == PixelState::Empty; }
   bool IsDegenerate() const { return this->State == PixelState::Degenerate; }

@@ -174,13 +174,12 @@ struct Moments : NoSegments
   const LogDepthWarp* Warp;
   SampleCache* Cache;
   std::vector<double> Sums;
-  // The tile's samples are recorded here, in this thread's own buffer reused from tile to
-  // tile (it grows only until it holds the largest tile), with each pixel's count, and
-  // grouped by pixel into the cache at EndTile. Pushing into the cache's vectors in place made
-  // threads on neighbouring tiles write the same cache lines (the vectors' ends), which cost
+  // The tile's samples are recorded in this thread's own buffer (the cache's, kept from tile
+  // to tile and frame to frame: it grows only until it holds the largest tile), with each
+  // pixel's count, and grouped by pixel into the cache at EndTile. Pushing into the cache's
+  // memory in place made threads on neighbouring tiles write the same cache lines, which cost
   // pass 1 a sixth of its speed on 2 threads.
-  std::vector<RecordedSample> Recorded;
-  std::vector<uint32_t> Counts;
+  RecordBuffer* Buffer = nullptr;
   bool Recording = false;
 
   Moments(double* output, int width, const LogDepthWarp* warp, SampleCache* cache)
@@ -194,10 +193,11 @@ struct Moments : NoSegments
   {
     this->Sums.assign(tile.Pixels() * (N + 1), 0.0);
     this->Recording = this->Cache && this->Cache->Record;
-    this->Recorded.clear();
     if (this->Recording)
     {
-      this->Counts.assign(tile.Pixels(), 0);
+      this->Buffer = &this->Cache->Buffers.local();
+      this->Buffer->Recorded.clear();
+      this->Buffer->Counts.assign(tile.Pixels(), 0);
     }
   }
   void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
@@ -208,12 +208,12 @@ struct Moments : NoSegments
     {
       // Written field by field in place: a record built on the stack and copied was read
       // back across its two 16-bit stores, which stalls store forwarding (a tenth of pass 1).
-      RecordedSample& record = this->Recorded.emplace_back();
+      RecordedSample& record = this->Buffer->Recorded.emplace_back();
       record.Z = static_cast<float>(z);
       record.Scalar = static_cast<float>(scalar);
       record.Pixel = static_cast<uint16_t>(pixel);
       record.K16 = static_cast<uint16_t>(k);
-      ++this->Counts[pixel];
+      ++this->Buffer->Counts[pixel];
     }
   }
   void EndTile(const TileRect& tile)
@@ -223,8 +223,8 @@ struct Moments : NoSegments
       if (this->Cache->Record)
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
-        this->Cache->Keep(
-          tile.Index, this->Recorded, this->Counts.data(), tile.Pixels(), this->Own != nullptr);
+        this->Cache->Keep(tile.Index, this->Buffer->Recorded, this->Buffer->Counts.data(),
+          tile.Pixels(), this->Own != nullptr);
       }
       else
       {

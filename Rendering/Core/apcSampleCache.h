@@ -4,7 +4,10 @@
 #ifndef apcSampleCache_h
 #define apcSampleCache_h
 
+#include "apcSampleArena.h"
 #include "apcUninitialized.h"
+
+#include <tbb/enumerable_thread_specific.h>
 
 #include <algorithm>
 #include <atomic>
@@ -41,28 +44,39 @@ struct CachedSample
 };
 static_assert(sizeof(CachedSample) == 8, "a cached sample is two floats");
 
+// A tile's records in the cache's arena.
+struct SampleSpan
+{
+  CachedSample* Data = nullptr;
+  size_t Size = 0;
+
+  CachedSample* data() const { return this->Data; }
+  size_t size() const { return this->Size; }
+  bool empty() const { return this->Size == 0; }
+  CachedSample& operator[](size_t i) const { return this->Data[i]; }
+};
+
 // A tile's samples grouped by pixel: pixel p's are Samples[Starts[p] .. Starts[p + 1]), in
 // the order pass 1 took them. K16, kept only for a pass 1 that keeps its own moments
 // (Hybrid), holds the low 16 bits of each sample's lattice index, which order the samples of
 // a pixel whose float depths tie, for the Hybrid resolve's exact own transmittance. The
-// vectors keep their memory from frame to frame (a tile that outgrows it gets a quarter
-// more): a static or slowly moving view's samples are written without reallocation or page
-// faults.
+// samples live in the cache's arena; Starts and K16 keep their memory from frame to frame (K16
+// grows by a quarter more than it needs).
 struct CachedTile
 {
   UninitializedVector<uint32_t> Starts;
-  UninitializedVector<CachedSample> Samples;
+  SampleSpan Samples;
   UninitializedVector<uint16_t> K16;
 
   size_t Bytes() const
   {
     return this->Starts.capacity() * sizeof(uint32_t) +
-      this->Samples.capacity() * sizeof(CachedSample) + this->K16.capacity() * sizeof(uint16_t);
+      this->Samples.size() * sizeof(CachedSample) + this->K16.capacity() * sizeof(uint16_t);
   }
   void Clear()
   {
     this->Starts.clear();
-    this->Samples.clear();
+    this->Samples = SampleSpan();
     this->K16.clear();
   }
   void Free() { *this = CachedTile(); }
@@ -78,6 +92,14 @@ struct RecordedSample
   uint16_t K16;
 };
 
+// A thread's samples of the tile it marches, before they are grouped by pixel, with each
+// pixel's count. Owned by the cache so that it keeps its memory from frame to frame.
+struct RecordBuffer
+{
+  std::vector<RecordedSample> Recorded;
+  std::vector<uint32_t> Counts;
+};
+
 struct SampleCache
 {
   template <class Vector>
@@ -91,6 +113,8 @@ struct SampleCache
   }
 
   std::vector<CachedTile> Tiles;
+  SampleArena Arena;
+  tbb::enumerable_thread_specific<RecordBuffer> Buffers;
   // Kept[t]: tile t's samples are all in the cache. The tiles recorded before the budget ran
   // out stay cached; pass 2 replays them and marches only the others again.
   std::vector<uint8_t> Kept;
@@ -116,8 +140,9 @@ struct SampleCache
     }
     std::fill(this->Kept.begin(), this->Kept.end(), uint8_t(0));
   }
-  // Ready to record tiles [first, last) of a frame of this many tiles. The memory of the other
-  // tiles goes (a large frame is rendered band by band: one band's samples at a time).
+  // Ready to record tiles [first, last) of a frame of this many tiles. The other tiles' memory
+  // goes (a large frame is rendered band by band: one band's samples at a time, each band
+  // in the arena's pages the one before touched).
   void Empty(size_t tiles, size_t first, size_t last)
   {
     this->Clear();
@@ -131,7 +156,21 @@ struct SampleCache
     }
     this->Kept.assign(tiles, 0);
     this->Bytes = 0;
-    this->Record = this->MaxBytes > 0;
+    if (this->MaxBytes > 0)
+    {
+      this->Arena.Reserve(this->MaxBytes);
+    }
+    this->Arena.Reset();
+    this->Record = this->MaxBytes > 0 && this->Arena.Capacity() > 0;
+  }
+  // Gives every byte back (a lower budget).
+  void Release()
+  {
+    this->Tiles = std::vector<CachedTile>();
+    this->Kept.clear();
+    this->Valid = false;
+    this->Arena.Release();
+    this->Buffers.clear();
   }
   // Groups a marched tile's recorded samples by pixel into Tiles[tile] (counts[p]: pixel p's
   // samples among them; withOrder: keep the lattice bits) if they fit in the budget; else
@@ -149,22 +188,20 @@ struct SampleCache
       return;
     }
     cached.Clear();
-    // A tile that outgrows last frame's memory gets a quarter more than it needs: after a
-    // small camera move half the tiles take a few more samples, and reallocating them exactly
-    // every frame cost pass 1 fresh pages (page faults) for half the cache.
-    Reserve(cached.Samples, n);
     Reserve(cached.K16, withOrder ? n : 0);
     cached.Starts.resize(static_cast<size_t>(pixels) + 1);
-    cached.Samples.resize(n);
     cached.K16.resize(withOrder ? n : 0);
-    const size_t bytes = cached.Bytes();
-    if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes)
+    const size_t bytes = cached.Bytes() + n * sizeof(CachedSample);
+    CachedSample* memory = nullptr;
+    if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes ||
+      !(memory = static_cast<CachedSample*>(this->Arena.Take(n * sizeof(CachedSample)))))
     {
       this->Bytes.fetch_sub(bytes);
       this->Record = false;
       cached.Free();
       return;
     }
+    cached.Samples = { memory, n };
     // A stable counting sort: each pixel's samples stay in the order they were taken.
     uint32_t* starts = cached.Starts.data();
     starts[0] = 0;

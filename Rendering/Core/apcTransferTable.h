@@ -70,6 +70,20 @@ public:
     return this->VisibleBefore[last + 1] > this->VisibleBefore[first];
   }
 
+  // The table as a vectorised lookup reads it, with Lookup's arithmetic (pass 2's replay).
+  struct Layout
+  {
+    const TransferSample* Entries;
+    int Count;
+    double Min;
+    double Scale;
+    double Last;
+  };
+  Layout GetLayout() const
+  {
+    return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last };
+  }
+
   double GetSampleSpacing() const { return this->Spacing; }
   // The scalar step between entries (+inf for a zero-width range: every scalar looks alike).
   double GetBinWidth() const

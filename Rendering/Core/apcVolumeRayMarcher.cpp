@@ -308,9 +308,7 @@ void VolumeRayMarcher::SetMaxSampleCacheBytes(size_t bytes)
   if (bytes < this->Cache->MaxBytes)
   {
     // The memory kept from frame to frame may exceed the new budget: give it back.
-    this->Cache->Tiles = std::vector<CachedTile>();
-    this->Cache->Kept.clear();
-    this->Cache->Valid = false;
+    this->Cache->Release();
   }
   this->Cache->MaxBytes = bytes;
 }

@@ -949,6 +949,54 @@ TYPED_TEST(MomentTransmittanceTest, HiddenDepthBoundsTheSkippedWeight)
     std::numeric_limits<double>::infinity());
 }
 
+// HiddenDepth takes two bisection steps a round (three independent queries): its depth is the
+// one-step-at-a-time bisection's, to the bit, written here with the public query.
+TYPED_TEST(MomentTransmittanceTest, HiddenDepthIsTheOneStepBisection)
+{
+  constexpr int N = TypeParam::value;
+  std::mt19937_64 rng(99 + N);
+  std::vector<double> depths;
+  int found = 0;
+  for (int set = 0; set < 2000; ++set)
+  {
+    std::vector<double> sums = RayMoments(rng, N, depths);
+    for (double& s : sums)
+    {
+      s *= 1.0 + (set % 8) * 4.0;
+    }
+    const apc::MomentTransmittance<N> t(sums.data());
+    const double weight = set % 3 == 0 ? 1e-2 : 1e-4;
+    const double limit = weight / sums[0];
+    auto hidden = [&](double z)
+    {
+      const apc::TransmittanceQuery q = t.Query(z);
+      return !q.Fallback && q.Transmittance <= limit;
+    };
+    double expected = std::numeric_limits<double>::infinity();
+    if (std::exp(-sums[0]) * sums[0] <= weight && hidden(1.0))
+    {
+      double lo = -1.0;
+      double hi = 1.0;
+      if (hidden(-1.0))
+      {
+        hi = -1.0;
+      }
+      else
+      {
+        for (int step = 0; step < 10; ++step)
+        {
+          const double mid = 0.5 * (lo + hi);
+          (hidden(mid) ? hi : lo) = mid;
+        }
+      }
+      expected = hi;
+      ++found;
+    }
+    ASSERT_EQ(t.HiddenDepth(weight), expected) << "set " << set;
+  }
+  EXPECT_GT(found, 500);
+}
+
 // The batched weights (vector arithmetic and a polynomial exponential for 4 moments) against
 // the per-sample query and std::expm1, over pass-2-like rays, absorbances from 1e-7 to the cap
 // and depths beyond [-1,1], relative to the weight and per unit of b0. Measured worst:

@@ -58,12 +58,12 @@ TEST(SampleCache, GroupsByPixelInTakenOrder)
     {
       EXPECT_EQ(tile.K16[i], recorded[taken[i]].K16) << i;
     }
-    // Sized with a quarter's slack at most, and counted as such against the budget.
-    EXPECT_GE(tile.Samples.capacity(), 6u);
-    EXPECT_LE(tile.Samples.capacity(), 7u);
+    // The samples sized exactly (in the arena), the lattice bits with a quarter's slack at
+    // most, and counted as such against the budget.
+    EXPECT_EQ(tile.Samples.size(), 6u);
     EXPECT_EQ(cache.Bytes.load(), tile.Bytes());
     EXPECT_LE(cache.Bytes.load(),
-      (kPixels + 1) * sizeof(uint32_t) + 7 * sizeof(apc::CachedSample) +
+      (kPixels + 1) * sizeof(uint32_t) + 6 * sizeof(apc::CachedSample) +
         (withOrder ? 7 * sizeof(uint16_t) : 0));
   }
 }
@@ -93,6 +93,53 @@ TEST(SampleCache, KeepsMemoryAcrossFramesAndStopsAtTheBudget)
   EXPECT_FALSE(cache.Record.load());
   EXPECT_EQ(cache.Tiles[1].Bytes(), 0u);
   EXPECT_EQ(cache.Bytes.load(), cache.MaxBytes);
+}
+
+// The records of a frame go into the pages the frames before it touched, in whatever order its
+// tiles finish: a view that needs no more than before takes no new memory.
+TEST(SampleCache, LaterFramesRefillTheSamePages)
+{
+  std::vector<uint32_t> counts;
+  const std::vector<apc::RecordedSample> recorded = Recorded(counts);
+  apc::SampleCache cache;
+  cache.Empty(3, 0, 3);
+  ASSERT_GE(cache.Arena.Capacity(), cache.MaxBytes);
+  for (size_t t : { 0, 1, 2 })
+  {
+    cache.Keep(t, recorded, counts.data(), kPixels, false);
+  }
+  const apc::CachedSample* low = cache.Tiles[0].Samples.data();
+  const apc::CachedSample* high = cache.Tiles[2].Samples.data() + 6;
+  for (size_t t : { 2, 0, 1 })
+  {
+    cache.Empty(3, 0, 3);
+    cache.Keep(t, recorded, counts.data(), kPixels, false);
+    cache.Keep((t + 1) % 3, recorded, counts.data(), kPixels, false);
+    cache.Keep((t + 2) % 3, recorded, counts.data(), kPixels, false);
+    for (const apc::CachedTile& tile : cache.Tiles)
+    {
+      EXPECT_GE(tile.Samples.data(), low);
+      EXPECT_LE(tile.Samples.data() + tile.Samples.size(), high);
+    }
+  }
+}
+
+// Where the arena has less room than the budget (a system that grants less address space),
+// a tile that does not fit is not kept and stops the recording, as at the budget.
+TEST(SampleCache, AFullArenaStopsTheRecording)
+{
+  std::vector<uint32_t> counts;
+  const std::vector<apc::RecordedSample> recorded = Recorded(counts);
+  apc::SampleCache cache;
+  cache.Empty(2, 0, 2);
+  // Leave room for 7 records only.
+  ASSERT_NE(cache.Arena.Take(cache.Arena.Capacity() - 7 * sizeof(apc::CachedSample)), nullptr);
+  cache.Keep(0, recorded, counts.data(), kPixels, false);
+  EXPECT_TRUE(cache.Kept[0]);
+  cache.Keep(1, recorded, counts.data(), kPixels, false);
+  EXPECT_FALSE(cache.Kept[1]);
+  EXPECT_FALSE(cache.Record.load());
+  EXPECT_EQ(cache.Tiles[1].Bytes(), 0u);
 }
 
 TEST(SampleCache, EmptyTilesTakeNoMemory)

@@ -1,0 +1,362 @@
+#include "apcPixelReplay.h"
+
+#include <cmath>
+#include <cstring>
+
+#if defined(__GNUC__) && defined(__x86_64__)
+#include <immintrin.h>
+#define APC_HAVE_AVX2_REPLAY 1
+#define APC_AVX2 __attribute__((target("avx2,fma")))
+#define APC_AVX2_INLINE inline __attribute__((always_inline, target("avx2,fma")))
+#endif
+
+namespace apc
+{
+
+#ifdef APC_HAVE_AVX2_REPLAY
+namespace
+{
+
+// The arithmetic of apcMomentTransmittance.cpp's batched weights (ExpNonPositive,
+// OpacityOfAbsorbance, FourMomentWeightsBody), written for 4 lanes.
+
+// c[k] x + c[k + 1]
+APC_AVX2_INLINE __m256d Pair(const double* c, int k, __m256d x)
+{
+  return _mm256_fmadd_pd(_mm256_set1_pd(c[k]), x, _mm256_set1_pd(c[k + 1]));
+}
+
+// sum c[k] x^k, k < 14 (the high degrees first in c), by Estrin's scheme: a chain of 5
+// multiply-adds instead of Horner's 13, so that the loop's few independent samples keep the
+// FMA units busy (pass 2 is bound by this latency, not by the number of operations).
+APC_AVX2_INLINE __m256d Estrin14(const double* c, __m256d x)
+{
+  const __m256d x2 = _mm256_mul_pd(x, x);
+  const __m256d x4 = _mm256_mul_pd(x2, x2);
+  const __m256d x8 = _mm256_mul_pd(x4, x4);
+  const __m256d s0 = _mm256_fmadd_pd(Pair(c, 10, x), x2, Pair(c, 12, x)); // degrees 0-3
+  const __m256d s1 = _mm256_fmadd_pd(Pair(c, 6, x), x2, Pair(c, 8, x));   // 4-7
+  const __m256d s2 = _mm256_fmadd_pd(Pair(c, 2, x), x2, Pair(c, 4, x));   // 8-11
+  const __m256d s3 = Pair(c, 0, x);                                       // 12-13
+  return _mm256_fmadd_pd(_mm256_fmadd_pd(s3, x4, s2), x8, _mm256_fmadd_pd(s1, x4, s0));
+}
+
+// exp(x) for x <= 0: x = k ln 2 + r, e^r by its Taylor series to degree 13, 2^k added to the
+// exponent; 0 below -708.
+APC_AVX2_INLINE __m256d ExpNonPositive4(__m256d x)
+{
+  static constexpr double kTaylor[] = { 1.0 / 6227020800.0, 1.0 / 479001600.0, 1.0 / 39916800.0,
+    1.0 / 3628800.0, 1.0 / 362880.0, 1.0 / 40320.0, 1.0 / 5040.0, 1.0 / 720.0, 1.0 / 120.0,
+    1.0 / 24.0, 1.0 / 6.0, 0.5, 1.0, 1.0 };
+  const __m256d lowest = _mm256_set1_pd(-708.0);
+  const __m256d shifter = _mm256_set1_pd(6755399441055744.0);
+  const __m256d under = _mm256_cmp_pd(x, lowest, _CMP_LT_OQ);
+  const __m256d xc = _mm256_blendv_pd(x, lowest, under);
+  const __m256d shifted = _mm256_fmadd_pd(xc, _mm256_set1_pd(1.4426950408889634), shifter);
+  const __m256d k = _mm256_sub_pd(shifted, shifter);
+  __m256d r = _mm256_fnmadd_pd(k, _mm256_set1_pd(6.93147180369123816490e-01), xc);
+  r = _mm256_fnmadd_pd(k, _mm256_set1_pd(1.90821492927058770002e-10), r);
+  const __m256d p = Estrin14(kTaylor, r);
+  const __m256i kBits =
+    _mm256_sub_epi64(_mm256_castpd_si256(shifted), _mm256_set1_epi64x(0x4338000000000000));
+  const __m256i bits = _mm256_add_epi64(_mm256_castpd_si256(p), _mm256_slli_epi64(kBits, 52));
+  return _mm256_andnot_pd(under, _mm256_castsi256_pd(bits));
+}
+
+// 1 - exp(-a) for a >= 0: below 1/2 a times the series of (1 - exp(-a)) / a to degree 16
+// (truncation below 1e-19 relative), above it 1 - exp(-a). Only the forms some lane needs are
+// evaluated (most samples are faint: the series alone).
+APC_AVX2_INLINE __m256d OpacityOfAbsorbance4(__m256d a)
+{
+  // (-1)^n / (n + 1)!, n = 16 down to 0; degrees 14-16 ahead of Estrin14's 0-13.
+  static constexpr double kSeries[] = { 1.0 / 355687428096000.0, -1.0 / 20922789888000.0,
+    1.0 / 1307674368000.0, -1.0 / 87178291200.0, 1.0 / 6227020800.0, -1.0 / 479001600.0,
+    1.0 / 39916800.0, -1.0 / 3628800.0, 1.0 / 362880.0, -1.0 / 40320.0, 1.0 / 5040.0, -1.0 / 720.0,
+    1.0 / 120.0, -1.0 / 24.0, 1.0 / 6.0, -0.5, 1.0 };
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d small = _mm256_cmp_pd(a, _mm256_set1_pd(0.5), _CMP_LT_OQ);
+  const int smallLanes = _mm256_movemask_pd(small);
+  __m256d series = _mm256_setzero_pd();
+  if (smallLanes != 0)
+  {
+    const __m256d a2 = _mm256_mul_pd(a, a);
+    const __m256d a4 = _mm256_mul_pd(a2, a2);
+    const __m256d a14 = _mm256_mul_pd(_mm256_mul_pd(a4, a4), _mm256_mul_pd(a4, a2));
+    const __m256d high =
+      _mm256_fmadd_pd(_mm256_fmadd_pd(_mm256_set1_pd(kSeries[0]), a, _mm256_set1_pd(kSeries[1])), a,
+        _mm256_set1_pd(kSeries[2]));
+    series = _mm256_fmadd_pd(high, a14, Estrin14(kSeries + 3, a));
+    series = _mm256_mul_pd(a, series);
+    if (smallLanes == 0xF)
+    {
+      return series;
+    }
+  }
+  const __m256d large = _mm256_sub_pd(one, ExpNonPositive4(_mm256_sub_pd(_mm256_setzero_pd(), a)));
+  return _mm256_blendv_pd(large, series, small);
+}
+
+struct Lanes
+{
+  __m256d Weight;
+  __m256d Fallback; // lanes the vector arithmetic cannot answer (Query's full path)
+};
+
+// alpha T(z) of 4 samples, FourMomentWeightsBody's arithmetic.
+APC_AVX2_INLINE Lanes Weights4(const FourMomentPixel& px, __m256d raw, __m256d absorbance)
+{
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d l3 = _mm256_set1_pd(px.L3), l4 = _mm256_set1_pd(px.L4);
+  const __m256d l6 = _mm256_set1_pd(px.L6), l7 = _mm256_set1_pd(px.L7);
+  const __m256d l8 = _mm256_set1_pd(px.L8);
+  const __m256d d0 = _mm256_set1_pd(px.D0), d1 = _mm256_set1_pd(px.D1);
+  const __m256d d2 = _mm256_set1_pd(px.D2), beta = _mm256_set1_pd(px.Beta);
+  const __m256d z = _mm256_min_pd(_mm256_max_pd(raw, _mm256_set1_pd(-1.0)), one);
+  const __m256d y1 = _mm256_fmadd_pd(l4, z, l3);
+  const __m256d y2 = _mm256_fmadd_pd(_mm256_fmadd_pd(l8, z, l7), z, l6);
+  const __m256d u1 = _mm256_mul_pd(y1, d1);
+  const __m256d u2 = _mm256_mul_pd(y2, d2);
+  const __m256d kernelAtZ = _mm256_fmadd_pd(y2, u2, _mm256_fmadd_pd(y1, u1, d0));
+  const __m256d c2 = u2;
+  const __m256d c1 = _mm256_fmadd_pd(u2, l7, u1);
+  const __m256d c0 = _mm256_fmadd_pd(u1, l3, _mm256_fmadd_pd(u2, l6, d0));
+  const __m256d disc =
+    _mm256_fmsub_pd(c1, c1, _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(4.0), c0), c2));
+  const __m256d wz = _mm256_div_pd(one, kernelAtZ);
+  const __m256d pastVertex = _mm256_cmp_pd(
+    _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), c2), z), _mm256_sub_pd(zero, c1), _CMP_GT_OQ);
+  const __m256d outside = _mm256_blendv_pd(
+    _mm256_mul_pd(beta, wz), _mm256_fnmadd_pd(_mm256_sub_pd(one, beta), wz, one), pastVertex);
+  const __m256d discPositive = _mm256_cmp_pd(disc, zero, _CMP_GT_OQ);
+  const __m256d root = _mm256_sqrt_pd(_mm256_and_pd(disc, discPositive));
+  const __m256d c1Negative = _mm256_cmp_pd(c1, zero, _CMP_LT_OQ);
+  const __m256d signedRoot = _mm256_blendv_pd(root, _mm256_sub_pd(zero, root), c1Negative);
+  const __m256d q = _mm256_mul_pd(_mm256_set1_pd(-0.5), _mm256_add_pd(c1, signedRoot));
+  const __m256d r0 = _mm256_div_pd(q, c2);
+  const __m256d r1 = _mm256_div_pd(c0, q);
+  const __m256d lo = _mm256_blendv_pd(r1, r0, _mm256_cmp_pd(r0, r1, _CMP_LT_OQ));
+  const __m256d ylo1 = _mm256_fmadd_pd(l4, lo, l3);
+  const __m256d ylo2 = _mm256_fmadd_pd(_mm256_fmadd_pd(l8, lo, l7), lo, l6);
+  const __m256d kernelAtLo = _mm256_fmadd_pd(
+    _mm256_mul_pd(ylo2, ylo2), d2, _mm256_fmadd_pd(_mm256_mul_pd(ylo1, ylo1), d1, d0));
+  const __m256d between = _mm256_fmadd_pd(beta, wz, _mm256_div_pd(one, kernelAtLo));
+  const __m256d c2Positive = _mm256_cmp_pd(c2, zero, _CMP_GT_OQ);
+  const __m256d absorbanceInFront = _mm256_blendv_pd(between, outside, c2Positive);
+  const __m256d largest = _mm256_set1_pd(1.7976931348623157e308);
+  const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFF));
+  const __m256d loFinite = _mm256_and_pd(_mm256_cmp_pd(q, zero, _CMP_NEQ_UQ),
+    _mm256_cmp_pd(_mm256_and_pd(lo, absMask), largest, _CMP_LE_OQ));
+  __m256d usual = _mm256_and_pd(_mm256_cmp_pd(c2, zero, _CMP_NEQ_UQ), discPositive);
+  usual = _mm256_and_pd(usual, _mm256_or_pd(c2Positive, loFinite));
+  usual = _mm256_and_pd(
+    usual, _mm256_cmp_pd(_mm256_and_pd(absorbanceInFront, absMask), largest, _CMP_LE_OQ));
+  const __m256d b0 = _mm256_set1_pd(px.B0);
+  const __m256d t = ExpNonPositive4(
+    _mm256_sub_pd(zero, _mm256_mul_pd(b0, _mm256_and_pd(absorbanceInFront, usual))));
+  const __m256d clamped = _mm256_min_pd(_mm256_max_pd(t, zero), one);
+  return { _mm256_mul_pd(OpacityOfAbsorbance4(absorbance), clamped),
+    _mm256_andnot_pd(usual, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))) };
+}
+
+// TransferTable::Lookup of 4 scalars: colours (r, g, b) and absorbances, widened to double.
+struct Looked
+{
+  __m256d R, G, B, Absorbance;
+};
+
+APC_AVX2_INLINE Looked Lookup4(const TransferTable::Layout& table, __m256d scalar)
+{
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFF));
+  const __m256d finite = _mm256_cmp_pd(
+    _mm256_and_pd(scalar, absMask), _mm256_set1_pd(1.7976931348623157e308), _CMP_LE_OQ);
+  __m256d x =
+    _mm256_mul_pd(_mm256_sub_pd(scalar, _mm256_set1_pd(table.Min)), _mm256_set1_pd(table.Scale));
+  const __m256d last = _mm256_set1_pd(table.Last);
+  x = _mm256_blendv_pd(x, last, _mm256_cmp_pd(x, last, _CMP_GT_OQ));
+  x = _mm256_blendv_pd(x, zero, _mm256_cmp_pd(x, zero, _CMP_LT_OQ));
+  x = _mm256_and_pd(x, finite); // a non-finite scalar: entry 0, made transparent below
+  const __m128i i = _mm256_cvttpd_epi32(x);
+  const __m128i j =
+    _mm_min_epi32(_mm_add_epi32(i, _mm_set1_epi32(1)), _mm_set1_epi32(table.Count - 1));
+  const __m128 f = _mm256_cvtpd_ps(_mm256_sub_pd(x, _mm256_cvtepi32_pd(i)));
+  alignas(16) int ii[4];
+  alignas(16) int jj[4];
+  _mm_store_si128(reinterpret_cast<__m128i*>(ii), i);
+  _mm_store_si128(reinterpret_cast<__m128i*>(jj), j);
+  const float* entries = reinterpret_cast<const float*>(table.Entries);
+  static_assert(sizeof(TransferSample) == 4 * sizeof(float), "an entry is r, g, b, absorbance");
+  __m128 e[4];
+  for (int k = 0; k < 4; ++k)
+  {
+    const __m128 a = _mm_loadu_ps(entries + 4 * ii[k]);
+    const __m128 b = _mm_loadu_ps(entries + 4 * jj[k]);
+    const __m128 fk = _mm_permutevar_ps(f, _mm_set1_epi32(k));
+    __m128 step = _mm_mul_ps(fk, _mm_sub_ps(b, a));
+    // Rounded before the add, as Lookup's baseline code does: no contraction into an FMA,
+    // so that the colours and absorbances are Lookup's to the bit.
+    __asm__("" : "+x"(step));
+    e[k] = _mm_add_ps(a, step);
+  }
+  _MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
+  return { _mm256_cvtps_pd(e[0]), _mm256_cvtps_pd(e[1]), _mm256_cvtps_pd(e[2]),
+    _mm256_and_pd(_mm256_cvtps_pd(e[3]), finite) };
+}
+
+APC_AVX2_INLINE double Total(__m256d v)
+{
+  const __m128d pairs = _mm_add_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
+  return _mm_cvtsd_f64(_mm_add_sd(pairs, _mm_unpackhi_pd(pairs, pairs)));
+}
+
+// Up to 4 records (depth, scalar) of a run from samples on: the depths and scalars widened to
+// double, and which lanes hold a sample in front of the hidden depth. Past the run's end, the
+// load is masked (nothing read) and the lanes are left out.
+struct Group
+{
+  __m256d Z;
+  __m256d Scalar;
+  __m256d Visible;
+  int Hidden;
+};
+
+APC_AVX2_INLINE Group Load(const CachedSample* samples, int lanes, __m256d hiddenFrom)
+{
+  const float* record = reinterpret_cast<const float*>(samples);
+  __m256 raw;
+  if (lanes >= 4)
+  {
+    lanes = 4;
+    raw = _mm256_loadu_ps(record);
+  }
+  else
+  {
+    const __m256i mask =
+      _mm256_cmpgt_epi32(_mm256_set1_epi32(2 * lanes), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    raw = _mm256_maskload_ps(record, mask);
+  }
+  const __m256 split = _mm256_permutevar8x32_ps(raw, _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
+  Group g;
+  g.Z = _mm256_cvtps_pd(_mm256_castps256_ps128(split));
+  g.Scalar = _mm256_cvtps_pd(_mm256_extractf128_ps(split, 1));
+  const __m256d valid =
+    _mm256_cmp_pd(_mm256_setr_pd(0, 1, 2, 3), _mm256_set1_pd(lanes), _CMP_LT_OQ);
+  g.Visible = _mm256_and_pd(valid, _mm256_cmp_pd(g.Z, hiddenFrom, _CMP_NGE_UQ));
+  g.Hidden = lanes - __builtin_popcount(_mm256_movemask_pd(g.Visible));
+  return g;
+}
+
+// The group's weights alpha T(z), 0 where a lane is hidden, past the run or (as
+// ColourSums::Add skips them) NaN or not positive; what the vector arithmetic cannot answer
+// comes from the pixel's query.
+APC_AVX2_INLINE __m256d Weigh(
+  const MomentTransmittance<4>& t, const FourMomentPixel& px, const Group& g, const Looked& s)
+{
+  Lanes l = Weights4(px, g.Z, s.Absorbance);
+  const int fallback = _mm256_movemask_pd(_mm256_and_pd(l.Fallback, g.Visible));
+  if (fallback != 0)
+  {
+    alignas(32) double weight[4];
+    alignas(32) double depth[4];
+    alignas(32) double absorbance[4];
+    _mm256_store_pd(weight, l.Weight);
+    _mm256_store_pd(depth, g.Z);
+    _mm256_store_pd(absorbance, s.Absorbance);
+    for (int k = 0; k < 4; ++k)
+    {
+      if (fallback & (1 << k))
+      {
+        weight[k] = -std::expm1(-absorbance[k]) * t.Query(depth[k]).Transmittance;
+      }
+    }
+    l.Weight = _mm256_load_pd(weight);
+  }
+  const __m256d take =
+    _mm256_and_pd(g.Visible, _mm256_cmp_pd(l.Weight, _mm256_setzero_pd(), _CMP_GT_OQ));
+  return _mm256_and_pd(l.Weight, take);
+}
+
+struct Sums4
+{
+  __m256d R, G, B, W;
+
+  APC_AVX2_INLINE void Add(__m256d weight, const Looked& s)
+  {
+    this->R = _mm256_fmadd_pd(weight, s.R, this->R);
+    this->G = _mm256_fmadd_pd(weight, s.G, this->G);
+    this->B = _mm256_fmadd_pd(weight, s.B, this->B);
+    this->W = _mm256_add_pd(this->W, weight);
+  }
+};
+
+// 8 samples a step, as two independent groups of 4: a group's arithmetic is one long chain
+// of dependent operations (divisions, a square root, two polynomials), and two of them in
+// flight keep the units busy where one leaves them waiting.
+APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& px,
+  double hiddenFrom, const TransferTable::Layout& table, const CachedSample* samples, int n,
+  double sums[4])
+{
+  const __m256d hidden = _mm256_set1_pd(hiddenFrom);
+  const __m256d zero = _mm256_setzero_pd();
+  Sums4 a{ zero, zero, zero, zero };
+  Sums4 b = a;
+  int skipped = 0;
+  for (int at = 0; at < n; at += 8)
+  {
+    const Group first = Load(samples + at, n - at, hidden);
+    skipped += first.Hidden;
+    if (n - at <= 4)
+    {
+      if (_mm256_movemask_pd(first.Visible) != 0)
+      {
+        const Looked s = Lookup4(table, first.Scalar);
+        a.Add(Weigh(t, px, first, s), s);
+      }
+      break;
+    }
+    const Group second = Load(samples + at + 4, n - at - 4, hidden);
+    skipped += second.Hidden;
+    if ((_mm256_movemask_pd(first.Visible) | _mm256_movemask_pd(second.Visible)) == 0)
+    {
+      continue;
+    }
+    const Looked s1 = Lookup4(table, first.Scalar);
+    const Looked s2 = Lookup4(table, second.Scalar);
+    a.Add(Weigh(t, px, first, s1), s1);
+    b.Add(Weigh(t, px, second, s2), s2);
+  }
+  sums[0] += Total(_mm256_add_pd(a.R, b.R));
+  sums[1] += Total(_mm256_add_pd(a.G, b.G));
+  sums[2] += Total(_mm256_add_pd(a.B, b.B));
+  sums[3] += Total(_mm256_add_pd(a.W, b.W));
+  return skipped;
+}
+
+} // namespace
+#endif
+
+bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
+  const TransferTable::Layout& table, const CachedSample* samples, int n, double sums[4],
+  int64_t& hidden)
+{
+#ifdef APC_HAVE_AVX2_REPLAY
+  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  FourMomentPixel px;
+  if (avx2 && t.GetFourMomentPixel(px))
+  {
+    hidden += ReplayAvx2(t, px, hiddenFrom, table, samples, n, sums);
+    return true;
+  }
+#endif
+  (void)t;
+  (void)hiddenFrom;
+  (void)table;
+  (void)samples;
+  (void)n;
+  (void)sums;
+  (void)hidden;
+  return false;
+}
+
+} // namespace apc

@@ -1,0 +1,31 @@
+// Pass 2 of one pixel from the sample cache, with 4 moments, in one vectorised loop: each
+// cached sample looked up in the transfer table, weighted by alpha T(z) (T reconstructed from
+// the pixel's global moments) and summed into the pixel's colour, 4 samples per step with no
+// scalar tail (the last step masks the lanes past the pixel's run). It does what
+// visitors::Colour's generic replay does (MomentTransmittance::Weights after
+// TransferTable::Lookup) with the same arithmetic, up to the order of the sums and FMA
+// rounding. Internal to the core's marcher.
+#ifndef apcPixelReplay_h
+#define apcPixelReplay_h
+
+#include "apcMomentTransmittance.h"
+#include "apcSampleCache.h"
+#include "apcTransferTable.h"
+
+#include <cstdint>
+
+namespace apc
+{
+
+// Adds the weighted colour of samples[0, n) (one pixel's run) to sums (r, g, b, weight), as
+// ColourSums::Add would, skipping the samples at depths >= hiddenFrom (added to hidden). t:
+// the pixel's reconstruction; a sample its vector arithmetic cannot answer is weighted by t's
+// query. False, and nothing done, if the CPU lacks AVX2 with FMA or t is not a valid pixel:
+// the generic replay then does it.
+bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
+  const TransferTable::Layout& table, const CachedSample* samples, int n, double sums[4],
+  int64_t& hidden);
+
+} // namespace apc
+
+#endif
