@@ -175,6 +175,7 @@ struct Moments : NoSegments
   std::vector<RecordedSample> Recorded;
   std::vector<uint32_t> Counts;
   bool Recording = false;
+  bool KeepOrder = false; // the cache keeps the lattice bits (the opaque cut reads them)
 
   Moments(double* output, int width, const LogDepthWarp* warp, SampleCache* cache)
     : Output(output)
@@ -216,8 +217,8 @@ struct Moments : NoSegments
       if (this->Cache->Record)
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
-        this->Cache->Keep(
-          tile.Index, this->Recorded, this->Counts.data(), tile.Pixels(), this->Own != nullptr);
+        this->Cache->Keep(tile.Index, this->Recorded, this->Counts.data(), tile.Pixels(),
+          this->Own != nullptr || this->KeepOrder);
       }
       else
       {
