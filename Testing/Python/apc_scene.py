@@ -61,6 +61,8 @@ parser.add_argument("--stop-where-opaque", help="folder: render with APCStopWher
                     "then on, on a nearly opaque transfer function; the stop must drop samples "
                     "and leave no pixel farther from --compare (an exact reference of the same "
                     "opaque scene) than 1/255 beyond where marching every sample leaves it")
+parser.add_argument("--stop", type=int, choices=(0, 1),
+                    help="set APCStopWhereOpaque (default: the property's default)")
 parser.add_argument("--opaque", action="store_true",
                     help="a nearly opaque transfer function (what the stop is for)")
 parser.add_argument("--offset", type=float, default=0.0,
@@ -360,6 +362,8 @@ def main():
         display.ScalarOpacityUnitDistance = 5.0 * args.scale
         display.APCSampleDistance = 0.0
     display.APCMode = args.mode
+    if args.stop is not None:
+        display.APCStopWhereOpaque = args.stop
     if args.band_megapixels > 0:
         display.APCBandMegapixels = args.band_megapixels
     display.APCResolveMode = args.resolve
