@@ -434,7 +434,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 57;
+  static constexpr int NumberOfTimings = 61;
 
   ///@{
   /**
