@@ -325,6 +325,7 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   this->ColourSamples = 0;
   this->ReplayedSamples = 0;
   this->HiddenSamples = 0;
+  this->CutSamples = 0;
   this->Ready = true;
   this->Clock.Lap("setup");
   return true;
@@ -383,6 +384,33 @@ void FrameEngine::RenderMoments(
     { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments, hybrid, band); });
   this->Samples += this->Marcher.GetLastSampleCount(); // summed over the frame's bands
   this->Clock.Lap("moments");
+}
+
+//------------------------------------------------------------------------------
+bool FrameEngine::StopsWhereOpaque(const MomentParameters& parameters) const
+{
+  // Hybrid's pass 1 marches every sample (its own transmittance is exact).
+  return this->Settings.StopWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
+}
+
+const std::vector<uint16_t>& FrameEngine::GetOpaqueProfile() const
+{
+  static const std::vector<uint16_t> none;
+  return this->Ready ? this->Marcher.GetOpaqueProfile() : none;
+}
+
+void FrameEngine::ApplyOpaqueCut(
+  const MomentParameters& parameters, const uint16_t* profile, double* moments, const RowBand& band)
+{
+  if (!this->Ready)
+  {
+    return;
+  }
+  DispatchMoments(parameters.Moments,
+    [&](auto n)
+    { this->Marcher.ApplyOpaqueCut<n()>(*this->Table, *this->Warp, profile, moments, band); });
+  this->CutSamples += this->Marcher.GetLastCutSampleCount();
+  this->Clock.Lap("cut");
 }
 
 //------------------------------------------------------------------------------

@@ -146,6 +146,16 @@ public:
   void RenderMoments(const MomentParameters& parameters, double* moments, const RowBand& band = {});
   void RenderColour(const MomentParameters& parameters, const double* moments, double* colourSums,
     const RowBand& band = {});
+  /// True if this volume's pass 1 stops where opaque (the same on every process), and after
+  /// RenderMoments its opaque profile (VolumeRayMarcher::GetOpaqueProfile; empty if none).
+  bool StopsWhereOpaque(const MomentParameters& parameters) const;
+  const std::vector<uint16_t>& GetOpaqueProfile() const;
+  /// The cut agreed from the profiles of every volume and process (ApplyOpaqueCut): moments
+  /// holds this volume's own pass-1 moments of band, which lose the samples past it.
+  void ApplyOpaqueCut(const MomentParameters& parameters, const uint16_t* profile, double* moments,
+    const RowBand& band);
+  /// Samples marched again by the cuts since Prepare (tiles the sample cache did not hold).
+  int64_t GetCutSampleCount() const { return this->CutSamples; }
   void RenderExact(float* rgba);
   void CountSegments(int* counts);
   /// This process's sort-last segments of every pixel, replacing segments' content.
@@ -187,6 +197,7 @@ private:
   int64_t ColourSamples = 0;
   int64_t ReplayedSamples = 0;
   int64_t HiddenSamples = 0;
+  int64_t CutSamples = 0;
   StageClock Clock;
 };
 

@@ -53,7 +53,7 @@ void SetRankTimings(const FrameRecord& record, vtkAPCCompositePass::Timings& t)
 
 double RenderSeconds(const StageClock& clock)
 {
-  return clock.Get("pass1") + clock.Get("pass2") + clock.Get("segments") +
+  return clock.Get("pass1") + clock.Get("cut") + clock.Get("pass2") + clock.Get("segments") +
     clock.Get("blend_segments") + clock.Get("exact");
 }
 

@@ -17,6 +17,8 @@
 #include "vtkCommunicator.h"
 #include "vtkMultiProcessController.h"
 
+#include "apcOpaqueBins.h"
+
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -177,9 +179,71 @@ std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGri
   return all;
 }
 
+// Saturating sums of opaque profiles (apcOpaqueBins.h): exact and order-independent.
+class SaturatingProfileSum : public vtkCommunicator::Operation
+{
+public:
+  void Function(const void* a, void* b, vtkIdType length, int) override
+  {
+    AddProfiles(static_cast<uint16_t*>(b), static_cast<const uint16_t*>(a), length);
+  }
+  int Commutative() override { return 1; }
+};
+
+// With Stop Where Opaque: every volume's opaque profile summed, over the covered tiles of
+// every process (one allreduce of OpaqueBins::kBins 16-bit values per pixel), then each
+// volume's own moments (own[e], or moments with one volume) cut where the sum is opaque and
+// summed into moments. Every process makes the same calls: the setting is the volume's.
+void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  const TileGrid& tiles, const std::vector<unsigned char>& covered,
+  std::vector<std::vector<double>>& own, std::vector<double>& moments, FrameRecord& record)
+{
+  constexpr int bins = OpaqueBins::kBins;
+  const size_t pixels = moments.size() / (frame.Moments.Moments + 1);
+  std::vector<uint16_t> profile(pixels * bins, 0);
+  for (const FrameEngine* engine : frame.Engines)
+  {
+    const std::vector<uint16_t>& mine = engine->GetOpaqueProfile();
+    AddProfiles(profile.data(), mine.data(), std::min(mine.size(), profile.size()));
+  }
+  const size_t count = tiles.PixelsIn(covered) * bins;
+  if (group.Parallel && count > 0)
+  {
+    std::vector<uint16_t> send(count);
+    std::vector<uint16_t> received(count);
+    tiles.Pack(covered, profile.data(), bins, send.data());
+    SaturatingProfileSum sum;
+    group.Collective("profile",
+      [&]
+      {
+        group.Controller->AllReduce(
+          send.data(), received.data(), static_cast<vtkIdType>(count), &sum);
+      });
+    tiles.Unpack(covered, received.data(), bins, profile.data());
+    record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
+    ++record.MessagesSent;
+  }
+  record.Clock.Lap("profile");
+  for (size_t e = 0; e < frame.Engines.size(); ++e)
+  {
+    frame.Engines[e]->ApplyOpaqueCut(
+      frame.Moments, profile.data(), own.empty() ? moments.data() : own[e].data(), band);
+  }
+  if (!own.empty())
+  {
+    std::fill(moments.begin(), moments.end(), 0.0);
+    for (const std::vector<double>& volume : own)
+    {
+      std::transform(volume.begin(), volume.end(), moments.begin(), moments.begin(),
+        [](double a, double b) { return a + b; });
+    }
+  }
+  record.Clock.Lap("cut");
+}
+
 // One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
-// agreement, the moments' allreduce, pass 2 and the colour sums' reduce; the display process
-// resolves the band into result at its rows.
+// agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
+// display process resolves the band into result at its rows.
 void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
   FrameRecord& record, FrameResult& result)
 {
@@ -193,9 +257,25 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   const bool exchange = group.Parallel && tiles.Tiles() > 0;
 
   std::vector<double> moments(pixels * stride, 0.0);
-  for (FrameEngine* engine : frame.Engines)
+  bool stops = false;
+  for (const FrameEngine* engine : frame.Engines)
   {
-    engine->RenderMoments(parameters, moments.data(), band);
+    stops = stops || engine->StopsWhereOpaque(parameters);
+  }
+  // The cut needs each volume's own moments: several volumes keep them apart until then.
+  std::vector<std::vector<double>> own(
+    stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
+  for (size_t e = 0; e < frame.Engines.size(); ++e)
+  {
+    if (own.empty())
+    {
+      frame.Engines[e]->RenderMoments(parameters, moments.data(), band);
+      continue;
+    }
+    own[e].assign(pixels * stride, 0.0);
+    frame.Engines[e]->RenderMoments(parameters, own[e].data(), band);
+    std::transform(own[e].begin(), own[e].end(), moments.begin(), moments.begin(),
+      [](double a, double b) { return a + b; });
   }
   record.Clock.Lap("pass1");
   for (size_t p = 0; p < pixels; ++p)
@@ -207,6 +287,10 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   // the moments' allreduce after it is nearly all transfer.
   const std::vector<unsigned char> covered = AgreeOnTiles(group, tiles, moments, stride, record);
   record.Clock.Lap("tiles");
+  if (stops)
+  {
+    CutWhereOpaque(group, frame, band, tiles, covered, own, moments, record);
+  }
   auto sum = [&](std::vector<double>& image, int components, bool everywhere)
   {
     if (exchange)
@@ -306,7 +390,7 @@ void RunMomentCompositing(
   }
   for (const FrameEngine* engine : frame.Engines)
   {
-    record.Pass1Samples += engine->GetSampleCount();
+    record.Pass1Samples += engine->GetSampleCount() + engine->GetCutSampleCount();
     record.Pass2Samples += engine->GetColourSampleCount();
     record.Pass2Replayed += engine->GetReplayedSampleCount();
     record.Pass2Hidden += engine->GetHiddenSampleCount();

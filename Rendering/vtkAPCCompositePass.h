@@ -310,7 +310,9 @@ public:
     double Agree = 0;
     double Depth = 0;
     double Pass1 = 0;
-    double Tiles = 0; // where a process waits for the slowest pass 1
+    double Tiles = 0;   // where a process waits for the slowest pass 1
+    double Profile = 0; // Stop Where Opaque: the opaque profiles' allreduce
+    double Cut = 0;     // and the cut applied to pass 1
     double Allreduce = 0;
     double Pass2 = 0;
     double Reduce = 0;
@@ -343,6 +345,7 @@ public:
     double AgreeWait = 0, AgreeTransfer = 0;
     double DepthWait = 0, DepthTransfer = 0;
     double TilesWait = 0, TilesTransfer = 0;
+    double ProfileWait = 0, ProfileTransfer = 0;
     double AllreduceWait = 0, AllreduceTransfer = 0;
     double ReduceWait = 0, ReduceTransfer = 0;
     double ExchangeWait = 0, ExchangeTransfer = 0;
@@ -373,6 +376,8 @@ public:
     f("depth", timings.Depth);
     f("pass1", timings.Pass1);
     f("tiles", timings.Tiles);
+    f("profile", timings.Profile);
+    f("cut", timings.Cut);
     f("allreduce", timings.Allreduce);
     f("pass2", timings.Pass2);
     f("reduce", timings.Reduce);
@@ -404,6 +409,8 @@ public:
     f("depth_transfer", timings.DepthTransfer);
     f("tiles_wait", timings.TilesWait);
     f("tiles_transfer", timings.TilesTransfer);
+    f("profile_wait", timings.ProfileWait);
+    f("profile_transfer", timings.ProfileTransfer);
     f("allreduce_wait", timings.AllreduceWait);
     f("allreduce_transfer", timings.AllreduceTransfer);
     f("reduce_wait", timings.ReduceWait);
@@ -427,7 +434,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 57;
+  static constexpr int NumberOfTimings = 61;
 
   ///@{
   /**

@@ -366,6 +366,9 @@ double* vtkAPCVolumeRepresentation::GetLastTimings()
 {
   static_assert(sizeof(this->LastTimings) / sizeof(double) == vtkAPCCompositePass::NumberOfTimings,
     "one value per field of vtkAPCCompositePass::Timings (and VTK_SIZEHINT in the header)");
+  static_assert(sizeof(vtkAPCCompositePass::Timings) ==
+      sizeof(double) * vtkAPCCompositePass::NumberOfTimings,
+    "NumberOfTimings counts every field of vtkAPCCompositePass::Timings");
   const vtkAPCCompositePass* pass = apc::FindPass(this);
   const vtkAPCCompositePass::Timings timings =
     pass ? pass->GetLastTimings() : vtkAPCCompositePass::Timings();

@@ -181,6 +181,7 @@ struct Moments : NoSegments
   // pass 1 a sixth of its speed on 2 threads.
   RecordBuffer* Buffer = nullptr;
   bool Recording = false;
+  bool KeepOrder = false; // the cache keeps the lattice bits (the opaque cut reads them)
 
   Moments(double* output, int width, const LogDepthWarp* warp, SampleCache* cache)
     : Output(output)
@@ -224,7 +225,7 @@ struct Moments : NoSegments
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
         this->Cache->Keep(tile.Index, this->Buffer->Recorded, this->Buffer->Counts.data(),
-          tile.Pixels(), this->Own != nullptr);
+          tile.Pixels(), this->Own != nullptr || this->KeepOrder);
       }
       else
       {

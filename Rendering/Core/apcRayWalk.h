@@ -5,6 +5,7 @@
 #define apcRayWalk_h
 
 #include "apcCellMesh.h"
+#include "apcOpaqueBins.h"
 
 #include <algorithm>
 #include <array>
@@ -204,54 +205,81 @@ struct Lattice
 };
 
 //------------------------------------------------------------------------------
-// How far each ray of a tile has come: the absorbance its samples have added, the largest t
-// among them, and once that absorbance reaches the opaque threshold, the t behind which it
-// takes no more samples. Every sample behind Stop lies behind all the samples summed so far,
-// so its transmittance is at most exp(-threshold) (see SetOpaqueAbsorbance). The walker keeps
+// How far each ray of a tile has come towards opaque (apcOpaqueBins.h). In pass 1 (Own) each
+// pixel sums its samples' absorbance per bin in quanta; once its total reaches the threshold
+// it takes no sample past the end of the bin of its farthest sample so far (Stop, set by the
+// walker), so its profile is complete up to that edge and zero beyond it. A pass that knows
+// the agreed cut instead gets every pixel's Stop preset and sums nothing. The walker keeps
 // this, not the visitor, so that pass 1 and a pass 2 that marches a tile again make the same
 // decisions from the same samples in the same order.
 struct RayProgress
 {
   static constexpr int kPixels = kTilePixels;
-  double Threshold = std::numeric_limits<double>::infinity();
-  double Absorbance[kPixels];
-  double Far[kPixels];
+  static constexpr int kBins = OpaqueBins::kBins;
+  const OpaqueBins* Bins = nullptr; // pass 1's own stop, or null
+  uint32_t Profile[kPixels][kBins];
+  uint32_t Total[kPixels];
+  int64_t FarK[kPixels]; // the largest lattice index summed
+  bool Opaque[kPixels];
   double Stop[kPixels];
-  // Once every pixel of the tile is opaque, the largest Stop: a cell nearer than none of them
-  // is skipped without looking at its rays.
+  // Once every pixel of the tile has a stop, the largest: a cell nearer than none of them is
+  // skipped without looking at its rays.
   double TileStop = std::numeric_limits<double>::infinity();
   int Pixels = 0;
-  int Open = 0; // pixels not yet opaque
+  int Open = 0; // pixels without a stop
 
-  void Begin(int pixels, double threshold)
+  // own: pass 1's bins (null: no pixel stops unless SetStop presets it).
+  void Begin(int pixels, const OpaqueBins* own)
   {
-    this->Threshold = threshold;
+    this->Bins = own;
     this->Pixels = pixels;
     this->Open = pixels;
     this->TileStop = std::numeric_limits<double>::infinity();
-    for (int p = 0; p < pixels; ++p)
+    std::fill(this->Stop, this->Stop + pixels, std::numeric_limits<double>::infinity());
+    if (own)
     {
-      this->Absorbance[p] = 0;
-      this->Far[p] = -std::numeric_limits<double>::infinity();
-      this->Stop[p] = std::numeric_limits<double>::infinity();
+      std::fill(&this->Profile[0][0], &this->Profile[0][0] + pixels * kBins, 0u);
+      std::fill(this->Total, this->Total + pixels, 0u);
+      std::fill(this->FarK, this->FarK + pixels, std::numeric_limits<int64_t>::min());
+      std::fill(this->Opaque, this->Opaque + pixels, false);
     }
   }
-  // Adds a sample at t; true if it made the ray opaque (nothing behind t is taken).
-  bool Add(int p, double t, double absorbance)
+  // Adds pass 1's sample k (in bin) to pixel p; true if it made the ray opaque (the walker
+  // then stops it at the end of FarK's bin).
+  bool Add(int p, int64_t k, int bin, double absorbance)
   {
-    this->Absorbance[p] += absorbance;
-    this->Far[p] = std::max(this->Far[p], t);
-    if (!(this->Absorbance[p] >= this->Threshold) ||
-      this->Stop[p] < std::numeric_limits<double>::infinity())
+    if (!this->Bins)
     {
       return false;
     }
-    this->Stop[p] = this->Far[p];
+    const uint32_t q = this->Bins->Quanta(absorbance);
+    this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q);
+    this->FarK[p] = std::max(this->FarK[p], k);
+    if (this->Opaque[p])
+    {
+      return false;
+    }
+    this->Total[p] = OpaqueBins::Add(this->Total[p], q);
+    this->Opaque[p] = this->Total[p] >= OpaqueBins::kOpaque;
+    return this->Opaque[p];
+  }
+  // Pixel p takes no sample at or past t.
+  void SetStop(int p, double t)
+  {
+    this->Stop[p] = t;
     if (--this->Open == 0)
     {
       this->TileStop = *std::max_element(this->Stop, this->Stop + this->Pixels);
     }
-    return true;
+  }
+  // Where an opaque pixel p stops: the first lattice index past the bin of its farthest
+  // sample (none past the last bin). Stopping at that sample instead would leave the
+  // profile's bin incomplete, and the cut then depends on the partition.
+  int64_t StopIndex(int p) const { return this->Bins->End(this->LastBin(p)); }
+  // The last bin holding a sample pixel p summed (0 if none).
+  int LastBin(int p) const
+  {
+    return this->FarK[p] == std::numeric_limits<int64_t>::min() ? 0 : this->Bins->Of(this->FarK[p]);
   }
 };
 

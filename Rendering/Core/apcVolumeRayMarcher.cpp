@@ -4,6 +4,7 @@
 #include "apcColourVisitors.h"
 #include "apcCompressedRows.h"
 #include "apcLatticeJitter.h"
+#include "apcOpaqueCut.h"
 #include "apcParallel.h"
 #include "apcRayVisitors.h"
 #include "apcRayWalk.h"
@@ -39,12 +40,18 @@ struct VolumeRayMarcher::Walker
   const TileBins& Bins;
   const TransferTable& Table;
   double FarLimit;
-  bool SharedOrigin; // a perspective camera: every ray starts at the eye
-  double OpaqueAbsorbance;
+  bool SharedOrigin;        // a perspective camera: every ray starts at the eye
+  const OpaqueBins* Opaque; // the frame's opaque stop, or null
 
   Lattice Grid; // the samples t_k of every ray
   // Largest scalar error (scalar units) of a cell sampled by its linear inverse.
   double LinearTolerance;
+  // With Opaque: the agreed last bin of each pixel of the band (rays stop there), or null for
+  // pass 1's own stop, which writes each pixel's profile and last bin to the band's buffers.
+  const uint8_t* Cut = nullptr;
+  uint16_t* ProfileOut = nullptr;
+  uint8_t* LastBinOut = nullptr;
+  int BandWidth = 0;
 
   // A cell's scalars: its own (or none needed), linear along the ray, a twisted pyramid's
   // closed-form inverse, or by Newton.
@@ -220,6 +227,10 @@ struct VolumeRayMarcher::Walker
     bool first = How == Sampling::Follow;
     int64_t samples = 0;
     int64_t k = this->Grid.First(tin, ray.Offset);
+    // Pass 1's own stop: the bin of k, and the first index past it.
+    const bool own = Visitor::StopsWhenOpaque && progress.Bins;
+    int bin = own ? progress.Bins->Of(k) : 0;
+    int64_t binEnd = own ? progress.Bins->End(bin) : 0;
     for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
     {
       TransferSample s = state.CellSample;
@@ -258,9 +269,22 @@ struct VolumeRayMarcher::Walker
       if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
       {
         visitor.Sample(local, k, t, scalar, s);
-        if (Visitor::StopsWhenOpaque && progress.Add(local, t, s.Absorbance))
+        if (own)
         {
-          break; // opaque: what lies behind t cannot be seen
+          for (; k >= binEnd; binEnd = progress.Bins->End(++bin))
+          {
+          }
+          if (progress.Add(local, k, bin, s.Absorbance))
+          {
+            // Opaque: nothing past the end of the farthest sample's bin is taken; what lies
+            // in front of it still is (this pixel's profile stays complete up to there).
+            const int64_t edge = progress.StopIndex(local);
+            const double stop = edge == std::numeric_limits<int64_t>::max()
+              ? std::numeric_limits<double>::infinity()
+              : this->Grid.At(edge, ray.Offset);
+            progress.SetStop(local, stop);
+            tout = std::min(tout, stop);
+          }
         }
       }
     }
@@ -275,15 +299,44 @@ struct VolumeRayMarcher::Walker
     int64_t samples = 0;
     CellState state;
     RayProgress progress;
-    progress.Begin(tile.Pixels(), this->OpaqueAbsorbance);
+    const bool stops = Visitor::StopsWhenOpaque && this->Opaque;
+    progress.Begin(tile.Pixels(), stops && !this->Cut ? this->Opaque : nullptr);
     const TileRect inBand = Shifted(tile, rowOffset);
+    if (stops && this->Cut)
+    {
+      this->StopAtCut(rays, inBand, progress);
+    }
     visitor.BeginTile(inBand);
     for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
     {
       samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state, progress);
     }
     visitor.EndTile(inBand);
+    if (progress.Bins && this->ProfileOut)
+    {
+      for (int p = 0; p < tile.Pixels(); ++p)
+      {
+        const int64_t pixel = inBand.ImagePixel(p, this->BandWidth);
+        std::copy(progress.Profile[p], progress.Profile[p] + OpaqueBins::kBins,
+          this->ProfileOut + pixel * OpaqueBins::kBins);
+        this->LastBinOut[pixel] = static_cast<uint8_t>(progress.LastBin(p));
+      }
+    }
     return samples;
+  }
+
+  // Every ray of the tile stops at the end of its pixel's agreed last bin.
+  void StopAtCut(
+    const std::vector<RaySetup>& rays, const TileRect& inBand, RayProgress& progress) const
+  {
+    for (int p = 0; p < inBand.Pixels(); ++p)
+    {
+      const int last = this->Cut[inBand.ImagePixel(p, this->BandWidth)];
+      if (last < OpaqueBins::kBins - 1)
+      {
+        progress.SetStop(p, this->Grid.At(this->Opaque->End(last), rays[p].Offset));
+      }
+    }
   }
 
   static TileRect Shifted(TileRect tile, int rows)
@@ -374,11 +427,21 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   double nearLimit = 0;
   double farLimit = 0;
   this->Camera->DistanceRange(this->Mesh->GetBounds(), nearLimit, farLimit);
-  const Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
+  Walker walker{ *this->Mesh, *this->Bins, table, farLimit * (1 + 1e-12) + 1e-300,
     !this->Camera->IsParallel(),
-    Visitor::StopsWhenOpaque ? this->FrameStop : std::numeric_limits<double>::infinity(),
+    Visitor::StopsWhenOpaque && this->Opaque.Active() ? &this->Opaque : nullptr,
     Lattice(table.GetSampleSpacing()),
     this->LinearTolerance > 0 ? this->LinearTolerance * table.GetBinWidth() : 0.0 };
+  walker.BandWidth = this->Width();
+  if (walker.Opaque && this->CutSet)
+  {
+    walker.Cut = this->Cut.data();
+  }
+  else if (walker.Opaque && this->RecordProfile)
+  {
+    walker.ProfileOut = this->Profile.data();
+    walker.LastBinOut = this->LastBin.data();
+  }
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
   tbb::combinable<std::vector<RaySetup>> rayBuffers;
@@ -438,8 +501,17 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);
   this->OwnMomentsOrder = 0;
   // Hybrid (keepOwn) promises the exact ordered blend of a rank's own samples: every sample
-  // is marched. Pass 2 stops where this pass did.
-  this->FrameStop = keepOwn ? std::numeric_limits<double>::infinity() : this->OpaqueAbsorbance;
+  // is marched. Pass 2 stops where this pass did, or at the cut ApplyOpaqueCut agreed.
+  this->Opaque = OpaqueBins::Make(
+    keepOwn ? 0.0 : this->OpaqueAbsorbance, warp.Near(), warp.Far(), table.GetSampleSpacing());
+  this->CutSet = false;
+  const size_t bandPixels = this->Camera ? static_cast<size_t>(this->Width()) *
+      static_cast<size_t>(std::max(0, std::min(rows.J1, this->Camera->GetHeight()) - rows.J0))
+                                         : 0;
+  this->Profile.assign(this->Opaque.Active() ? bandPixels * OpaqueBins::kBins : 0, 0);
+  this->LastBin.assign(this->Opaque.Active() ? bandPixels : 0, 0);
+  this->Cut.clear();
+  visitor.KeepOrder = this->Opaque.Active(); // the cut reads the cached samples' bins
   if (keepOwn && this->Camera)
   {
     const int height = this->Camera->GetHeight();
@@ -452,13 +524,78 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   {
     std::vector<double>().swap(this->OwnMoments); // no memory unless Hybrid asks for it
   }
+  this->RecordProfile = true;
   this->March(visitor, table, nullptr, rows);
+  this->RecordProfile = false;
   this->OwnMomentsOrder = visitor.Own ? N : 0;
   cache.Valid = cache.MaxBytes > 0;
   cache.Table = &table;
   cache.WarpNear = warp.Near();
   cache.WarpFar = warp.Far();
   cache.Moments = N;
+}
+
+//------------------------------------------------------------------------------
+template <int N>
+void VolumeRayMarcher::ApplyOpaqueCut(const TransferTable& table, const LogDepthWarp& warp,
+  const uint16_t* profile, double* moments, const RowBand& rows)
+{
+  if (!this->Opaque.Active() || !this->Camera)
+  {
+    return;
+  }
+  const size_t pixels = this->LastBin.size();
+  this->Cut.resize(pixels);
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    this->Cut[p] = static_cast<uint8_t>(CutBin(profile + p * OpaqueBins::kBins));
+  }
+  this->CutSet = true;
+  // Pixels that summed samples past their cut: from the cache where it holds their tile, else
+  // their tile is zeroed and marched again up to the cut (skip[t] == 0).
+  SampleCache& cache = *this->Cache;
+  const bool cached = cache.Valid && cache.Table == &table && cache.Moments == N;
+  const TileGrid& grid = this->Bins->Grid;
+  std::vector<uint8_t> skip(static_cast<size_t>(grid.Count()), 1);
+  std::atomic<bool> march{ false };
+  int64_t first = 0;
+  int64_t last = 0;
+  this->TilesOf(rows, first, last);
+  const int width = this->Width();
+  ParallelFor(this->Threads, last - first, 1,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t t = first + begin; t < first + end; ++t)
+      {
+        const TileRect inBand = Walker::Shifted(grid.Tile(t), rows.J0);
+        if (this->Bins->Empty(t) ||
+          !TileCrossesCut(inBand, width, this->Cut.data(), this->LastBin.data()))
+        {
+          continue;
+        }
+        if (cached && cache.Kept[t])
+        {
+          CutCachedTile<N>(cache.Tiles[t], inBand, width, this->Opaque, this->Cut.data(),
+            this->LastBin.data(), table, moments);
+          continue;
+        }
+        for (int p = 0; p < inBand.Pixels(); ++p)
+        {
+          std::fill_n(moments + (N + 1) * inBand.ImagePixel(p, width), N + 1, 0.0);
+        }
+        skip[t] = 0;
+        march = true;
+      }
+    });
+  const int64_t pass1 = this->LastSamples;
+  this->LastCutSamples = 0;
+  if (march)
+  {
+    visitors::Moments<N> visitor(moments, width, &warp, nullptr);
+    this->March(visitor, table, &skip, rows);
+    this->LastCutSamples = this->LastSamples;
+  }
+  this->LastSamples = pass1;
 }
 
 //------------------------------------------------------------------------------
@@ -597,6 +734,12 @@ template void VolumeRayMarcher::AccumulateMoments<6>(
   const TransferTable&, const LogDepthWarp&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateMoments<8>(
   const TransferTable&, const LogDepthWarp&, double*, bool, const RowBand&);
+template void VolumeRayMarcher::ApplyOpaqueCut<4>(
+  const TransferTable&, const LogDepthWarp&, const uint16_t*, double*, const RowBand&);
+template void VolumeRayMarcher::ApplyOpaqueCut<6>(
+  const TransferTable&, const LogDepthWarp&, const uint16_t*, double*, const RowBand&);
+template void VolumeRayMarcher::ApplyOpaqueCut<8>(
+  const TransferTable&, const LogDepthWarp&, const uint16_t*, double*, const RowBand&);
 template void VolumeRayMarcher::AccumulateColour<4>(const TransferTable&, const LogDepthWarp&,
   const double*, const MomentSettings<4>&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateColour<6>(const TransferTable&, const LogDepthWarp&,

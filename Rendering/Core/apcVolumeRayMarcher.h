@@ -19,6 +19,7 @@
 #include "apcCellMesh.h"
 #include "apcDepthWarp.h"
 #include "apcMomentTransmittance.h"
+#include "apcOpaqueBins.h"
 #include "apcRayCamera.h"
 #include "apcRaySegments.h"
 #include "apcTransferTable.h"
@@ -73,18 +74,31 @@ public:
   // this (the tiles' cells are visited nearest first, so that happens early): a later sample
   // behind all the samples summed so far has a transmittance below exp(-absorbance) whatever
   // other meshes or ranks add in front of it, so leaving it out changes a pixel's opacity by
-  // less than that. Pass 2 takes exactly pass 1's samples (it stops where pass 1 did). Off
-  // (+inf, every sample) by default: which samples a rank leaves out depends on its own
-  // cells, so MBOIT's moments, and its image, then depend on how the cells are split among
-  // ranks (well within the stop's bound against the exact blend, not within the 1e-5 that
-  // N ranks and one process agree to without it). kRecommendedOpaqueAbsorbance is the value
-  // to use where that does not matter. Exact and segment renders never stop, nor does a pass
-  // 1 that keeps its own moments for Hybrid, whose own transmittance is exact.
+  // less than that. Pass 1 stops at the end of one of the ray's fixed bins (apcOpaqueBins.h)
+  // and records each pixel's absorbance per bin (GetOpaqueProfile); ApplyOpaqueCut, given
+  // the profiles summed over every mesh and process, keeps only the samples up to the cut
+  // complete data gives, so N processes sum the samples one process sums. Without
+  // ApplyOpaqueCut, pass 2 takes exactly pass 1's samples, which depend on how the cells are
+  // split. +inf (every sample) by default. Exact and segment renders never stop, nor does a
+  // pass 1 that keeps its own moments for Hybrid, whose own transmittance is exact.
   void SetOpaqueAbsorbance(double absorbance) { this->OpaqueAbsorbance = absorbance; }
   double GetOpaqueAbsorbance() const { return this->OpaqueAbsorbance; }
   // ln 10^4: what a ray leaves unsampled is hidden behind a transmittance of at most 1e-4,
   // far below one step of an 8-bit colour (1/255).
   static constexpr double kRecommendedOpaqueAbsorbance = 9.210340371976184;
+
+  // After pass 1 with a stop: this mesh's profile, OpaqueBins::kBins saturating quanta per
+  // pixel of the pass's rows (empty without a stop), to be summed (AddProfiles) over every
+  // mesh and process into the profile ApplyOpaqueCut takes.
+  const std::vector<uint16_t>& GetOpaqueProfile() const { return this->Profile; }
+  // Cuts every pixel's samples at the end of the first bin where the summed profile reaches
+  // the threshold (CutBin): the moments of this pass 1 (moments: this mesh's alone, as pass 1
+  // wrote them) lose the samples past it, and pass 2 takes none of them. Nothing without a
+  // stop. Samples marched again for tiles beyond the cache: GetLastCutSampleCount.
+  template <int N>
+  void ApplyOpaqueCut(const TransferTable& table, const LogDepthWarp& warp, const uint16_t* profile,
+    double* moments, const RowBand& rows = {});
+  int64_t GetLastCutSampleCount() const { return this->LastCutSamples; }
 
   // Nearly affine cells take their parametric coordinates linearly along a ray (the inverse
   // of the map's affine part about the cell's centre) where that moves no sample's scalar by
@@ -185,8 +199,15 @@ private:
   bool LatticeJitter = false;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
   double LinearTolerance = kDefaultLinearTolerance;
-  // The stop of the last pass 1, which its pass 2 must use too.
-  double FrameStop = std::numeric_limits<double>::infinity();
+  // The opaque stop's bins of the last pass 1 (inactive without a stop), its own profile
+  // and last bin per pixel, and once agreed, each pixel's cut, which pass 2 uses too.
+  OpaqueBins Opaque;
+  std::vector<uint16_t> Profile;
+  std::vector<uint8_t> LastBin;
+  std::vector<uint8_t> Cut;
+  bool CutSet = false;
+  bool RecordProfile = false;
+  int64_t LastCutSamples = 0;
   int64_t LastSamples = 0;
   int64_t LastReplayed = 0;
   int64_t LastHidden = 0;

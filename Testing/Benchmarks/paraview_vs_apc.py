@@ -108,7 +108,7 @@ SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s", "setup", "opacity",
             "camera", "width", "height", "load_average"] +
-           [s + "_s" for s in STAGES] + ["tiles_s"] + [s + "_s" for s in SEGMENT_STAGES] +
+           [s + "_s" for s in STAGES] + ["tiles_s", "profile_s", "cut_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
             "pass2_cached_share", "pass2_hidden_share",
@@ -378,6 +378,9 @@ def main(args):
                 row["max_segments_per_pixel"] = "%d" % timings[-1]["max_segments_per_pixel"]
             else:
                 row["tiles_s"] = "%.4f" % statistics.median(t["tiles"] for t in same)
+                # Stop Where Opaque: the profiles' allreduce and the cut (0 without it).
+                for s in ("profile", "cut"):
+                    row[s + "_s"] = "%.4f" % statistics.median(t.get(s, 0) for t in same)
                 covered = statistics.median(t["covered_pixels"] for t in same)
                 row["covered_pixels"] = "%d" % covered
                 if covered > 0:

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -54,9 +55,11 @@ void Block(std::vector<std::array<double, 3>>& points, std::vector<float>& scala
   }
 }
 
-// The block's cells, all of them (part < 0) or those of one of two interleaved parts.
-apc::CellMesh BlockMesh(int part)
+// The block's cells, all of them (part < 0) or those of one of two interleaved parts, or
+// with parts > 0, those that a random split (seed) into that many parts gives part.
+apc::CellMesh BlockMesh(int part, int parts = 0, unsigned seed = 0)
 {
+  std::mt19937 split(seed);
   apc::CellMesh mesh;
   Block(mesh.Points, mesh.PointScalars);
   auto id = [](int i, int j, int k)
@@ -67,7 +70,9 @@ apc::CellMesh BlockMesh(int part)
     {
       for (int i = 0; i < kCells; ++i)
       {
-        if (part >= 0 && (i + j + k) % 2 != part)
+        const int owner =
+          parts > 0 ? std::uniform_int_distribution<int>(0, parts - 1)(split) : (i + j + k) % 2;
+        if (part >= 0 && owner != part)
         {
           continue;
         }
@@ -128,6 +133,40 @@ Frame Render(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers)
     marcher->SetView(scene.View, nullptr);
     marcher->AccumulateMoments<4>(scene.TF, scene.Warp, frame.Moments.data());
     frame.Pass1Samples += marcher->GetLastSampleCount();
+  }
+  for (auto* marcher : marchers)
+  {
+    marcher->AccumulateColour<4>(
+      scene.TF, scene.Warp, frame.Moments.data(), apc::MomentSettings<4>(), frame.Sums.data());
+    frame.Pass2Samples += marcher->GetLastSampleCount();
+  }
+  return frame;
+}
+
+// As Render, with the agreed cut: each mesh's pass 1 in its own moments, their profiles
+// summed (the processes' allreduce), each mesh cut, then the moments summed and pass 2.
+Frame RenderCut(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers)
+{
+  Frame frame;
+  std::vector<std::vector<double>> own(marchers.size());
+  std::vector<uint16_t> profile(kPixels * apc::OpaqueBins::kBins, 0);
+  for (size_t m = 0; m < marchers.size(); ++m)
+  {
+    own[m].assign(kPixels * 5, 0.0);
+    marchers[m]->SetView(scene.View, nullptr);
+    marchers[m]->AccumulateMoments<4>(scene.TF, scene.Warp, own[m].data());
+    frame.Pass1Samples += marchers[m]->GetLastSampleCount();
+    const std::vector<uint16_t>& mine = marchers[m]->GetOpaqueProfile();
+    EXPECT_EQ(mine.size(), profile.size());
+    apc::AddProfiles(profile.data(), mine.data(), std::min(mine.size(), profile.size()));
+  }
+  for (size_t m = 0; m < marchers.size(); ++m)
+  {
+    marchers[m]->ApplyOpaqueCut<4>(scene.TF, scene.Warp, profile.data(), own[m].data());
+    for (size_t i = 0; i < own[m].size(); ++i)
+    {
+      frame.Moments[i] += own[m][i];
+    }
   }
   for (auto* marcher : marchers)
   {
@@ -371,4 +410,59 @@ TEST(HiddenSamples, TwoMeshesSkipWhatOneSkips)
   std::cout << "one vs two meshes: " << withSkip << " skipping, " << without << " without ("
             << hiddenOne << " vs " << hiddenTwo << " samples skipped)\n";
   EXPECT_LE(withSkip, std::max(2 * without, 1e-6));
+}
+
+// With the agreed cut, the block split at random among 2 to 4 processes renders what one
+// process renders (float rounding: the cut pixels' moments are summed again from the cache's
+// float depths), whether pass 2 replays the cache or marches again, and the image keeps the
+// stop's bound against the exact blend.
+TEST(OpaqueStop, TheCutKeepsProcessesEqualToOne)
+{
+  const Scene scene;
+  const apc::CellMesh whole = BlockMesh(-1);
+  apc::VolumeRayMarcher one;
+  one.SetMesh(&whole);
+  one.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+  const Frame single = RenderCut(scene, { &one });
+  const std::vector<float> image = single.Image();
+  one.SetOpaqueAbsorbance(std::numeric_limits<double>::infinity());
+  const Frame all = Render(scene, { &one });
+  const std::vector<float> exact = Exact(scene, one);
+  EXPECT_LT(single.Pass1Samples, 0.8 * all.Pass1Samples);
+  ExpectWithinBound(image, all.Image(), exact, "one process, cut");
+
+  for (int parts = 2; parts <= 4; ++parts)
+  {
+    for (size_t budget : { size_t(1) << 30, size_t(0) })
+    {
+      std::vector<apc::CellMesh> meshes;
+      for (int p = 0; p < parts; ++p)
+      {
+        meshes.push_back(BlockMesh(p, parts, 31));
+      }
+      std::vector<std::unique_ptr<apc::VolumeRayMarcher>> marchers;
+      std::vector<apc::VolumeRayMarcher*> pointers;
+      for (const apc::CellMesh& mesh : meshes)
+      {
+        marchers.emplace_back(new apc::VolumeRayMarcher);
+        marchers.back()->SetMesh(&mesh);
+        marchers.back()->SetMaxSampleCacheBytes(budget);
+        marchers.back()->SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+        pointers.push_back(marchers.back().get());
+      }
+      const Frame split = RenderCut(scene, pointers);
+      EXPECT_LT(split.Pass1Samples, all.Pass1Samples) << parts << " processes stop too";
+      for (size_t i = 0; i < single.Moments.size(); ++i)
+      {
+        ASSERT_NEAR(split.Moments[i], single.Moments[i], 1e-6 * (1 + std::abs(single.Moments[i])))
+          << parts << " processes, budget " << budget << ", moment " << i;
+      }
+      const std::vector<float> splitImage = split.Image();
+      for (size_t i = 0; i < image.size(); ++i)
+      {
+        ASSERT_NEAR(splitImage[i], image[i], 1e-5)
+          << parts << " processes, budget " << budget << ", value " << i;
+      }
+    }
+  }
 }

@@ -63,6 +63,11 @@ parser.add_argument("--stop-where-opaque", help="folder: render with APCStopWher
                     "then on, on a nearly opaque transfer function; the stop must drop samples "
                     "and leave no pixel farther from --compare (an exact reference of the same "
                     "opaque scene) than 1/255 beyond where marching every sample leaves it")
+parser.add_argument("--stop", type=int, choices=(0, 1),
+                    help="set APCStopWhereOpaque (default: the property's default)")
+parser.add_argument("--paraview-setup", action="store_true",
+                    help="ParaView's default colour map and linear opacity ramp over the data "
+                    "range, the representation's unit distance, APC's default sample distance")
 parser.add_argument("--opaque", action="store_true",
                     help="a nearly opaque transfer function (what the stop is for)")
 parser.add_argument("--offset", type=float, default=0.0,
@@ -344,6 +349,7 @@ def main():
     display = Show(scene_source, view)
     display.Representation = "APC Volume"
     ColorBy(display, ("POINTS", scene_array))
+    paraview_unit = display.ScalarOpacityUnitDistance  # the representation's, from the data
     lut = GetColorTransferFunction(scene_array)
     lut.RGBPoints = [lo, 0.2, 0.3, 1.0, 0.5 * (lo + hi), 0.9, 0.9, 0.9, hi, 1.0, 0.2, 0.1]
     pwf = GetOpacityTransferFunction(scene_array)
@@ -361,7 +367,17 @@ def main():
                       16, 0.03, 0.5, 0, 20, 0.2, 0.5, 0]
         display.ScalarOpacityUnitDistance = 5.0 * args.scale
         display.APCSampleDistance = 0.0
+    if args.paraview_setup:
+        # As the GUI leaves it: the default map and linear ramp over the data range, the
+        # representation's unit distance, APC's default sample distance.
+        display.RescaleTransferFunctionToDataRange(False, True)
+        data_lo, data_hi = lut.RGBPoints[0], lut.RGBPoints[-4]
+        pwf.Points = [data_lo, 0.0, 0.5, 0.0, data_hi, 1.0, 0.5, 0.0]
+        display.ScalarOpacityUnitDistance = paraview_unit
+        display.APCSampleDistance = 0.0
     display.APCMode = args.mode
+    if args.stop is not None:
+        display.APCStopWhereOpaque = args.stop
     if args.band_megapixels > 0:
         display.APCBandMegapixels = args.band_megapixels
     display.APCResolveMode = args.resolve

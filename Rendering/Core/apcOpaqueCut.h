@@ -1,0 +1,81 @@
+// Applying the agreed opaque cut (apcOpaqueBins.h) to a tile pass 1 kept in the sample cache
+// (internal to apcVolumeRayMarcher.cpp): the samples of a pixel past its cut leave the cache,
+// so that pass 2 replays exactly the samples the moments hold, and that pixel's moments are
+// summed again from the samples it keeps.
+#ifndef apcOpaqueCut_h
+#define apcOpaqueCut_h
+
+#include "apcOpaqueBins.h"
+#include "apcPowerMoments.h"
+#include "apcSampleCache.h"
+#include "apcTileBins.h"
+#include "apcTransferTable.h"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace apc
+{
+
+// True if a pixel of tile (in band coordinates, band rows width pixels wide) summed a sample
+// past its cut.
+inline bool TileCrossesCut(
+  const TileRect& tile, int width, const uint8_t* cut, const uint8_t* lastBin)
+{
+  for (int p = 0; p < tile.Pixels(); ++p)
+  {
+    const int64_t pixel = tile.ImagePixel(p, width);
+    if (lastBin[pixel] > cut[pixel])
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+// Drops the cached samples past each pixel's cut, in place and keeping each pixel's order,
+// and overwrites the moments (N + 1 per pixel of the band) of each pixel that loses any with
+// those of the samples it keeps. The cache must hold lattice bits (K16).
+template <int N>
+void CutCachedTile(CachedTile& cached, const TileRect& tile, int width, const OpaqueBins& bins,
+  const uint8_t* cut, const uint8_t* lastBin, const TransferTable& table, double* moments)
+{
+  uint32_t* starts = cached.Starts.data();
+  CachedSample* samples = cached.Samples.data();
+  uint16_t* order = cached.K16.data();
+  uint32_t kept = 0;
+  for (int p = 0; p < tile.Pixels(); ++p)
+  {
+    const int64_t pixel = tile.ImagePixel(p, width);
+    const uint32_t begin = starts[p];
+    const uint32_t end = starts[p + 1];
+    starts[p] = kept;
+    if (lastBin[pixel] <= cut[pixel])
+    {
+      std::copy(samples + begin, samples + end, samples + kept);
+      std::copy(order + begin, order + end, order + kept);
+      kept += end - begin;
+      continue;
+    }
+    double sums[N + 1] = {};
+    for (uint32_t s = begin; s < end; ++s)
+    {
+      if (bins.OfLow16(order[s]) > cut[pixel])
+      {
+        continue;
+      }
+      AccumulatePowerMoments<N>(sums, samples[s].Z, table.Lookup(samples[s].Scalar).Absorbance);
+      samples[kept] = samples[s];
+      order[kept] = order[s];
+      ++kept;
+    }
+    std::copy(sums, sums + N + 1, moments + (N + 1) * pixel);
+  }
+  starts[tile.Pixels()] = kept;
+  cached.Samples.resize(kept);
+  cached.K16.resize(kept);
+}
+
+} // namespace apc
+
+#endif

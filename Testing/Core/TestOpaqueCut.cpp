@@ -1,0 +1,148 @@
+// The opaque stop's agreed cut (apcOpaqueBins.h): random rays of random samples split among
+// random numbers of processes, each visiting its samples roughly front to back and stopping
+// as pass 1 does (RayProgress). The cut from the summed per-process profiles must be the one
+// the complete profile gives, and every sample the cut keeps must be one its process took,
+// so that N processes keep exactly the samples one process keeps.
+#include "apcOpaqueBins.h"
+#include "apcRayWalk.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace
+{
+using apc::OpaqueBins;
+
+struct Sample
+{
+  int64_t K;
+  double Absorbance;
+  int Process;
+  double Order; // when its process visits it: k plus noise (cells binned by depth)
+};
+
+// One process's pass 1 over its samples: its profile, and whether it took each sample.
+std::array<uint16_t, OpaqueBins::kBins> Pass1(
+  const OpaqueBins& bins, std::vector<Sample>& samples, int process, std::vector<bool>& taken)
+{
+  std::vector<size_t> visit;
+  for (size_t s = 0; s < samples.size(); ++s)
+  {
+    if (samples[s].Process == process)
+    {
+      visit.push_back(s);
+    }
+  }
+  std::sort(visit.begin(), visit.end(),
+    [&](size_t a, size_t b) { return samples[a].Order < samples[b].Order; });
+  apc::walk::RayProgress progress;
+  progress.Begin(1, &bins);
+  int64_t stop = std::numeric_limits<int64_t>::max();
+  for (size_t s : visit)
+  {
+    if (samples[s].K >= stop)
+    {
+      continue;
+    }
+    taken[s] = true;
+    if (progress.Add(0, samples[s].K, bins.Of(samples[s].K), samples[s].Absorbance))
+    {
+      stop = progress.StopIndex(0);
+    }
+  }
+  std::array<uint16_t, OpaqueBins::kBins> profile{};
+  for (int b = 0; b < OpaqueBins::kBins; ++b)
+  {
+    profile[b] = static_cast<uint16_t>(progress.Profile[0][b]);
+  }
+  return profile;
+}
+}
+
+TEST(OpaqueCut, BinsFollowTheLattice)
+{
+  const OpaqueBins bins = OpaqueBins::Make(9.21, 10.0, 50.0, 0.1);
+  ASSERT_TRUE(bins.Active());
+  EXPECT_EQ(bins.Base, 100);
+  EXPECT_EQ(bins.Width, 25); // 400 steps in 16 bins
+  EXPECT_EQ(bins.Of(0), 0);
+  EXPECT_EQ(bins.Of(124), 0);
+  EXPECT_EQ(bins.Of(125), 1);
+  EXPECT_EQ(bins.Of(1000000), OpaqueBins::kBins - 1);
+  EXPECT_EQ(bins.End(0), 125);
+  EXPECT_EQ(bins.End(OpaqueBins::kBins - 1), std::numeric_limits<int64_t>::max());
+  for (int64_t k = 0; k < 600; ++k)
+  {
+    ASSERT_EQ(bins.OfLow16(static_cast<uint16_t>(k)), bins.Of(k)) << k;
+  }
+  // Rounded down: a sample just under the threshold is not opaque alone.
+  EXPECT_EQ(bins.Quanta(9.21), OpaqueBins::kOpaque);
+  EXPECT_LT(bins.Quanta(9.2099), OpaqueBins::kOpaque);
+  EXPECT_EQ(bins.Quanta(1e300), OpaqueBins::kOpaque);
+  EXPECT_EQ(bins.Quanta(0.0), 0u);
+  // No threshold, or a span the cache's 16 lattice bits cannot hold: nothing stops.
+  EXPECT_FALSE(OpaqueBins::Make(std::numeric_limits<double>::infinity(), 1, 2, 0.1).Active());
+  EXPECT_FALSE(OpaqueBins::Make(9.21, 1, 1e6, 1.0).Active());
+}
+
+TEST(OpaqueCut, ProfilesSummedOverProcessesGiveTheCompleteCut)
+{
+  const OpaqueBins bins = OpaqueBins::Make(9.21, 10.0, 50.0, 0.1);
+  std::mt19937 rng(26);
+  int cutEarly = 0;
+  int stoppedPast = 0;
+  int leftOut = 0;
+  for (int trial = 0; trial < 4000; ++trial)
+  {
+    const int processes = 1 + trial % 4;
+    const int count = std::uniform_int_distribution<int>(1, 400)(rng);
+    const double mean = std::uniform_real_distribution<double>(0.005, 0.5)(rng);
+    const double noise = std::uniform_real_distribution<double>(0.0, 80.0)(rng);
+    std::exponential_distribution<double> absorbance(1.0 / mean);
+    std::vector<Sample> samples;
+    for (int s = 0; s < count; ++s)
+    {
+      const int64_t k = bins.Base + std::uniform_int_distribution<int64_t>(-5, 420)(rng);
+      const int process = std::uniform_int_distribution<int>(0, processes - 1)(rng);
+      samples.push_back({ k, absorbance(rng), process,
+        static_cast<double>(k) + std::uniform_real_distribution<double>(0.0, noise)(rng) });
+    }
+    std::array<uint16_t, OpaqueBins::kBins> complete{};
+    for (const Sample& s : samples)
+    {
+      complete[bins.Of(s.K)] = OpaqueBins::Add(complete[bins.Of(s.K)], bins.Quanta(s.Absorbance));
+    }
+    const int expected = apc::CutBin(complete.data());
+
+    std::vector<bool> taken(samples.size(), false);
+    std::array<uint16_t, OpaqueBins::kBins> summed{};
+    for (int p = 0; p < processes; ++p)
+    {
+      const auto profile = Pass1(bins, samples, p, taken);
+      apc::AddProfiles(summed.data(), profile.data(), summed.size());
+    }
+    const int cut = apc::CutBin(summed.data());
+    ASSERT_EQ(cut, expected) << "trial " << trial;
+    for (size_t s = 0; s < samples.size(); ++s)
+    {
+      if (bins.Of(samples[s].K) <= cut)
+      {
+        ASSERT_TRUE(taken[s]) << "trial " << trial << ": the cut keeps a sample pass 1 left out";
+      }
+      stoppedPast += taken[s] && bins.Of(samples[s].K) > cut ? 1 : 0;
+      leftOut += taken[s] ? 0 : 1;
+    }
+    cutEarly += cut < OpaqueBins::kBins - 1 ? 1 : 0;
+  }
+  // The trials must exercise the stop: rays cut short, samples left out, and processes that
+  // took samples past the agreed cut (which the cut then drops).
+  EXPECT_GT(cutEarly, 1000);
+  EXPECT_GT(stoppedPast, 1000);
+  EXPECT_GT(leftOut, 10000);
+}
