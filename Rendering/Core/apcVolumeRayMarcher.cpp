@@ -28,6 +28,7 @@ using walk::kSampleTolerance;
 using walk::Lattice;
 using walk::RayProgress;
 using walk::RaySetup;
+using walk::TileRays;
 static_assert(walk::kTilePixels == VolumeRayMarcher::kTileSize * VolumeRayMarcher::kTileSize,
   "a tile's progress holds every pixel of it");
 
@@ -75,6 +76,10 @@ struct VolumeRayMarcher::Walker
     // pixel at about the same depth), then goes on from the previous sample.
     NewtonMemory FirstMemory;
     double Centre[3] = { 0, 0, 0 };
+    // The tile's rays clipped against the cell (by local pixel), and those inside it.
+    double Tin[TileRays::kSize];
+    double Tout[TileRays::kSize];
+    uint16_t Hits[walk::kTilePixels];
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -122,8 +127,8 @@ struct VolumeRayMarcher::Walker
 
   // One cell against the tile's rays; returns the lattice samples taken.
   template <class Visitor>
-  int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRect& tile,
-    Visitor& visitor, CellState& state, RayProgress& progress) const
+  int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRays& packed,
+    const TileRect& tile, Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     if (!this->SetUp<Visitor>(cell, rays.front(), state, progress))
     {
@@ -134,41 +139,33 @@ struct VolumeRayMarcher::Walker
     const int i1 = std::min(r[2], tile.I1 - 1);
     const int j0 = std::max(r[1], tile.J0);
     const int j1 = std::min(r[3], tile.J1 - 1);
-    int64_t samples = 0;
-    for (int j = j0; j <= j1; ++j)
+    if (i0 > i1 || j0 > j1)
     {
-      for (int i = i0; i <= i1; ++i)
-      {
-        const int local = (j - tile.J0) * tile.Width() + (i - tile.I0);
-        samples += this->Ray(local, rays[local], visitor, state, progress);
-      }
+      return 0;
+    }
+    // All the rays first, then those inside: the clipping runs several rays at a time, and
+    // a ray's interval does not depend on the samples of other rays.
+    const int width = tile.Width();
+    const int hits =
+      walk::ClipRays(state.Planes, packed, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
+        state.Near, (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1, width,
+        state.Tin, state.Tout, state.Hits);
+    int64_t samples = 0;
+    for (int h = 0; h < hits; ++h)
+    {
+      const int local = state.Hits[h];
+      samples += this->Ray(
+        local, rays[local], state.Tin[local], state.Tout[local], visitor, state, progress);
     }
     return samples;
   }
 
-  // The tile's ray local through the cell state holds: clipped, then sampled; returns the
+  // The tile's ray local inside the cell state holds, over [tin, tout): sampled; returns the
   // samples taken.
   template <class Visitor>
-  int64_t Ray(
-    int local, const RaySetup& ray, Visitor& visitor, CellState& state, RayProgress& progress) const
+  int64_t Ray(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
   {
-    double tin = 0.0;
-    // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes fail to
-    // enclose it (rounding on a nearly flat cell) from sampling forever.
-    double tout = std::min(ray.End, this->FarLimit);
-    if (Visitor::StopsWhenOpaque)
-    {
-      if (state.Near >= progress.Stop[local])
-      {
-        return 0; // the whole cell lies behind where this ray is opaque
-      }
-      tout = std::min(tout, progress.Stop[local]);
-    }
-    state.Planes.Clip(ray, tin, tout);
-    if (!(tin < tout))
-    {
-      return 0;
-    }
     visitor.Segment(local, tin, tout);
     if (!Visitor::WantsSamples)
     {
@@ -277,10 +274,12 @@ struct VolumeRayMarcher::Walker
     RayProgress progress;
     progress.Begin(tile.Pixels(), this->OpaqueAbsorbance);
     const TileRect inBand = Shifted(tile, rowOffset);
+    TileRays packed;
+    packed.Set(rays.data(), tile.Pixels(), this->FarLimit);
     visitor.BeginTile(inBand);
     for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
     {
-      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state, progress);
+      samples += this->Cell(this->Bins.Cells[b], rays, packed, tile, visitor, state, progress);
     }
     visitor.EndTile(inBand);
     return samples;
