@@ -161,51 +161,6 @@ struct CellPlanes
 #endif
 };
 
-// A tile's rays by component, for clipping several rays against one cell at once. Padded
-// by kPad entries so that a packet of rays may read (and ClipRays write) past the last one.
-struct TileRays
-{
-  static constexpr int kPad = 4;
-  static constexpr int kSize = kTilePixels + kPad;
-  double Dx[kSize], Dy[kSize], Dz[kSize];
-  double Ox[kSize], Oy[kSize], Oz[kSize];
-  // Where clipping starts from: min(ray end, the mesh's far bound). No sample lies beyond
-  // the far bound, which also keeps a cell whose planes fail to enclose it (rounding on a
-  // nearly flat cell) from sampling forever.
-  double End[kSize];
-
-  // Copies rays[0, count) (count <= kTilePixels); far bounds every ray's end.
-  void Set(const RaySetup* rays, int count, double far)
-  {
-    for (int p = 0; p < kSize; ++p)
-    {
-      const RaySetup& r = rays[std::min(p, count - 1)];
-      this->Dx[p] = r.D[0];
-      this->Dy[p] = r.D[1];
-      this->Dz[p] = r.D[2];
-      this->Ox[p] = r.O[0];
-      this->Oy[p] = r.O[1];
-      this->Oz[p] = r.O[2];
-      this->End[p] = std::min(r.End, far);
-    }
-  }
-};
-
-// Rays rows x width of a tile (the first one first, a row every stride rays) clipped against
-// one cell: for each ray l, [tin[l], tout[l]) is what CellPlanes::Clip gives from [0, tout)
-// with tout = min(End[l], stop[l]), bit for bit, and nothing (tout = -inf) where
-// near >= stop[l]; stop may be null (no limit). tin and tout hold kSize entries. Writes the
-// rays with tin < tout into hits, in order, and returns how many. Four rays per AVX2
-// instruction where the processor has it, else ray by ray with CellPlanes::Clip.
-int ClipRays(const CellPlanes& planes, const TileRays& rays, const double* stop, double near,
-  int first, int width, int rows, int stride, double* tin, double* tout, uint16_t* hits);
-// The two forms ClipRays chooses from (tests); ClipRaysAvx2 only where HasAvx2().
-int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const double* stop, double near,
-  int first, int width, int rows, int stride, double* tin, double* tout, uint16_t* hits);
-int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const double* stop, double near,
-  int first, int width, int rows, int stride, double* tin, double* tout, uint16_t* hits);
-bool HasAvx2();
-
 // Scalars need about single precision: 1e-7 in parametric units is ample and saves Newton
 // steps on distorted cells.
 constexpr double kSampleTolerance = 1e-7;

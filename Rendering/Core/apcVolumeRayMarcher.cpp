@@ -5,6 +5,7 @@
 #include "apcCompressedRows.h"
 #include "apcLatticeJitter.h"
 #include "apcParallel.h"
+#include "apcRayClip.h"
 #include "apcRayVisitors.h"
 #include "apcRayWalk.h"
 #include "apcSampleCache.h"
@@ -76,10 +77,8 @@ struct VolumeRayMarcher::Walker
     // pixel at about the same depth), then goes on from the previous sample.
     NewtonMemory FirstMemory;
     double Centre[3] = { 0, 0, 0 };
-    // The tile's rays clipped against the cell (by local pixel), and those inside it.
-    double Tin[TileRays::kSize];
-    double Tout[TileRays::kSize];
-    uint16_t Hits[walk::kTilePixels];
+    // The tile's rays clipped against the cell.
+    walk::ClippedRays Clipped;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -143,33 +142,42 @@ struct VolumeRayMarcher::Walker
     {
       return 0;
     }
-    // All the rays first, then those inside: the clipping runs several rays at a time, and
-    // a ray's interval does not depend on the samples of other rays.
+    // All the rays first, then those with a sample: the clipping runs several rays at a
+    // time, and a ray's interval does not depend on the samples of other rays.
     const int width = tile.Width();
+    const walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1,
+      width };
+    // A visitor of segments sees every ray inside, with a sample or not.
+    constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
+    walk::ClippedRays& c = state.Clipped;
     const int hits =
-      walk::ClipRays(state.Planes, packed, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
-        state.Near, (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1, width,
-        state.Tin, state.Tout, state.Hits);
+      walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
+        state.Near, allInside ? nullptr : &this->Grid, c);
     int64_t samples = 0;
     for (int h = 0; h < hits; ++h)
     {
-      const int local = state.Hits[h];
-      samples += this->Ray(
-        local, rays[local], state.Tin[local], state.Tout[local], visitor, state, progress);
+      const int l = c.Hits[h];
+      const int64_t k = allInside ? 0 : static_cast<int64_t>(c.Lattice[l]);
+      samples += this->Ray(l, rays[l], c.Tin[l], c.Tout[l], k, visitor, state, progress);
     }
     return samples;
   }
 
-  // The tile's ray local inside the cell state holds, over [tin, tout): sampled; returns the
-  // samples taken.
+  // The tile's ray local inside the cell state holds, over [tin, tout) from lattice index k
+  // on (the first one there, unless the visitor wants segments): sampled; returns the samples
+  // taken.
   template <class Visitor>
-  int64_t Ray(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+  int64_t Ray(int local, const RaySetup& ray, double tin, double tout, int64_t k, Visitor& visitor,
     CellState& state, RayProgress& progress) const
   {
     visitor.Segment(local, tin, tout);
     if (!Visitor::WantsSamples)
     {
       return 0;
+    }
+    if (Visitor::WantsSegments)
+    {
+      k = this->Grid.First(tin, ray.Offset);
     }
     if (state.Interpolate && !state.HaveCorners)
     {
@@ -183,23 +191,23 @@ struct VolumeRayMarcher::Walker
     }
     if (!state.Interpolate)
     {
-      return this->Samples<Sampling::Constant>(local, ray, tin, tout, visitor, state, progress);
+      return this->Samples<Sampling::Constant>(local, ray, k, tout, visitor, state, progress);
     }
     if (state.Linear)
     {
-      return this->Samples<Sampling::Linear>(local, ray, tin, tout, visitor, state, progress);
+      return this->Samples<Sampling::Linear>(local, ray, k, tout, visitor, state, progress);
     }
     if (state.Interpolator.HasPyramidInverse())
     {
-      return this->Samples<Sampling::Pyramid>(local, ray, tin, tout, visitor, state, progress);
+      return this->Samples<Sampling::Pyramid>(local, ray, k, tout, visitor, state, progress);
     }
-    return this->Samples<Sampling::Follow>(local, ray, tin, tout, visitor, state, progress);
+    return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
   }
 
   // The lattice samples of the ray in [tin, tout), the same points on every rank; one loop
   // per way of finding the scalar.
   template <Sampling How, class Visitor>
-  int64_t Samples(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+  int64_t Samples(int local, const RaySetup& ray, int64_t k, double tout, Visitor& visitor,
     CellState& state, RayProgress& progress) const
   {
     double p0[3] = { 0, 0, 0 };
@@ -216,7 +224,6 @@ struct VolumeRayMarcher::Walker
     double pcoords[3] = { state.Centre[0], state.Centre[1], state.Centre[2] };
     bool first = How == Sampling::Follow;
     int64_t samples = 0;
-    int64_t k = this->Grid.First(tin, ray.Offset);
     for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
     {
       TransferSample s = state.CellSample;

@@ -3,7 +3,7 @@
 // against the plain per-plane form they replaced: the same interval, bit for bit, for any
 // planes and rays, parallel ones included. Neighbouring cells and ranks rely on these exact
 // numbers to give every lattice sample to exactly one cell.
-#include "apcRayWalk.h"
+#include "apcRayClip.h"
 
 #include <gtest/gtest.h>
 
@@ -17,6 +17,9 @@ namespace
 
 using apc::FacePlane;
 using apc::walk::CellPlanes;
+using apc::walk::ClippedRays;
+using apc::walk::Lattice;
+using apc::walk::RayRect;
 using apc::walk::RaySetup;
 using apc::walk::TileRays;
 
@@ -106,12 +109,13 @@ TEST(CellPlanes, ClipMatchesPerPlaneDivision)
 namespace
 {
 
-using ClipRaysForm = int (*)(const CellPlanes&, const TileRays&, const double*, double, int, int,
-  int, int, double*, double*, uint16_t*);
+using ClipRaysForm = int (*)(const CellPlanes&, const TileRays&, const RayRect&, const double*,
+  double, const Lattice*, ClippedRays&);
 
-// A tile of rays (a perspective camera's, sharing one origin, or a parallel one's) against
-// random cells, over random rectangles of the tile, with and without an opaque stop: each
-// form of ClipRays against the per-plane division, ray by ray.
+// A tile of rays (a perspective camera's, sharing one origin, or a parallel one's; some with a
+// lattice offset) against random cells, over random rectangles of the tile, with and without
+// an opaque stop and a lattice: each form of ClipRays against the per-plane division and
+// Lattice::First, ray by ray.
 void CheckClipRays(ClipRaysForm form)
 {
   constexpr int kWidth = 16;
@@ -122,6 +126,8 @@ void CheckClipRays(ClipRaysForm form)
   int inside = 0;
   int outside = 0;
   int stopped = 0;
+  int sampled = 0;
+  int unsampled = 0;
   for (int trial = 0; trial < 4000; ++trial)
   {
     const bool axis = trial % 2 == 0;
@@ -136,6 +142,7 @@ void CheckClipRays(ClipRaysForm form)
         ray.D[d] = axis ? (d == static_cast<int>(p + trial) % 3 ? 1.0 : 0.0) : u(rng);
       }
       ray.End = p % 7 == 3 ? 0.5 : 10.0;
+      ray.Offset = p % 3 == 0 ? 0.5 * (u(rng) + 1.0) : 0.0;
     }
     const int count = 4 + trial % 3;
     FacePlane planes[6];
@@ -159,6 +166,10 @@ void CheckClipRays(ClipRaysForm form)
       // Some stops at the cell's near bound exactly: that cell lies behind them.
       s = withStop && rng() % 2 ? (rng() % 4 == 0 ? near : 2.0 * (u(rng) + 1.0)) : s;
     }
+    // Spacings from a tenth of the cells to several times them, some with a periodic binary
+    // expansion (a quotient that rounds).
+    const Lattice grid(trial % 5 == 0 ? 0.1 : 0.013 * (1 + trial % 300));
+    const bool withLattice = trial % 8 < 6;
     int i0 = pixel(rng), i1 = pixel(rng), j0 = pixel(rng), j1 = pixel(rng);
     if (i0 > i1)
     {
@@ -168,11 +179,9 @@ void CheckClipRays(ClipRaysForm form)
     {
       std::swap(j0, j1);
     }
-    double tin[TileRays::kSize];
-    double tout[TileRays::kSize];
-    uint16_t hits[kWidth * kWidth];
-    const int n = form(cell, packed, withStop ? stop.data() : nullptr, near, j0 * kWidth + i0,
-      i1 - i0 + 1, j1 - j0 + 1, kWidth, tin, tout, hits);
+    ClippedRays out;
+    const int n = form(cell, packed, RayRect{ j0 * kWidth + i0, i1 - i0 + 1, j1 - j0 + 1, kWidth },
+      withStop ? stop.data() : nullptr, near, withLattice ? &grid : nullptr, out);
     int h = 0;
     for (int j = j0; j <= j1; ++j)
     {
@@ -193,21 +202,39 @@ void CheckClipRays(ClipRaysForm form)
           ReferenceClip(planes, count, rays[l], rin, rout);
         }
         const bool empty = skipped || !(rin < rout);
-        ASSERT_EQ(empty, !(tin[l] < tout[l])) << "trial " << trial << " ray " << l;
+        ASSERT_EQ(empty, !(out.Tin[l] < out.Tout[l])) << "trial " << trial << " ray " << l;
         if (empty)
         {
           ++outside;
           continue;
         }
         ++inside;
-        ASSERT_LT(h, n) << "trial " << trial;
-        ASSERT_EQ(hits[h++], l) << "trial " << trial;
-        ASSERT_TRUE(SameBits(tin[l], rin) && SameBits(tout[l], rout))
+        ASSERT_TRUE(SameBits(out.Tin[l], rin) && SameBits(out.Tout[l], rout))
           << "trial " << trial << " ray " << l;
+        if (withLattice)
+        {
+          // The smallest k with t_k >= tin, found by walking the lattice.
+          int64_t k = static_cast<int64_t>(std::floor(rin / grid.Spacing)) - 3;
+          while (grid.At(k, rays[l].Offset) < rin)
+          {
+            ++k;
+          }
+          if (!(grid.At(k, rays[l].Offset) < rout))
+          {
+            ++unsampled;
+            continue;
+          }
+          ++sampled;
+          ASSERT_EQ(out.Lattice[l], static_cast<double>(k)) << "trial " << trial << " ray " << l;
+        }
+        ASSERT_LT(h, n) << "trial " << trial;
+        ASSERT_EQ(out.Hits[h++], l) << "trial " << trial;
       }
     }
     ASSERT_EQ(h, n) << "trial " << trial;
   }
+  EXPECT_GT(sampled, 5000);
+  EXPECT_GT(unsampled, 1000);
   EXPECT_GT(inside, 10000);
   EXPECT_GT(outside, 10000);
   EXPECT_GT(stopped, 1000);
