@@ -72,7 +72,7 @@ void CutCachedTile(CachedTile& cached, const TileRect& tile, int width, const Op
     std::copy(sums, sums + N + 1, moments + (N + 1) * pixel);
   }
   starts[tile.Pixels()] = kept;
-  cached.Samples.resize(kept);
+  cached.Samples.Size = kept;
   cached.K16.resize(kept);
 }
 

@@ -6,6 +6,7 @@
 #include "apcLatticeJitter.h"
 #include "apcOpaqueCut.h"
 #include "apcParallel.h"
+#include "apcRayClip.h"
 #include "apcRayVisitors.h"
 #include "apcRayWalk.h"
 #include "apcSampleCache.h"
@@ -29,6 +30,7 @@ using walk::kSampleTolerance;
 using walk::Lattice;
 using walk::RayProgress;
 using walk::RaySetup;
+using walk::TileRays;
 static_assert(walk::kTilePixels == VolumeRayMarcher::kTileSize * VolumeRayMarcher::kTileSize,
   "a tile's progress holds every pixel of it");
 
@@ -82,6 +84,8 @@ struct VolumeRayMarcher::Walker
     // pixel at about the same depth), then goes on from the previous sample.
     NewtonMemory FirstMemory;
     double Centre[3] = { 0, 0, 0 };
+    // The tile's rays clipped against the cell.
+    walk::ClippedRays Clipped;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -129,8 +133,8 @@ struct VolumeRayMarcher::Walker
 
   // One cell against the tile's rays; returns the lattice samples taken.
   template <class Visitor>
-  int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRect& tile,
-    Visitor& visitor, CellState& state, RayProgress& progress) const
+  int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRays& packed,
+    const TileRect& tile, Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     if (!this->SetUp<Visitor>(cell, rays.front(), state, progress))
     {
@@ -141,45 +145,46 @@ struct VolumeRayMarcher::Walker
     const int i1 = std::min(r[2], tile.I1 - 1);
     const int j0 = std::max(r[1], tile.J0);
     const int j1 = std::min(r[3], tile.J1 - 1);
-    int64_t samples = 0;
-    for (int j = j0; j <= j1; ++j)
+    if (i0 > i1 || j0 > j1)
     {
-      for (int i = i0; i <= i1; ++i)
-      {
-        const int local = (j - tile.J0) * tile.Width() + (i - tile.I0);
-        samples += this->Ray(local, rays[local], visitor, state, progress);
-      }
+      return 0;
+    }
+    // All the rays first, then those with a sample: the clipping runs several rays at a
+    // time, and a ray's interval does not depend on the samples of other rays.
+    const int width = tile.Width();
+    const walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1,
+      width };
+    // A visitor of segments sees every ray inside, with a sample or not.
+    constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
+    walk::ClippedRays& c = state.Clipped;
+    const int hits =
+      walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
+        state.Near, allInside ? nullptr : &this->Grid, c);
+    int64_t samples = 0;
+    for (int h = 0; h < hits; ++h)
+    {
+      const int l = c.Hits[h];
+      const int64_t k = allInside ? 0 : static_cast<int64_t>(c.Lattice[l]);
+      samples += this->Ray(l, rays[l], c.Tin[l], c.Tout[l], k, visitor, state, progress);
     }
     return samples;
   }
 
-  // The tile's ray local through the cell state holds: clipped, then sampled; returns the
-  // samples taken.
+  // The tile's ray local inside the cell state holds, over [tin, tout) from lattice index k
+  // on (the first one there, unless the visitor wants segments): sampled; returns the samples
+  // taken.
   template <class Visitor>
-  int64_t Ray(
-    int local, const RaySetup& ray, Visitor& visitor, CellState& state, RayProgress& progress) const
+  int64_t Ray(int local, const RaySetup& ray, double tin, double tout, int64_t k, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
   {
-    double tin = 0.0;
-    // No sample lies beyond the mesh's far bound: this also keeps a cell whose planes fail to
-    // enclose it (rounding on a nearly flat cell) from sampling forever.
-    double tout = std::min(ray.End, this->FarLimit);
-    if (Visitor::StopsWhenOpaque)
-    {
-      if (state.Near >= progress.Stop[local])
-      {
-        return 0; // the whole cell lies behind where this ray is opaque
-      }
-      tout = std::min(tout, progress.Stop[local]);
-    }
-    state.Planes.Clip(ray, tin, tout);
-    if (!(tin < tout))
-    {
-      return 0;
-    }
     visitor.Segment(local, tin, tout);
     if (!Visitor::WantsSamples)
     {
       return 0;
+    }
+    if (Visitor::WantsSegments)
+    {
+      k = this->Grid.First(tin, ray.Offset);
     }
     if (state.Interpolate && !state.HaveCorners)
     {
@@ -193,23 +198,23 @@ struct VolumeRayMarcher::Walker
     }
     if (!state.Interpolate)
     {
-      return this->Samples<Sampling::Constant>(local, ray, tin, tout, visitor, state, progress);
+      return this->Samples<Sampling::Constant>(local, ray, k, tout, visitor, state, progress);
     }
     if (state.Linear)
     {
-      return this->Samples<Sampling::Linear>(local, ray, tin, tout, visitor, state, progress);
+      return this->Samples<Sampling::Linear>(local, ray, k, tout, visitor, state, progress);
     }
     if (state.Interpolator.HasPyramidInverse())
     {
-      return this->Samples<Sampling::Pyramid>(local, ray, tin, tout, visitor, state, progress);
+      return this->Samples<Sampling::Pyramid>(local, ray, k, tout, visitor, state, progress);
     }
-    return this->Samples<Sampling::Follow>(local, ray, tin, tout, visitor, state, progress);
+    return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
   }
 
   // The lattice samples of the ray in [tin, tout), the same points on every rank; one loop
   // per way of finding the scalar.
   template <Sampling How, class Visitor>
-  int64_t Samples(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+  int64_t Samples(int local, const RaySetup& ray, int64_t k, double tout, Visitor& visitor,
     CellState& state, RayProgress& progress) const
   {
     double p0[3] = { 0, 0, 0 };
@@ -226,7 +231,6 @@ struct VolumeRayMarcher::Walker
     double pcoords[3] = { state.Centre[0], state.Centre[1], state.Centre[2] };
     bool first = How == Sampling::Follow;
     int64_t samples = 0;
-    int64_t k = this->Grid.First(tin, ray.Offset);
     // Pass 1's own stop: the bin of k, and the first index past it.
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
     int bin = own ? progress.Bins->Of(k) : 0;
@@ -306,10 +310,12 @@ struct VolumeRayMarcher::Walker
     {
       this->StopAtCut(rays, inBand, progress);
     }
+    TileRays packed;
+    packed.Set(rays.data(), tile.Pixels(), this->FarLimit);
     visitor.BeginTile(inBand);
     for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
     {
-      samples += this->Cell(this->Bins.Cells[b], rays, tile, visitor, state, progress);
+      samples += this->Cell(this->Bins.Cells[b], rays, packed, tile, visitor, state, progress);
     }
     visitor.EndTile(inBand);
     if (progress.Bins && this->ProfileOut)

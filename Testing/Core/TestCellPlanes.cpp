@@ -1,21 +1,27 @@
 // The marcher's clipping of a ray against a cell's face planes (walk::CellPlanes::Clip, two
-// planes per SSE2 instruction) against the plain per-plane form it replaced: the same
-// interval, bit for bit, for any planes and rays, parallel ones included. Neighbouring cells
-// and ranks rely on these exact numbers to give every lattice sample to exactly one cell.
-#include "apcRayWalk.h"
+// planes per SSE2 instruction, and walk::ClipRays, a tile's rays four per AVX2 instruction)
+// against the plain per-plane form they replaced: the same interval, bit for bit, for any
+// planes and rays, parallel ones included. Neighbouring cells and ranks rely on these exact
+// numbers to give every lattice sample to exactly one cell.
+#include "apcRayClip.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <limits>
 #include <random>
+#include <vector>
 
 namespace
 {
 
 using apc::FacePlane;
 using apc::walk::CellPlanes;
+using apc::walk::ClippedRays;
+using apc::walk::Lattice;
+using apc::walk::RayRect;
 using apc::walk::RaySetup;
+using apc::walk::TileRays;
 
 // The per-plane loop with a division and a branch per plane, as the marcher had it.
 void ReferenceClip(
@@ -98,4 +104,155 @@ TEST(CellPlanes, ClipMatchesPerPlaneDivision)
   // The cases must include both outcomes and rays parallel to planes.
   EXPECT_GT(nonEmpty, 1000);
   EXPECT_GT(parallel, 1000);
+}
+
+namespace
+{
+
+using ClipRaysForm = int (*)(const CellPlanes&, const TileRays&, const RayRect&, const double*,
+  double, const Lattice*, ClippedRays&);
+
+// A tile of rays (a perspective camera's, sharing one origin, or a parallel one's; some with a
+// lattice offset) against random cells, over random rectangles of the tile, with and without
+// an opaque stop and a lattice: each form of ClipRays against the per-plane division and
+// Lattice::First, ray by ray.
+void CheckClipRays(ClipRaysForm form)
+{
+  constexpr int kWidth = 16;
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> small(-2, 2);
+  std::uniform_int_distribution<int> pixel(0, kWidth - 1);
+  int inside = 0;
+  int outside = 0;
+  int stopped = 0;
+  int sampled = 0;
+  int unsampled = 0;
+  for (int trial = 0; trial < 4000; ++trial)
+  {
+    const bool axis = trial % 2 == 0;
+    const bool shared = trial % 4 < 2;
+    std::vector<RaySetup> rays(kWidth * kWidth);
+    for (size_t p = 0; p < rays.size(); ++p)
+    {
+      RaySetup& ray = rays[p];
+      for (int d = 0; d < 3; ++d)
+      {
+        ray.O[d] = shared ? rays[0].O[d] : (axis ? small(rng) : 3 * u(rng));
+        ray.D[d] = axis ? (d == static_cast<int>(p + trial) % 3 ? 1.0 : 0.0) : u(rng);
+      }
+      ray.End = p % 7 == 3 ? 0.5 : 10.0;
+      ray.Offset = p % 3 == 0 ? 0.5 * (u(rng) + 1.0) : 0.0;
+    }
+    const int count = 4 + trial % 3;
+    FacePlane planes[6];
+    for (int p = 0; p < count; ++p)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        planes[p].Normal[d] = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
+      }
+      planes[p].Offset = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
+    }
+    CellPlanes cell;
+    cell.Set(planes, count, rays[0], shared);
+    TileRays packed;
+    packed.Set(rays.data(), kWidth * kWidth, 8.0);
+    std::vector<double> stop(kWidth * kWidth, std::numeric_limits<double>::infinity());
+    const bool withStop = trial % 3 == 0;
+    const double near = 0.25 * (trial % 5);
+    for (double& s : stop)
+    {
+      // Some stops at the cell's near bound exactly: that cell lies behind them.
+      s = withStop && rng() % 2 ? (rng() % 4 == 0 ? near : 2.0 * (u(rng) + 1.0)) : s;
+    }
+    // Spacings from a tenth of the cells to several times them, some with a periodic binary
+    // expansion (a quotient that rounds).
+    const Lattice grid(trial % 5 == 0 ? 0.1 : 0.013 * (1 + trial % 300));
+    const bool withLattice = trial % 8 < 6;
+    int i0 = pixel(rng), i1 = pixel(rng), j0 = pixel(rng), j1 = pixel(rng);
+    if (i0 > i1)
+    {
+      std::swap(i0, i1);
+    }
+    if (j0 > j1)
+    {
+      std::swap(j0, j1);
+    }
+    ClippedRays out;
+    const int n = form(cell, packed, RayRect{ j0 * kWidth + i0, i1 - i0 + 1, j1 - j0 + 1, kWidth },
+      withStop ? stop.data() : nullptr, near, withLattice ? &grid : nullptr, out);
+    int h = 0;
+    for (int j = j0; j <= j1; ++j)
+    {
+      for (int i = i0; i <= i1; ++i)
+      {
+        const int l = j * kWidth + i;
+        double rin = 0;
+        double rout = std::min(rays[l].End, 8.0);
+        bool skipped = false;
+        if (withStop)
+        {
+          rout = std::min(rout, stop[l]);
+          skipped = near >= stop[l];
+          stopped += skipped ? 1 : 0;
+        }
+        if (!skipped)
+        {
+          ReferenceClip(planes, count, rays[l], rin, rout);
+        }
+        const bool empty = skipped || !(rin < rout);
+        ASSERT_EQ(empty, !(out.Tin[l] < out.Tout[l])) << "trial " << trial << " ray " << l;
+        if (empty)
+        {
+          ++outside;
+          continue;
+        }
+        ++inside;
+        ASSERT_TRUE(SameBits(out.Tin[l], rin) && SameBits(out.Tout[l], rout))
+          << "trial " << trial << " ray " << l;
+        if (withLattice)
+        {
+          // The smallest k with t_k >= tin, found by walking the lattice.
+          int64_t k = static_cast<int64_t>(std::floor(rin / grid.Spacing)) - 3;
+          while (grid.At(k, rays[l].Offset) < rin)
+          {
+            ++k;
+          }
+          if (!(grid.At(k, rays[l].Offset) < rout))
+          {
+            ++unsampled;
+            continue;
+          }
+          ++sampled;
+          ASSERT_EQ(out.Lattice[l], static_cast<double>(k)) << "trial " << trial << " ray " << l;
+        }
+        ASSERT_LT(h, n) << "trial " << trial;
+        ASSERT_EQ(out.Hits[h++], l) << "trial " << trial;
+      }
+    }
+    ASSERT_EQ(h, n) << "trial " << trial;
+  }
+  EXPECT_GT(sampled, 5000);
+  EXPECT_GT(unsampled, 1000);
+  EXPECT_GT(inside, 10000);
+  EXPECT_GT(outside, 10000);
+  EXPECT_GT(stopped, 1000);
+}
+
+} // namespace
+
+TEST(CellPlanes, ClipRaysMatchesPerPlaneDivision)
+{
+  CheckClipRays(apc::walk::ClipRaysScalar);
+  CheckClipRays(apc::walk::ClipRays);
+}
+
+TEST(CellPlanes, ClipRaysAvx2MatchesPerPlaneDivision)
+{
+  if (!apc::walk::HasAvx2())
+  {
+    GTEST_SKIP() << "no AVX2 on this processor";
+  }
+  CheckClipRays(apc::walk::ClipRaysAvx2);
 }

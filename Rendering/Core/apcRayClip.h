@@ -1,0 +1,88 @@
+// Clipping a tile's rays against one cell several rays at a time (internal to
+// apcVolumeRayMarcher.cpp): the same intervals as CellPlanes::Clip ray by ray, bit for bit,
+// and each ray's first lattice index, so that only the rays with a sample reach the sample
+// loop.
+#ifndef apcRayClip_h
+#define apcRayClip_h
+
+#include "apcRayWalk.h"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace apc
+{
+namespace walk
+{
+
+// A tile's rays by component. Padded by kPad entries so that a packet of rays may read (and
+// ClipRays write) past the last one.
+struct TileRays
+{
+  static constexpr int kPad = 4;
+  static constexpr int kSize = kTilePixels + kPad;
+  double Dx[kSize], Dy[kSize], Dz[kSize];
+  double Ox[kSize], Oy[kSize], Oz[kSize];
+  // Where clipping starts from: min(ray end, the mesh's far bound). No sample lies beyond
+  // the far bound, which also keeps a cell whose planes fail to enclose it (rounding on a
+  // nearly flat cell) from sampling forever.
+  double End[kSize];
+  double Offset[kSize]; // the ray's lattice offset (RaySetup::Offset)
+
+  // Copies rays[0, count) (0 < count <= kTilePixels); far bounds every ray's end.
+  void Set(const RaySetup* rays, int count, double far)
+  {
+    for (int p = 0; p < kSize; ++p)
+    {
+      const RaySetup& r = rays[std::min(p, count - 1)];
+      this->Dx[p] = r.D[0];
+      this->Dy[p] = r.D[1];
+      this->Dz[p] = r.D[2];
+      this->Ox[p] = r.O[0];
+      this->Oy[p] = r.O[1];
+      this->Oz[p] = r.O[2];
+      this->End[p] = std::min(r.End, far);
+      this->Offset[p] = r.Offset;
+    }
+  }
+};
+
+// Rows x Width rays of a tile: ray First, then a row every Stride rays.
+struct RayRect
+{
+  int First;
+  int Width;
+  int Rows;
+  int Stride;
+};
+
+// What ClipRays finds, by the ray's index in the tile (Tin, Tout, Lattice: kSize entries,
+// written for the rectangle's rays and possibly a few beyond).
+struct ClippedRays
+{
+  double Tin[TileRays::kSize];
+  double Tout[TileRays::kSize];
+  // Lattice::First(Tin, Offset), exactly, as a double (an integer; only with a lattice).
+  double Lattice[TileRays::kSize];
+  uint16_t Hits[kTilePixels]; // the rays kept, in the rectangle's order
+};
+
+// The rays of rect clipped against one cell: [Tin, Tout) is what CellPlanes::Clip gives from
+// [0, min(End, stop)), bit for bit, and nothing (Tout = -inf) where near >= stop (the cell
+// lies behind where the ray is opaque); stop (by ray) may be null. Without a lattice the rays
+// kept are those with Tin < Tout; with one, those whose interval holds a lattice point, whose
+// first index goes to Lattice. Returns how many rays were kept. Four rays per AVX2
+// instruction where the processor has it, else ray by ray (CellPlanes::Clip, Lattice::First).
+int ClipRays(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice* lattice, ClippedRays& out);
+// The two forms ClipRays chooses from (tests); ClipRaysAvx2 only where HasAvx2().
+int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice* lattice, ClippedRays& out);
+int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice* lattice, ClippedRays& out);
+bool HasAvx2();
+
+} // namespace walk
+} // namespace apc
+
+#endif
