@@ -65,10 +65,10 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
   // normal is stored in float: the offset is taken with the rounded normal, so that the
   // stored plane passes through the centroid (to double rounding) and is only tilted by the
   // normal's rounding, an error relative to the face's size, not to its distance from the
-  // origin. The rounded normal goes through float storage: GCC 12's -O3 vectoriser dropped
-  // the rounding of a double -> float -> double round trip held in doubles for two of the
-  // three components, so the offset belonged to the unrounded normal and the stored plane
-  // missed the face by the rounding times the distance from the origin (0.1 m at 1e7).
+  // origin. The rounded normal goes through float storage: kept in a double array, GCC 12
+  // (-O2 and -O3) vectorised the double -> float -> double round trip of two components into
+  // nothing, so the offset belonged to the unrounded normal and the stored plane missed the
+  // face by the rounding times the distance from the origin (0.1 m at 1e7).
   for (int d = 0; d < 3; ++d)
   {
     normal[d] = static_cast<float>(n[d] / length);
