@@ -200,18 +200,24 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
 {
   constexpr int bins = OpaqueBins::kBins;
   const size_t pixels = moments.size() / (frame.Moments.Moments + 1);
-  std::vector<uint16_t> profile(pixels * bins, 0);
-  for (const FrameEngine* engine : frame.Engines)
+  // One volume's profile is this process's own (no copy); several are summed.
+  const std::vector<uint16_t>& first = frame.Engines.front()->GetOpaqueProfile();
+  const bool single = frame.Engines.size() == 1 && first.size() == pixels * bins;
+  std::vector<uint16_t> profile(single ? 0 : pixels * bins, 0);
+  for (size_t e = 0; !single && e < frame.Engines.size(); ++e)
   {
-    const std::vector<uint16_t>& mine = engine->GetOpaqueProfile();
-    AddProfiles(profile.data(), mine.data(), std::min(mine.size(), profile.size()));
+    const std::vector<uint16_t>& volume = frame.Engines[e]->GetOpaqueProfile();
+    AddProfiles(profile.data(), volume.data(), std::min(volume.size(), profile.size()));
   }
+  const uint16_t* mine = single ? first.data() : profile.data();
   const size_t count = tiles.PixelsIn(covered) * bins;
   if (group.Parallel && count > 0)
   {
     std::vector<uint16_t> send(count);
     std::vector<uint16_t> received(count);
-    tiles.Pack(covered, profile.data(), bins, send.data());
+    tiles.Pack(covered, mine, bins, send.data());
+    profile.assign(pixels * bins, 0); // the uncovered tiles have no samples anywhere
+    mine = profile.data();
     SaturatingProfileSum sum;
     group.Collective("profile",
       [&]
@@ -227,7 +233,7 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
   for (size_t e = 0; e < frame.Engines.size(); ++e)
   {
     frame.Engines[e]->ApplyOpaqueCut(
-      frame.Moments, profile.data(), own.empty() ? moments.data() : own[e].data(), band);
+      frame.Moments, mine, own.empty() ? moments.data() : own[e].data(), band);
   }
   if (!own.empty())
   {

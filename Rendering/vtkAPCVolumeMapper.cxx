@@ -287,6 +287,11 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
     moments.assign(pixels * (parameters.Moments + 1), 0.0);
     colourSums.assign(pixels * 4, 0.0);
     engine.RenderMoments(parameters, moments.data());
+    if (engine.StopsWhereOpaque(parameters))
+    {
+      // One process: its own profile is the whole ray's (the same cut the pass makes).
+      engine.ApplyOpaqueCut(parameters, engine.GetOpaqueProfile().data(), moments.data(), {});
+    }
     engine.RenderColour(parameters, moments.data(), colourSums.data());
     apc::ResolveImage(parameters.Resolve, pixels, moments.data(), parameters.Moments + 1,
       colourSums.data(), rgba.data());

@@ -366,8 +366,8 @@ double* vtkAPCVolumeRepresentation::GetLastTimings()
 {
   static_assert(sizeof(this->LastTimings) / sizeof(double) == vtkAPCCompositePass::NumberOfTimings,
     "one value per field of vtkAPCCompositePass::Timings (and VTK_SIZEHINT in the header)");
-  static_assert(sizeof(vtkAPCCompositePass::Timings) ==
-      sizeof(double) * vtkAPCCompositePass::NumberOfTimings,
+  static_assert(
+    sizeof(vtkAPCCompositePass::Timings) == sizeof(double) * vtkAPCCompositePass::NumberOfTimings,
     "NumberOfTimings counts every field of vtkAPCCompositePass::Timings");
   const vtkAPCCompositePass* pass = apc::FindPass(this);
   const vtkAPCCompositePass::Timings timings =
