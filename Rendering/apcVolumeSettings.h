@@ -35,7 +35,7 @@ struct VolumeSettings
   double SampleDistance = 0.0; // world units; 0: from the cells (apcDefaultSpacing.h)
   bool LatticeJitter = false;
   // MBOIT stops a ray at VolumeRayMarcher::kRecommendedOpaqueAbsorbance of its own samples.
-  bool StopWhereOpaque = false;
+  bool StopWhereOpaque = true;
   int SampleCacheMiB = -1; // -1: the process's share of its node's memory (apcNodeThreads.h)
   int NumberOfThreads = 0; // 0: the process's share of its node (apcNodeThreads.h)
   bool ComputeSegmentCount = false;

@@ -162,10 +162,11 @@ public:
    * MBOIT only: stop a ray once the absorbance of its samples along it reaches ln 10^4 (a
    * transmittance of 1e-4), leaving out samples nobody can see; a pixel's opacity changes by
    * less than 1e-4 against marching every sample. The processes agree on where each ray
-   * stops, so N processes render what one process renders (docs/sampler.md). Off by default:
+   * stops, so N processes render what one process renders (docs/sampler.md). On by default:
    * leaving the hidden samples out of the moments changes MBOIT's reconstruction of the
-   * visible ones, on some views by more than one 8-bit step against marching every sample
-   * (docs/settings.md). EXACT and HYBRID march every sample.
+   * visible ones, closer to the exact blend on average and at worst, though a few pixels move
+   * by more than one 8-bit step against marching every sample (docs/settings.md). EXACT and
+   * HYBRID march every sample.
    */
   void SetStopWhereOpaque(bool stop);
   bool GetStopWhereOpaque() const;

@@ -59,8 +59,8 @@ parser.add_argument("--frames", type=int, default=3, help="later frames to time 
 parser.add_argument("--sample-distance", type=float, default=1.0,
                     help="APC sample distance in metres (the cells are ~1-10 m)")
 parser.add_argument("--cases", default="apc,apc-default,pt,bunyk",
-                    help="comma-separated: apc, apc-default, apc-stop (defaults with Stop Where Opaque), "
-                    "segments, auto, pt, bunyk")
+                    help="comma-separated: apc, apc-default, apc-stop (defaults with Stop Where Opaque "
+                    "on), apc-nostop (defaults with it off), segments, auto, pt, bunyk")
 parser.add_argument("--distances", default="1",
                     help="comma-separated camera distance factors (1 = the default view)")
 parser.add_argument("--no-float-images", action="store_true",
@@ -263,8 +263,9 @@ def main(args):
     cases = {
         "apc": ("APC Volume", "APC", args.sample_distance),
         "apc-default": ("APC Volume", "APC", 0.0),
-        # APC's defaults but Stop Where Opaque on (faster; N ranks then differ from one).
+        # APC's defaults with Stop Where Opaque set on or off whatever its default.
         "apc-stop": ("APC Volume", "APC", 0.0),
+        "apc-nostop": ("APC Volume", "APC", 0.0),
         "segments": ("APC Volume", "Exact (segments)", 0.0),
         "auto": ("APC Volume", "Auto", 0.0),
         "pt": ("Volume", "Projected tetra", None),
@@ -314,8 +315,8 @@ def main(args):
                 name, value = setting.split("=", 1)
                 setattr(display, name, type(getattr(display, name))(value)
                         if not isinstance(getattr(display, name), str) else value)
-            if key == "apc-stop":
-                display.APCStopWhereOpaque = 1
+            if key in ("apc-stop", "apc-nostop"):
+                display.APCStopWhereOpaque = 1 if key == "apc-stop" else 0
         if not apc:
             display.SelectMapper = mapper
         for k, v in camera.items():  # Show() may have touched the camera

@@ -43,7 +43,7 @@ def main(out, docs):
         "The wind data (331,699 cells, 8 Scotch pieces) in pvbatch under `mpirun`, coloured by "
         "U_mag as a user would: ParaView's default colour map and linear opacity ramp rescaled "
         "to the data range, its opacity unit distance, every APC property at its default "
-        "(APC Mode APC or Auto; **Stop**: the same with Stop Where Opaque on). **fill**: camera "
+        "(APC Mode APC or Auto, Stop Where Opaque on; **No stop**: APC with Stop Where Opaque off). **fill**: camera "
         "at 0.6 of the demo's focal distance, the "
         "data fills the view; **overview**: the demo's direction, the camera reset to the whole "
         "data. First frame = the view's first render (the reader already updated; ParaView's "
@@ -53,9 +53,9 @@ def main(out, docs):
         "**ramp**: ParaView's default linear ramp; **lower60**: the same with the lower 60 % "
         "of the range transparent.",
         "",
-        "| opacity | ranks | size | camera | APC first s | APC later s | Stop first s | Stop later s "
+        "| opacity | ranks | size | camera | APC first s | APC later s | No stop first s | No stop later s "
         "| Auto first s | Auto later s | PT first s | PT later s | APC/PT first | APC/PT later "
-        "| Stop/PT first | Stop/PT later | Auto/PT later | load |",
+        "| No stop/PT first | No stop/PT later | Auto/PT later | load |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
 
@@ -69,7 +69,7 @@ def main(out, docs):
 
     for k in keys:
         apc, stop, auto, pt = (by.get(k + (c,))
-                               for c in ("apc-default", "apc-stop", "auto", "pt"))
+                               for c in ("apc-default", "apc-nostop", "auto", "pt"))
         load = "/".join(r["load_average"] for r in (apc, stop, auto, pt) if r)
         lines.append("| " + " | ".join([
             k[4], k[0], "%s×%s" % (k[1], k[2]), k[3], cell(apc, "first_frame_s"),

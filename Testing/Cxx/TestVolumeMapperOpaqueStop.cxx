@@ -47,8 +47,9 @@ TEST(VolumeMapperOpaqueStop, ReachesTheMarcherWithinTheBound)
   apctest::LiveWindow live(OpaqueTF(), view);
   live.Mapper->SetInputData(grid);
   live.Mapper->SetSampleDistance(0.02);
-  ASSERT_FALSE(live.Mapper->GetStopWhereOpaque()) << "off by default";
+  ASSERT_TRUE(live.Mapper->GetStopWhereOpaque()) << "on by default";
 
+  live.Mapper->StopWhereOpaqueOff();
   const apctest::Frame all = live.Render();
   const double allSamples = SampleCount(live.Mapper);
   live.Mapper->StopWhereOpaqueOn();
