@@ -8,7 +8,7 @@
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
-//     [--linear-tolerance BINS]
+//     [--linear-tolerance BINS] [--no-stop]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -146,9 +146,10 @@ struct Options
   vtkIdType ZSweepMaxCells = 100000;
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
-  bool SpacingScaleGiven = false;  // --setup paraview: the mean cell size times SpacingScale
-  double LinearTolerance = NAN;    // sampler: the linear inverse's tolerance in bins (NaN: default)
-  int Moments = 4;                 // APC's MBOIT moments
+  bool SpacingScaleGiven = false; // --setup paraview: the mean cell size times SpacingScale
+  double LinearTolerance = NAN;   // sampler: the linear inverse's tolerance in bins (NaN: default)
+  bool Stop = true; // sampler: time with the recommended opaque stop (off: as ParaView renders)
+  int Moments = 4;  // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
   bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
@@ -843,7 +844,7 @@ private:
     auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
     const apcbench::SamplerTiming s = apcbench::TimeSampler(grid, stage.Renderer, stage.Property,
       this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare,
-      this->Opt.LinearTolerance);
+      this->Opt.LinearTolerance, this->Opt.Stop);
     row.Sampler = s;
     row.Pass1 = s.Pass1Seconds;
     row.Pass2 = s.Pass2Seconds;
@@ -989,7 +990,7 @@ void Usage()
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
-               "  [--linear-tolerance BINS]\n";
+               "  [--linear-tolerance BINS] [--no-stop]\n";
 }
 
 } // namespace
@@ -1069,6 +1070,10 @@ int main(int argc, char* argv[])
     {
       options.SpacingScale = std::stod(value());
       options.SpacingScaleGiven = true;
+    }
+    else if (arg == "--no-stop")
+    {
+      options.Stop = false;
     }
     else if (arg == "--linear-tolerance")
     {

@@ -278,7 +278,7 @@ std::vector<float> MboitImage(apc::VolumeRayMarcher& marcher, const apc::Transfe
 
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
-  double linearTolerance)
+  double linearTolerance, bool withStop)
 {
   SamplerTiming result;
   apc::CellMesh mesh;
@@ -312,7 +312,8 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
 
   apc::VolumeRayMarcher marcher;
   marcher.SetNumberOfThreads(threads);
-  SetStop(marcher, RecommendedStop<apc::VolumeRayMarcher>());
+  SetStop(marcher,
+    withStop ? RecommendedStop<apc::VolumeRayMarcher>() : std::numeric_limits<double>::infinity());
   if (!std::isnan(linearTolerance))
   {
     SetLinearTolerance(marcher, linearTolerance);

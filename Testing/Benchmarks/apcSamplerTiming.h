@@ -69,9 +69,11 @@ struct SamplerTiming
 // default, the bounding-box diagonal / 256) and 4 moments. compare: also render the exact and
 // the non-stopping images for the two errors (one untimed frame each).
 // linearTolerance: the marcher's linear-inverse tolerance in table bins (NaN: its default).
+// withStop false: timed without the opaque stop, as the mapper renders by default (pass 2 then
+// finds hidden depths where rays are opaque).
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
-  double linearTolerance = NAN);
+  double linearTolerance = NAN, bool withStop = true);
 
 } // namespace apcbench
 
