@@ -49,8 +49,8 @@ constexpr double kSlack = 0.15;
 // on 3 ranks at load ~23 on 2 cores), hence the halves and quarters below.
 constexpr double kSleep = 2.0;
 
-const char* const kStages[] = { "agree", "depth", "tiles", "allreduce", "reduce", "exchange",
-  "gather", "statistics", "auto", "ranks" };
+const char* const kStages[] = { "agree", "depth", "tiles", "profile", "allreduce", "reduce",
+  "exchange", "gather", "statistics", "auto", "ranks" };
 
 std::map<std::string, double> TimingsOf(const vtkAPCCompositePass* pass)
 {

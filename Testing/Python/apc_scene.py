@@ -143,7 +143,7 @@ def check_opaque_stop(view, display, check):
     import numpy
 
     os.makedirs(args.stop_where_opaque, exist_ok=True)
-    check(display.APCStopWhereOpaque == 0, "APCStopWhereOpaque is off by default")
+    check(display.APCStopWhereOpaque == 1, "APCStopWhereOpaque is on by default")
     images = {}
     for stop in (0, 1):
         display.APCStopWhereOpaque = stop
@@ -151,7 +151,7 @@ def check_opaque_stop(view, display, check):
         display.APCImageFile = images[stop]
         Render(view)
     display.APCImageFile = ""
-    display.APCStopWhereOpaque = 0
+    display.APCStopWhereOpaque = 1  # back to its default
     if apcparaview.number_of_ranks() > 1 and not os.path.exists(images[0]):
         return  # only the display rank writes and checks the images
     every, stopped = sample_count(images[0]), sample_count(images[1])

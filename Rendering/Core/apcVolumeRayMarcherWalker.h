@@ -1,0 +1,355 @@
+// VolumeRayMarcher's walker: one screen tile's cells against the tile's rays (clipping, the
+// lattice, the interpolation and the opaque stop), for every visitor. Internal to
+// apcVolumeRayMarcher.cpp, which runs it per tile for each pass.
+#ifndef apcVolumeRayMarcherWalker_h
+#define apcVolumeRayMarcherWalker_h
+
+#include "apcVolumeRayMarcher.h"
+
+#include "apcCellInterpolation.h"
+#include "apcOpaqueBins.h"
+#include "apcRayClip.h"
+#include "apcRayWalk.h"
+#include "apcTileBins.h"
+#include "apcTransferTable.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace apc
+{
+
+using walk::CellPlanes;
+using walk::kSampleTolerance;
+using walk::Lattice;
+using walk::RayProgress;
+using walk::RaySetup;
+using walk::TileRays;
+static_assert(walk::kTilePixels == VolumeRayMarcher::kTileSize * VolumeRayMarcher::kTileSize,
+  "a tile's progress holds every pixel of it");
+
+//------------------------------------------------------------------------------
+// Marches one tile: all its cells against all its pixels.
+struct VolumeRayMarcher::Walker
+{
+  const CellMesh& Mesh;
+  const TileBins& Bins;
+  const TransferTable& Table;
+  double FarLimit;
+  bool SharedOrigin;        // a perspective camera: every ray starts at the eye
+  const OpaqueBins* Opaque; // the frame's opaque stop, or null
+
+  Lattice Grid; // the samples t_k of every ray
+  // Largest scalar error (scalar units) of a cell sampled by its linear inverse.
+  double LinearTolerance;
+  // With Opaque: the agreed last bin of each pixel of the band (rays stop there), or null for
+  // pass 1's own stop, which writes each pixel's profile and last bin to the band's buffers.
+  const uint8_t* Cut = nullptr;
+  uint16_t* ProfileOut = nullptr;
+  uint8_t* LastBinOut = nullptr;
+  int BandWidth = 0;
+
+  // A cell's scalars: its own (or none needed), linear along the ray, a twisted pyramid's
+  // closed-form inverse, or by Newton.
+  enum class Sampling
+  {
+    Constant,
+    Linear,
+    Pyramid,
+    Follow
+  };
+
+  // What a cell needs while its rays are marched; reused from cell to cell.
+  struct CellState
+  {
+    CellPlanes Planes;
+    CellCorners Corners;
+    CellInterpolator Interpolator;
+    int64_t Cell = -1;
+    double Near = 0; // no point of the cell lies at a smaller t (TileBins::Near)
+    double Lo = 0;   // the cell's scalar range
+    double Hi = 0;
+    bool Interpolate = false; // point scalars of a visible cell
+    bool HaveCorners = false; // Corners and Interpolator are set up
+    bool Linear = false;      // the interpolator's linear inverse is close enough
+    TransferSample CellSample{};
+    double CellScalar = std::numeric_limits<double>::quiet_NaN();
+    // Newton starts a ray from the first sample of the cell's previous ray (a neighbouring
+    // pixel at about the same depth), then goes on from the previous sample.
+    NewtonMemory FirstMemory;
+    double Centre[3] = { 0, 0, 0 };
+    // The tile's rays clipped against the cell.
+    walk::ClippedRays Clipped;
+  };
+
+  // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
+  template <class Visitor>
+  bool SetUp(
+    int64_t cell, const RaySetup& anyRay, CellState& state, const RayProgress& progress) const
+  {
+    constexpr bool keepsTransparent = Visitor::WantsSegments || Visitor::WantsTransparentSamples;
+    state.Near = this->Bins.Near[cell];
+    if (Visitor::StopsWhenOpaque && state.Near >= progress.TileStop)
+    {
+      return false; // behind every ray of the tile, all opaque
+    }
+    const bool cellScalars = this->Mesh.HasCellScalars();
+    const auto& range = this->Mesh.GetScalarRange(cell);
+    state.Lo = range[0];
+    state.Hi = range[1];
+    // A cell whose scalars all map to zero opacity adds nothing: skip it, unless the visitor
+    // needs its extent (segment runs go on through transparent cells).
+    const bool visible = this->Table.MayBeVisible(state.Lo, state.Hi);
+    if (!visible && !keepsTransparent)
+    {
+      return false;
+    }
+    state.CellSample = TransferSample{};
+    state.CellScalar = std::numeric_limits<double>::quiet_NaN();
+    if (cellScalars && visible)
+    {
+      state.CellScalar = this->Mesh.CellScalars[cell];
+      state.CellSample = this->Table.Lookup(state.CellScalar);
+    }
+    int planeCount = 0;
+    const FacePlane* planes = this->Mesh.GetPlanes(cell, planeCount);
+    if (planeCount == 0)
+    {
+      return false; // a cell the mesh left out (see CellMesh::GetNumberOfSkippedCells)
+    }
+    state.Planes.Set(planes, planeCount, anyRay, this->SharedOrigin);
+    state.Cell = cell;
+    state.Interpolate = visible && !cellScalars;
+    state.HaveCorners = false;
+    state.FirstMemory = NewtonMemory();
+    return true;
+  }
+
+  // One cell against the tile's rays; returns the lattice samples taken.
+  template <class Visitor>
+  int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRays& packed,
+    const TileRect& tile, Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    if (!this->SetUp<Visitor>(cell, rays.front(), state, progress))
+    {
+      return 0;
+    }
+    const auto& r = this->Bins.Rects[cell];
+    const int i0 = std::max(r[0], tile.I0);
+    const int i1 = std::min(r[2], tile.I1 - 1);
+    const int j0 = std::max(r[1], tile.J0);
+    const int j1 = std::min(r[3], tile.J1 - 1);
+    if (i0 > i1 || j0 > j1)
+    {
+      return 0;
+    }
+    // All the rays first, then those with a sample: the clipping runs several rays at a
+    // time, and a ray's interval does not depend on the samples of other rays.
+    const int width = tile.Width();
+    const walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1,
+      width };
+    // A visitor of segments sees every ray inside, with a sample or not.
+    constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
+    walk::ClippedRays& c = state.Clipped;
+    const int hits =
+      walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
+        state.Near, allInside ? nullptr : &this->Grid, c);
+    int64_t samples = 0;
+    for (int h = 0; h < hits; ++h)
+    {
+      const int l = c.Hits[h];
+      const int64_t k = allInside ? 0 : static_cast<int64_t>(c.Lattice[l]);
+      samples += this->Ray(l, rays[l], c.Tin[l], c.Tout[l], k, visitor, state, progress);
+    }
+    return samples;
+  }
+
+  // The tile's ray local inside the cell state holds, over [tin, tout) from lattice index k
+  // on (the first one there, unless the visitor wants segments): sampled; returns the samples
+  // taken.
+  template <class Visitor>
+  int64_t Ray(int local, const RaySetup& ray, double tin, double tout, int64_t k, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
+  {
+    visitor.Segment(local, tin, tout);
+    if (!Visitor::WantsSamples)
+    {
+      return 0;
+    }
+    if (Visitor::WantsSegments)
+    {
+      k = this->Grid.First(tin, ray.Offset);
+    }
+    if (state.Interpolate && !state.HaveCorners)
+    {
+      // Set up lazily: most binned cells miss most of their rectangle's rays.
+      this->Mesh.GetCorners(state.Cell, state.Corners);
+      state.Interpolator.Set(state.Corners);
+      ParametricCenter(state.Corners.Shape, state.Centre);
+      state.Linear = state.Interpolator.IsAffine() ||
+        state.Interpolator.GetLinearScalarError() <= this->LinearTolerance;
+      state.HaveCorners = true;
+    }
+    if (!state.Interpolate)
+    {
+      return this->Samples<Sampling::Constant>(local, ray, k, tout, visitor, state, progress);
+    }
+    if (state.Linear)
+    {
+      return this->Samples<Sampling::Linear>(local, ray, k, tout, visitor, state, progress);
+    }
+    if (state.Interpolator.HasPyramidInverse())
+    {
+      return this->Samples<Sampling::Pyramid>(local, ray, k, tout, visitor, state, progress);
+    }
+    return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
+  }
+
+  // The lattice samples of the ray in [tin, tout), the same points on every rank; one loop
+  // per way of finding the scalar.
+  template <Sampling How, class Visitor>
+  int64_t Samples(int local, const RaySetup& ray, int64_t k, double tout, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
+  {
+    double p0[3] = { 0, 0, 0 };
+    double dp[3] = { 0, 0, 0 };
+    NewtonMemory memory;
+    if (How == Sampling::Linear || How == Sampling::Pyramid)
+    {
+      state.Interpolator.LinearRay(ray.O, ray.D, p0, dp);
+    }
+    else if (How == Sampling::Follow)
+    {
+      memory = state.FirstMemory;
+    }
+    double pcoords[3] = { state.Centre[0], state.Centre[1], state.Centre[2] };
+    bool first = How == Sampling::Follow;
+    int64_t samples = 0;
+    // Pass 1's own stop: the bin of k, and the first index past it.
+    const bool own = Visitor::StopsWhenOpaque && progress.Bins;
+    int bin = own ? progress.Bins->Of(k) : 0;
+    int64_t binEnd = own ? progress.Bins->End(bin) : 0;
+    for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
+    {
+      TransferSample s = state.CellSample;
+      double scalar = state.CellScalar;
+      if (How == Sampling::Linear || How == Sampling::Pyramid)
+      {
+        for (int d = 0; d < 3; ++d)
+        {
+          pcoords[d] = p0[d] + t * dp[d];
+        }
+      }
+      else if (How == Sampling::Follow)
+      {
+        const double x[3] = { ray.O[0] + t * ray.D[0], ray.O[1] + t * ray.D[1],
+          ray.O[2] + t * ray.D[2] };
+        state.Interpolator.Follow(x, memory, pcoords, kSampleTolerance);
+        if (first)
+        {
+          state.FirstMemory = memory;
+          first = false;
+        }
+      }
+      if (How != Sampling::Constant)
+      {
+        // Clamped to the cell's range: a point inside the planes but outside the
+        // interpolating map's cell (non-planar faces) must not extrapolate past the corners,
+        // and it is what makes skipping by range exact.
+        const double interpolated = How == Sampling::Linear
+          ? state.Interpolator.LinearScalarAt(pcoords)
+          : (How == Sampling::Pyramid ? state.Interpolator.PyramidScalarAt(pcoords)
+                                      : state.Interpolator.ScalarAt(pcoords));
+        scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
+        s = this->Table.Lookup(scalar);
+      }
+      ++samples;
+      if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
+      {
+        visitor.Sample(local, k, t, scalar, s);
+        if (own)
+        {
+          for (; k >= binEnd; binEnd = progress.Bins->End(++bin))
+          {
+          }
+          if (progress.Add(local, k, bin, s.Absorbance))
+          {
+            // Opaque: nothing past the end of the farthest sample's bin is taken; what lies
+            // in front of it still is (this pixel's profile stays complete up to there).
+            const int64_t edge = progress.StopIndex(local);
+            const double stop = edge == std::numeric_limits<int64_t>::max()
+              ? std::numeric_limits<double>::infinity()
+              : this->Grid.At(edge, ray.Offset);
+            progress.SetStop(local, stop);
+            tout = std::min(tout, stop);
+          }
+        }
+      }
+    }
+    return samples;
+  }
+
+  // The visitor sees the tile rowOffset rows lower (where it lies in a band's buffers).
+  template <class Visitor>
+  int64_t Tile(
+    const std::vector<RaySetup>& rays, const TileRect& tile, int rowOffset, Visitor& visitor) const
+  {
+    int64_t samples = 0;
+    CellState state;
+    RayProgress progress;
+    const bool stops = Visitor::StopsWhenOpaque && this->Opaque;
+    progress.Begin(tile.Pixels(), stops && !this->Cut ? this->Opaque : nullptr);
+    const TileRect inBand = Shifted(tile, rowOffset);
+    if (stops && this->Cut)
+    {
+      this->StopAtCut(rays, inBand, progress);
+    }
+    TileRays packed;
+    packed.Set(rays.data(), tile.Pixels(), this->FarLimit);
+    visitor.BeginTile(inBand);
+    for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
+    {
+      samples += this->Cell(this->Bins.Cells[b], rays, packed, tile, visitor, state, progress);
+    }
+    visitor.EndTile(inBand);
+    if (progress.Bins && this->ProfileOut)
+    {
+      for (int p = 0; p < tile.Pixels(); ++p)
+      {
+        const int64_t pixel = inBand.ImagePixel(p, this->BandWidth);
+        std::copy(progress.Profile[p], progress.Profile[p] + OpaqueBins::kBins,
+          this->ProfileOut + pixel * OpaqueBins::kBins);
+        this->LastBinOut[pixel] = static_cast<uint8_t>(progress.LastBin(p));
+      }
+    }
+    return samples;
+  }
+
+  // Every ray of the tile stops at the end of its pixel's agreed last bin.
+  void StopAtCut(
+    const std::vector<RaySetup>& rays, const TileRect& inBand, RayProgress& progress) const
+  {
+    for (int p = 0; p < inBand.Pixels(); ++p)
+    {
+      const int last = this->Cut[inBand.ImagePixel(p, this->BandWidth)];
+      if (last < OpaqueBins::kBins - 1)
+      {
+        progress.SetStop(p, this->Grid.At(this->Opaque->End(last), rays[p].Offset));
+      }
+    }
+  }
+
+  static TileRect Shifted(TileRect tile, int rows)
+  {
+    tile.J0 -= rows;
+    tile.J1 -= rows;
+    return tile;
+  }
+};
+
+} // namespace apc
+
+#endif
