@@ -33,14 +33,17 @@ if [ "${1:-}" = "--default-setup" ]; then
   shift
   APC_COMPARE_RANKS=${APC_COMPARE_RANKS:-1 2 4}
   sizes="1024x1024 1920x1080"
+  # These three in any place; every other argument goes on to paraview_vs_apc.py.
+  rest=()
   while [ $# -gt 0 ]; do
     case "$1" in
       --ranks) APC_COMPARE_RANKS=$2; shift 2 ;;
       --sizes) sizes=$2; shift 2 ;;
       --opacity) opacity=$2; shift 2 ;;
-      *) break ;;
+      *) rest+=("$1"); shift ;;
     esac
   done
+  set -- ${rest[@]+"${rest[@]}"}
   APC_COMPARE_OUT=${APC_COMPARE_OUT:-$top/out/benchmark/paraview-default}
 fi
 [ -n "${APC_NO_BUILD:-}" ] || bash "$top/.ci/build"
