@@ -91,6 +91,9 @@ struct CompositeFrame
   TileGrid Tiles; // Rect in tiles, in Rect's own pixel indices: what the depth share ships
   MomentParameters Moments;
   int Volumes = 0; // visible APC volumes, the most on any process
+  // Some process's volume stops where opaque (agreed): every process joins the profile's
+  // allreduce, a process without volumes too.
+  bool StopsWhereOpaque = false;
   std::vector<FrameEngine*> Engines;
   // The frame's float image is kept (KeepLastImage, or the display process's image file): the
   // display process then keeps the moments and colour sums in the result; otherwise they go

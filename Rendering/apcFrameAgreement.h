@@ -41,10 +41,11 @@ struct LocalFrame
   int MaxMoments = 0;
   int Width = 0;
   int Height = 0;
-  bool ReportPending = false; // an input report to say (apcInputReport.h)
-  bool Interactive = false;   // this process's window asks for a fast frame
-  FrameSettings Settings;     // the pass's
-  TransferSignature Transfer; // of the visible volumes (combined)
+  bool ReportPending = false;    // an input report to say (apcInputReport.h)
+  bool Interactive = false;      // this process's window asks for a fast frame
+  bool StopsWhereOpaque = false; // a volume of this process has Stop Where Opaque on
+  FrameSettings Settings;        // the pass's
+  TransferSignature Transfer;    // of the visible volumes (combined)
 
   LocalFrame();
   // One visible APC volume: its number of moments, if it has cells their bounds, and its
@@ -58,6 +59,9 @@ struct FrameAgreement
   double Bounds[6]; // union over all processes; empty if no cells anywhere
   double Cells = 0; // sum over all processes
   bool AnyFailed = false;
+  // A volume of some process stops where opaque: every process then joins the profile's
+  // allreduce, with volumes or without.
+  bool AnyStopsWhereOpaque = false;
   int MinVolumes = 0;
   int MaxVolumes = 0;
   int MinMoments = 0;

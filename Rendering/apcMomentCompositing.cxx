@@ -232,6 +232,10 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
   record.Clock.Lap("profile");
   for (size_t e = 0; e < frame.Engines.size(); ++e)
   {
+    if (!frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+    {
+      continue;
+    }
     frame.Engines[e]->ApplyOpaqueCut(
       frame.Moments, mine, own.empty() ? moments.data() : own[e].data(), band);
   }
@@ -263,11 +267,9 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   const bool exchange = group.Parallel && tiles.Tiles() > 0;
 
   std::vector<double> moments(pixels * stride, 0.0);
-  bool stops = false;
-  for (const FrameEngine* engine : frame.Engines)
-  {
-    stops = stops || engine->StopsWhereOpaque(parameters);
-  }
+  // Agreed, not this process's own volumes: a process without volumes (or with the stop off
+  // where others have it on) still joins the profile's allreduce.
+  const bool stops = frame.StopsWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
   // The cut needs each volume's own moments: several volumes keep them apart until then.
   std::vector<std::vector<double>> own(
     stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);

@@ -291,6 +291,7 @@ void CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& lo
     local.AddVolume(volumeSettings.Moments.Moments,
       engine->GetLocalBounds(bounds) ? bounds : nullptr, entry.Volume->GetProperty());
     local.Cells += static_cast<double>(engine->GetNumberOfCells());
+    local.StopsWhereOpaque = local.StopsWhereOpaque || volumeSettings.StopWhereOpaque;
     if (mappers.empty())
     {
       // The frame's moment settings: the first volume's beta, bias and resolve.
@@ -367,6 +368,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
     r.Pixels() > 0 ? apc::TileGrid(r.Width(), 0, 0, r.Width(), r.Height()) : apc::TileGrid();
   frame.Moments.Moments = agreed.MaxMoments;
   frame.Volumes = agreed.MaxVolumes;
+  frame.StopsWhereOpaque = agreed.AnyStopsWhereOpaque;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
   frame.Cells = agreed.Cells;
   return true;

@@ -599,6 +599,19 @@ int main(int argc, char* argv[])
     Check(pass->GetLastFrameFailed(), rank, "a process without a volume: frame skipped everywhere");
   }
 
+  // Stop Where Opaque on one process only (a script that sets it on some ranks): the profile's
+  // allreduce is agreed, so every process joins it and the frame ends everywhere.
+  if (ranks > 1)
+  {
+    auto piece = PuzzlePiece(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass, true,
+      vtkAPCVolumeMapper::RENORMALISED, nullptr, rank == 0);
+    Check(!pass->GetLastFrameFailed(), rank, "Stop Where Opaque on one process: frame rendered");
+  }
+
   // Viewports of different sizes (a misconfigured in-situ code): the image buffers would
   // differ in length, so every process must skip the frame, in both modes.
   if (ranks > 1)
