@@ -334,6 +334,9 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   std::vector<double> moments;
   std::vector<unsigned char> covered;
   vtkIdType ownCovered = 0;
+  // Without the stop, a pixel whose global absorbance reaches the threshold (less a margin
+  // for the wire's rounding) may be one the stop cuts.
+  const double opaque = VolumeRayMarcher::kRecommendedOpaqueAbsorbance * (1 - 1e-6);
   for (;;)
   {
     for (FrameEngine* engine : frame.Engines)
@@ -342,10 +345,8 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     }
     moments.assign(pixels * stride, 0.0);
     PassOne(group, frame, band, tiles, stops, moments, covered, ownCovered, record);
-    // Without the stop, a pixel whose global absorbance reaches the threshold (less a margin
-    // for the wire's rounding) may be one the stop cuts: the band is marched again with it.
-    // The global moments are the same integer sums on every process, so all decide alike.
-    const double opaque = VolumeRayMarcher::kRecommendedOpaqueAbsorbance * (1 - 1e-6);
+    // Such a band is marched again with the stop. The global moments are the same integer
+    // sums on every process, so all decide alike.
     if (stops || !stopping || !AnyPixelReaches(moments, stride, opaque))
     {
       break;
@@ -359,8 +360,7 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   for (size_t p = 0; p < pixels; ++p)
   {
     record.CoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
-    record.NearlyOpaquePixels +=
-      moments[p * stride] >= 0.5 * VolumeRayMarcher::kRecommendedOpaqueAbsorbance ? 1 : 0;
+    record.OpaquePixels += moments[p * stride] >= opaque ? 1 : 0;
   }
 
   std::vector<double> colourSums(pixels * 4, 0.0);

@@ -51,8 +51,8 @@ struct vtkAPCCompositePass::Internals
   int LastMode = -1;
   int LastReduction = 0;
   bool LastInteractive = false;
-  apc::AutoMode Auto;       // the same on every process: fed only by collectives' results
-  bool NearlyOpaque = true; // the last APC frame had a pixel near the opaque stop's threshold
+  apc::AutoMode Auto; // the same on every process: fed only by collectives' results
+  bool Opaque = true; // the last APC frame had a pixel at the opaque stop's threshold
   vtkNew<vtkImageData> Image;
   vtkSmartPointer<vtkFloatArray> DelegateDepth; // this frame's, if its delegate gave one
   bool TransferWarned = false; // the display process said that transfer functions differ
@@ -309,11 +309,11 @@ void CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& lo
 bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   const std::vector<VolumeEntry>& volumes, const apc::FrameSettings& settings, vtkRenderer* ren,
   apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible, apc::FrameRecord& record,
-  bool& transferWarned, bool nearlyOpaque)
+  bool& transferWarned, bool opaque)
 {
   apc::LocalFrame local;
   local.Settings = settings;
-  local.NearlyOpaque = nearlyOpaque;
+  local.Opaque = opaque;
   std::ostringstream problem;
   apc::InputReport reports; // said once for all processes when any has news
   std::vector<vtkAPCVolumeMapper*> mappers;
@@ -372,7 +372,7 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Volumes = agreed.MaxVolumes;
   frame.StopsWhereOpaque = agreed.AnyStopsWhereOpaque;
   // The double wire's sums may round differently on each process: no retry decided from them.
-  frame.TryWithoutOpaqueStop = !agreed.AnyNearlyOpaque && !agreed.Settings.CompositeInDouble;
+  frame.TryWithoutOpaqueStop = !agreed.AnyOpaque && !agreed.Settings.CompositeInDouble;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
   frame.Cells = agreed.Cells;
   return true;
@@ -410,7 +410,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   apc::CompositeFrame frame;
   std::vector<vtkVolume*> volumes;
   if (!AgreeOnFrame(this, group, internal.Volumes, internal.Settings, s->GetRenderer(), frame,
-        volumes, internal.Record, internal.TransferWarned, internal.NearlyOpaque))
+        volumes, internal.Record, internal.TransferWarned, internal.Opaque))
   {
     return;
   }
@@ -444,7 +444,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       break;
     default:
       apc::RunMomentCompositing(group, frame, internal.Record, result);
-      internal.NearlyOpaque = internal.Record.NearlyOpaquePixels > 0;
+      internal.Opaque = internal.Record.OpaquePixels > 0;
   }
   if (frame.Settings.CompositeMode == AUTO)
   {

@@ -341,6 +341,8 @@ public:
     double Pass1Samples = 0;
     double Pass2CachedShare = 0;
     double Pass2HiddenShare = 0;
+    // Pass 2's samples (replayed or marched): pass 1's samples with an opacity, less the cut.
+    double Pass2Samples = 0;
     // Bands of rows rendered without Stop Where Opaque (it was on, but the last frame had no
     // pixel near its threshold), and bands marched again with it (tried without, a pixel
     // reached the threshold after all).
@@ -408,6 +410,7 @@ public:
     f("pass1_samples", timings.Pass1Samples);
     f("pass2_cached_share", timings.Pass2CachedShare);
     f("pass2_hidden_share", timings.Pass2HiddenShare);
+    f("pass2_samples", timings.Pass2Samples);
     f("opaque_stop_skipped", timings.OpaqueStopSkipped);
     f("opaque_stop_redone", timings.OpaqueStopRedone);
     f("agree_wait", timings.AgreeWait);
@@ -441,7 +444,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 63;
+  static constexpr int NumberOfTimings = 64;
 
   ///@{
   /**

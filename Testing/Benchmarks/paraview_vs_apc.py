@@ -111,7 +111,7 @@ COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "f
            [s + "_s" for s in STAGES] + ["tiles_s", "profile_s", "cut_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
-            "pass2_cached_share", "pass2_hidden_share", "opaque_stop_skipped",
+            "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped",
             "opaque_stop_redone", "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
             "cells_per_rank_after", "note"])
 
@@ -393,6 +393,9 @@ def main(args):
                         t["pass1_samples"] for t in same)
                     for share in ("pass2_cached_share", "pass2_hidden_share"):
                         row[share] = "%.4f" % statistics.median(t[share] for t in same)
+                # Pass 2's samples: pass 1's with an opacity (less the opaque cut's).
+                row["pass2_samples"] = "%d" % statistics.median(
+                    t.get("pass2_samples", 0) for t in same)
                 # Bands marched without Stop Where Opaque, and again with it, in the later frames.
                 for s in ("opaque_stop_skipped", "opaque_stop_redone"):
                     row[s] = "/".join("%d" % t.get(s, 0) for t in same)
