@@ -94,6 +94,10 @@ struct CompositeFrame
   // Some process's volume stops where opaque (agreed): every process joins the profile's
   // allreduce, a process without volumes too.
   bool StopsWhereOpaque = false;
+  // ... but no pixel of the last frame reached the stop's threshold (agreed): pass 1 marches
+  // without the stop's bookkeeping, and a band where some pixel reaches it after all is
+  // marched again with the stop, so the image is the one the stop gives.
+  bool TryWithoutOpaqueStop = false;
   std::vector<FrameEngine*> Engines;
   // The frame's float image is kept (KeepLastImage, or the display process's image file): the
   // display process then keeps the moments and colour sums in the result; otherwise they go
@@ -134,6 +138,11 @@ struct FrameRecord
   int64_t Pass2Samples = 0;
   int64_t Pass2Replayed = 0;
   int64_t Pass2Hidden = 0;
+  // APC: pixels whose global absorbance reached the opaque stop's threshold (the next frame
+  // keeps the stop), bands rendered without the stop and bands marched again with it.
+  vtkIdType OpaquePixels = 0;
+  int OpaqueStopSkipped = 0;
+  int OpaqueStopRedone = 0;
   SegmentStatistics Segments;
   bool Failed = false;
 };

@@ -141,6 +141,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   values.Add(local.ReportPending ? 1 : 0);
   values.Add(local.Interactive ? 1 : 0);
   values.Add(local.StopsWhereOpaque ? 1 : 0);
+  values.Add(local.Opaque ? 1 : 0);
   ForEachAgreed(
     local.Settings, [&](const char*, const auto& setting, AgreementRule) { values.Add(setting); });
   // A process without volumes has no transfer function to compare: it adds neutral values.
@@ -181,6 +182,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   agreed.AnyReportPending = values.Take().first > 0;
   agreed.Interactive = values.Take().first > 0;
   agreed.AnyStopsWhereOpaque = values.Take().first > 0;
+  agreed.AnyOpaque = values.Take().first > 0;
   ForEachAgreed(agreed.Settings,
     [&](const char* name, auto& setting, AgreementRule rule)
     {

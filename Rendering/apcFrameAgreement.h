@@ -44,6 +44,7 @@ struct LocalFrame
   bool ReportPending = false;    // an input report to say (apcInputReport.h)
   bool Interactive = false;      // this process's window asks for a fast frame
   bool StopsWhereOpaque = false; // a volume of this process has Stop Where Opaque on
+  bool Opaque = true;            // its last APC frame had a pixel at the stop's threshold
   FrameSettings Settings;        // the pass's
   TransferSignature Transfer;    // of the visible volumes (combined)
 
@@ -62,6 +63,7 @@ struct FrameAgreement
   // A volume of some process stops where opaque: every process then joins the profile's
   // allreduce, with volumes or without.
   bool AnyStopsWhereOpaque = false;
+  bool AnyOpaque = true;
   int MinVolumes = 0;
   int MaxVolumes = 0;
   int MinMoments = 0;

@@ -242,6 +242,7 @@ bool FrameEngine::GetLocalBounds(double bounds[6]) const
 void FrameEngine::BeginFrame(const VolumeSettings& settings)
 {
   this->Settings = settings;
+  this->OpaqueStopActive = true;
   this->Clock.Restart();
   this->Ready = false;
 }
@@ -314,9 +315,7 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
   this->Marcher.SetLatticeJitter(this->Settings.LatticeJitter);
-  this->Marcher.SetOpaqueAbsorbance(this->Settings.StopWhereOpaque
-      ? VolumeRayMarcher::kRecommendedOpaqueAbsorbance
-      : std::numeric_limits<double>::infinity());
+  this->SetOpaqueStopActive(this->OpaqueStopActive);
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
   this->Marcher.SetMesh(&this->Mesh);
   depth = std::vector<float>();
@@ -390,7 +389,16 @@ void FrameEngine::RenderMoments(
 bool FrameEngine::StopsWhereOpaque(const MomentParameters& parameters) const
 {
   // Hybrid's pass 1 marches every sample (its own transmittance is exact).
-  return this->Settings.StopWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
+  return this->Settings.StopWhereOpaque && this->OpaqueStopActive &&
+    parameters.Resolve != ResolveMode::Hybrid;
+}
+
+void FrameEngine::SetOpaqueStopActive(bool active)
+{
+  this->OpaqueStopActive = active;
+  this->Marcher.SetOpaqueAbsorbance(this->Settings.StopWhereOpaque && active
+      ? VolumeRayMarcher::kRecommendedOpaqueAbsorbance
+      : std::numeric_limits<double>::infinity());
 }
 
 const std::vector<uint16_t>& FrameEngine::GetOpaqueProfile() const

@@ -149,6 +149,10 @@ public:
   /// True if this volume's pass 1 stops where opaque (the same on every process), and after
   /// RenderMoments its opaque profile (VolumeRayMarcher::GetOpaqueProfile; empty if none).
   bool StopsWhereOpaque(const MomentParameters& parameters) const;
+  /// Whether the next RenderMoments applies the volume's Stop Where Opaque (on from
+  /// BeginFrame): the pass leaves it out of a frame where it would cut nothing (an agreed
+  /// choice, the same on every process).
+  void SetOpaqueStopActive(bool active);
   const std::vector<uint16_t>& GetOpaqueProfile() const;
   /// The cut agreed from the profiles of every volume and process (ApplyOpaqueCut): moments
   /// holds this volume's own pass-1 moments of band, which lose the samples past it.
@@ -168,6 +172,7 @@ private:
   FrameEngine& operator=(const FrameEngine&) = delete;
 
   VolumeSettings Settings; // this frame's
+  bool OpaqueStopActive = true;
   CellMesh Mesh;
   bool MeshValid = false;
   std::string MeshKey;            // what the mesh was made of (data arrays, scalar selection)

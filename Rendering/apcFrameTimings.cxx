@@ -105,6 +105,9 @@ vtkAPCCompositePass::Timings TimingsOf(const FrameRecord& record)
   t.AverageSegmentsPerPixel = record.Segments.Average();
   t.MaxSegmentsPerPixel = static_cast<double>(record.Segments.MaxPerPixel);
   t.Pass1Samples = static_cast<double>(record.Pass1Samples);
+  t.Pass2Samples = static_cast<double>(record.Pass2Samples);
+  t.OpaqueStopSkipped = record.OpaqueStopSkipped;
+  t.OpaqueStopRedone = record.OpaqueStopRedone;
   if (record.Pass2Samples > 0)
   {
     const double pass2 = static_cast<double>(record.Pass2Samples);

@@ -251,25 +251,28 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
   record.Clock.Lap("cut");
 }
 
-// One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
-// agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
-// display process resolves the band into result at its rows.
-void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
-  FrameRecord& record, FrameResult& result)
+// Whether some pixel's absorbance (b0) reaches absorbance.
+bool AnyPixelReaches(const std::vector<double>& moments, int stride, double absorbance)
 {
-  const bool inDouble = frame.Settings.CompositeInDouble;
+  for (size_t at = 0; at < moments.size(); at += static_cast<size_t>(stride))
+  {
+    if (moments[at] >= absorbance)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+// A band's pass 1 into moments (zeroed), the tiles' agreement (covered), the opaque cut if
+// stops, and the moments' allreduce; ownCovered: the pixels this process's volumes cover.
+void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  const TileGrid& tiles, bool stops, std::vector<double>& moments,
+  std::vector<unsigned char>& covered, vtkIdType& ownCovered, FrameRecord& record)
+{
   const MomentParameters& parameters = frame.Moments;
   const int stride = parameters.Moments + 1;
-  const int width = frame.RectWidth();
-  const size_t pixels = static_cast<size_t>(width) * (band.J1 - band.J0);
-  const size_t offset = static_cast<size_t>(width) * band.J0; // of the band in the frame
-  const TileGrid tiles(width, 0, 0, width, band.J1 - band.J0);
-  const bool exchange = group.Parallel && tiles.Tiles() > 0;
-
-  std::vector<double> moments(pixels * stride, 0.0);
-  // Agreed, not this process's own volumes: a process without volumes (or with the stop off
-  // where others have it on) still joins the profile's allreduce.
-  const bool stops = frame.StopsWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
+  const size_t pixels = moments.size() / stride;
   // The cut needs each volume's own moments: several volumes keep them apart until then.
   std::vector<std::vector<double>> own(
     stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
@@ -286,41 +289,78 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
       [](double a, double b) { return a + b; });
   }
   record.Clock.Lap("pass1");
+  ownCovered = 0;
   for (size_t p = 0; p < pixels; ++p)
   {
-    record.OwnCoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
+    ownCovered += moments[p * stride] > 0.0 ? 1 : 0;
   }
 
   // The mask's allreduce is where a process waits for the slowest one's pass 1 (its wait);
   // the moments' allreduce after it is nearly all transfer.
-  const std::vector<unsigned char> covered = AgreeOnTiles(group, tiles, moments, stride, record);
+  covered = AgreeOnTiles(group, tiles, moments, stride, record);
   record.Clock.Lap("tiles");
   if (stops)
   {
     CutWhereOpaque(group, frame, band, tiles, covered, own, moments, record);
   }
-  auto sum = [&](std::vector<double>& image, int components, bool everywhere)
+  if (group.Parallel && tiles.Tiles() > 0)
   {
-    if (exchange)
-    {
-      record.BytesSent += inDouble
-        ? SumTiles<double>(group, tiles, covered, image, components, everywhere, record)
-        : SumTiles<float>(group, tiles, covered, image, components, everywhere, record);
-    }
-  };
-  if (exchange && !inDouble)
-  {
-    record.BytesSent += SumMomentsInFixedPoint(group, tiles, covered, moments, stride, record);
-  }
-  else
-  {
-    sum(moments, stride, true);
+    record.BytesSent += frame.Settings.CompositeInDouble
+      ? SumTiles<double>(group, tiles, covered, moments, stride, true, record)
+      : SumMomentsInFixedPoint(group, tiles, covered, moments, stride, record);
   }
   record.Clock.Lap("allreduce");
+}
+
+// One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
+// agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
+// display process resolves the band into result at its rows.
+void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  FrameRecord& record, FrameResult& result)
+{
+  const bool inDouble = frame.Settings.CompositeInDouble;
+  const MomentParameters& parameters = frame.Moments;
+  const int stride = parameters.Moments + 1;
+  const int width = frame.RectWidth();
+  const size_t pixels = static_cast<size_t>(width) * (band.J1 - band.J0);
+  const size_t offset = static_cast<size_t>(width) * band.J0; // of the band in the frame
+  const TileGrid tiles(width, 0, 0, width, band.J1 - band.J0);
+  const bool exchange = group.Parallel && tiles.Tiles() > 0;
+
+  // Agreed, not this process's own volumes: a process without volumes (or with the stop off
+  // where others have it on) still joins the profile's allreduce.
+  const bool stopping = frame.StopsWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
+  bool stops = stopping && !frame.TryWithoutOpaqueStop;
+  std::vector<double> moments;
+  std::vector<unsigned char> covered;
+  vtkIdType ownCovered = 0;
+  // Without the stop, a pixel whose global absorbance reaches the threshold (less a margin
+  // for the wire's rounding) may be one the stop cuts.
+  const double opaque = VolumeRayMarcher::kRecommendedOpaqueAbsorbance * (1 - 1e-6);
+  for (;;)
+  {
+    for (FrameEngine* engine : frame.Engines)
+    {
+      engine->SetOpaqueStopActive(stops);
+    }
+    moments.assign(pixels * stride, 0.0);
+    PassOne(group, frame, band, tiles, stops, moments, covered, ownCovered, record);
+    // Such a band is marched again with the stop. The global moments are the same integer
+    // sums on every process, so all decide alike.
+    if (stops || !stopping || !AnyPixelReaches(moments, stride, opaque))
+    {
+      break;
+    }
+    stops = true;
+    ++record.OpaqueStopRedone;
+  }
+  record.OpaqueStopSkipped += stopping && !stops ? 1 : 0;
+  record.OwnCoveredPixels += ownCovered;
   record.Pixels += static_cast<vtkIdType>(tiles.PixelsIn(covered));
   for (size_t p = 0; p < pixels; ++p)
   {
     record.CoveredPixels += moments[p * stride] > 0.0 ? 1 : 0;
+    record.OpaquePixels += moments[p * stride] >= opaque ? 1 : 0;
   }
 
   std::vector<double> colourSums(pixels * 4, 0.0);
@@ -329,7 +369,12 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     engine->RenderColour(parameters, moments.data(), colourSums.data(), band);
   }
   record.Clock.Lap("pass2");
-  sum(colourSums, 4, false);
+  if (exchange)
+  {
+    record.BytesSent += inDouble
+      ? SumTiles<double>(group, tiles, covered, colourSums, 4, false, record)
+      : SumTiles<float>(group, tiles, covered, colourSums, 4, false, record);
+  }
   record.Clock.Lap("reduce");
 
   if (!group.IsDisplay())

@@ -52,6 +52,7 @@ struct vtkAPCCompositePass::Internals
   int LastReduction = 0;
   bool LastInteractive = false;
   apc::AutoMode Auto; // the same on every process: fed only by collectives' results
+  bool Opaque = true; // the last APC frame had a pixel at the opaque stop's threshold
   vtkNew<vtkImageData> Image;
   vtkSmartPointer<vtkFloatArray> DelegateDepth; // this frame's, if its delegate gave one
   bool TransferWarned = false; // the display process said that transfer functions differ
@@ -308,10 +309,11 @@ void CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& lo
 bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   const std::vector<VolumeEntry>& volumes, const apc::FrameSettings& settings, vtkRenderer* ren,
   apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible, apc::FrameRecord& record,
-  bool& transferWarned)
+  bool& transferWarned, bool opaque)
 {
   apc::LocalFrame local;
   local.Settings = settings;
+  local.Opaque = opaque;
   std::ostringstream problem;
   apc::InputReport reports; // said once for all processes when any has news
   std::vector<vtkAPCVolumeMapper*> mappers;
@@ -369,6 +371,8 @@ bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
   frame.Moments.Moments = agreed.MaxMoments;
   frame.Volumes = agreed.MaxVolumes;
   frame.StopsWhereOpaque = agreed.AnyStopsWhereOpaque;
+  // The double wire's sums may round differently on each process: no retry decided from them.
+  frame.TryWithoutOpaqueStop = !agreed.AnyOpaque && !agreed.Settings.CompositeInDouble;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
   frame.Cells = agreed.Cells;
   return true;
@@ -406,7 +410,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   apc::CompositeFrame frame;
   std::vector<vtkVolume*> volumes;
   if (!AgreeOnFrame(this, group, internal.Volumes, internal.Settings, s->GetRenderer(), frame,
-        volumes, internal.Record, internal.TransferWarned))
+        volumes, internal.Record, internal.TransferWarned, internal.Opaque))
   {
     return;
   }
@@ -424,6 +428,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   const int mode = this->ChooseMode(group, frame);
   internal.LastMode = mode;
   apc::FrameResult result;
+  const double before = internal.Record.Clock.Get(nullptr);
   switch (mode)
   {
     case LOCAL_EXACT:
@@ -439,10 +444,13 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       break;
     default:
       apc::RunMomentCompositing(group, frame, internal.Record, result);
+      internal.Opaque = internal.Record.OpaquePixels > 0;
   }
   if (frame.Settings.CompositeMode == AUTO)
   {
-    this->RecordForAuto(group);
+    // Interactive frames render another lattice and image: only still frames are timed.
+    this->RecordForAuto(
+      group, frame.Interactive ? -1.0 : internal.Record.Clock.Get(nullptr) - before);
   }
   apc::GatherRankTimes(group, internal.Record);
   this->FinishFrame(group, frame, result);
@@ -489,22 +497,24 @@ int vtkAPCCompositePass::ChooseMode(
 }
 
 //------------------------------------------------------------------------------
-void vtkAPCCompositePass::RecordForAuto(const apc::ProcessGroup& group)
+void vtkAPCCompositePass::RecordForAuto(const apc::ProcessGroup& group, double seconds)
 {
   Internals& internal = *this->Internal;
   const apc::FrameRecord& record = internal.Record;
-  long long covered = record.OwnCoveredPixels;
-  long long coveredSum = covered;
+  // Covered pixels and microseconds (< 0: untimed): integers, so every process sums the same.
+  long long own[2] = { record.OwnCoveredPixels, static_cast<long long>(seconds * 1e6) };
+  long long sum[2] = { own[0], own[1] };
   if (group.Parallel)
   {
-    group.Collective("auto",
-      [&] { group.Controller->AllReduce(&covered, &coveredSum, 1, vtkCommunicator::SUM_OP); });
+    group.Collective(
+      "auto", [&] { group.Controller->AllReduce(own, sum, 2, vtkCommunicator::SUM_OP); });
   }
   const bool segments = internal.LastMode == SEGMENTS;
   const double coveredUnion = segments ? static_cast<double>(record.Segments.NonEmptyPixels)
                                        : static_cast<double>(record.CoveredPixels);
-  internal.Auto.Record(coveredUnion, static_cast<double>(coveredSum),
-    segments ? static_cast<double>(record.Segments.Segments) : -1.0);
+  internal.Auto.Record(coveredUnion, static_cast<double>(sum[0]),
+    segments ? static_cast<double>(record.Segments.Segments) : -1.0,
+    seconds < 0 ? -1.0 : static_cast<double>(sum[1]) * 1e-6, segments);
   internal.Record.Clock.Lap("auto");
 }
 

@@ -341,6 +341,13 @@ public:
     double Pass1Samples = 0;
     double Pass2CachedShare = 0;
     double Pass2HiddenShare = 0;
+    // Pass 2's samples (replayed or marched): pass 1's samples with an opacity, less the cut.
+    double Pass2Samples = 0;
+    // Bands of rows rendered without Stop Where Opaque (it was on, but the last frame had no
+    // pixel near its threshold), and bands marched again with it (tried without, a pixel
+    // reached the threshold after all).
+    double OpaqueStopSkipped = 0;
+    double OpaqueStopRedone = 0;
     // Each stage's wait for the last process and transfer after it (see above).
     double AgreeWait = 0, AgreeTransfer = 0;
     double DepthWait = 0, DepthTransfer = 0;
@@ -403,6 +410,9 @@ public:
     f("pass1_samples", timings.Pass1Samples);
     f("pass2_cached_share", timings.Pass2CachedShare);
     f("pass2_hidden_share", timings.Pass2HiddenShare);
+    f("pass2_samples", timings.Pass2Samples);
+    f("opaque_stop_skipped", timings.OpaqueStopSkipped);
+    f("opaque_stop_redone", timings.OpaqueStopRedone);
     f("agree_wait", timings.AgreeWait);
     f("agree_transfer", timings.AgreeTransfer);
     f("depth_wait", timings.DepthWait);
@@ -434,7 +444,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 61;
+  static constexpr int NumberOfTimings = 64;
 
   ///@{
   /**
@@ -501,8 +511,9 @@ private:
   // The mode this frame runs: the setting, AUTO's choice, or APC for several volumes (the
   // exact modes cannot interleave them; said once while it lasts).
   int ChooseMode(const apc::ProcessGroup& group, const apc::CompositeFrame& frame);
-  // AUTO: what this frame measured, summed over processes, into the history of the choice.
-  void RecordForAuto(const apc::ProcessGroup& group);
+  // AUTO: what this frame measured, summed over processes, into the history of the choice;
+  // seconds: this process's compositing of a still frame (< 0: not timed).
+  void RecordForAuto(const apc::ProcessGroup& group, double seconds);
   // Stores, blends and writes the display process's image, and reports the frame.
   void FinishFrame(const apc::ProcessGroup& group, const apc::CompositeFrame& frame,
     const apc::FrameResult& result);

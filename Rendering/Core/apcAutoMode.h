@@ -14,6 +14,14 @@
 // the pieces are along the rays and changes little with the camera, the second is counted in
 // every frame. Hysteresis keeps the mode (and so the picture: exact or approximate) from
 // flickering when the costs are close.
+//
+// Bytes are not the whole cost: the segments march every sample (transparent ones too, and
+// never stop where a ray is opaque) and sort them, APC marches twice. So once both modes have
+// been timed (the seconds of a frame's compositing, summed over the processes: an agreed
+// value), the choice follows the time instead: each mode's last timed seconds per covered
+// pixel (summed over processes), with the same hysteresis. The first timed segment frame is
+// followed by one APC frame, which times APC; untimed frames (interactive ones) keep the
+// measurements they find. Without times the bytes decide, as before.
 #ifndef apcAutoMode_h
 #define apcAutoMode_h
 
@@ -36,8 +44,11 @@ public:
   static constexpr double kHysteresis = 0.8;
 
   // A frame's measurements: pixels covered by some process, and covered by each process
-  // summed over processes; segments only when the frame composited segments (else < 0).
-  void Record(double coveredUnion, double coveredSum, double segments);
+  // summed over processes; segments only when the frame composited segments (else < 0);
+  // seconds, the frame's compositing summed over the processes, only if it was timed (else
+  // < 0), and whether it composited segments (else moments).
+  void Record(double coveredUnion, double coveredSum, double segments, double seconds = -1,
+    bool segmentFrame = false);
 
   // The mode for the next frame of `processes` processes whose moment wire costs
   // bytesPerMomentPixel per covered pixel. The first frame composites segments: it gives the
@@ -47,22 +58,31 @@ public:
   double EstimatedMomentBytes(int processes, double bytesPerMomentPixel) const;
   double EstimatedSegmentBytes(int processes) const;
   bool HasEstimate() const { return this->RunsPerCoveringProcess > 0; }
+  // Seconds per covered pixel (summed over processes) of the last timed frame of a mode; 0 if
+  // none was timed.
+  double GetSecondsPerPixel(Choice mode) const { return this->SecondsPerPixel[mode]; }
 
 private:
   double CoveredUnion = 0;
   double CoveredSum = 0;
-  double RunsPerCoveringProcess = 0; // 0: no segment frame measured yet
+  double RunsPerCoveringProcess = 0;    // 0: no segment frame measured yet
+  double SecondsPerPixel[2] = { 0, 0 }; // by Choice; 0: not timed yet
   Choice Current = Segments;
 };
 
 //------------------------------------------------------------------------------
-inline void AutoMode::Record(double coveredUnion, double coveredSum, double segments)
+inline void AutoMode::Record(
+  double coveredUnion, double coveredSum, double segments, double seconds, bool segmentFrame)
 {
   this->CoveredUnion = coveredUnion;
   this->CoveredSum = coveredSum;
   if (segments >= 0 && coveredSum > 0)
   {
     this->RunsPerCoveringProcess = segments / coveredSum;
+  }
+  if (seconds > 0 && coveredSum > 0)
+  {
+    this->SecondsPerPixel[segmentFrame ? Segments : Moments] = seconds / coveredSum;
   }
 }
 
@@ -90,8 +110,18 @@ inline AutoMode::Choice AutoMode::Choose(int processes, double bytesPerMomentPix
     this->Current = Segments;
     return this->Current;
   }
-  const double moments = this->EstimatedMomentBytes(processes, bytesPerMomentPixel);
-  const double segments = this->EstimatedSegmentBytes(processes);
+  double moments = this->EstimatedMomentBytes(processes, bytesPerMomentPixel);
+  double segments = this->EstimatedSegmentBytes(processes);
+  if (this->SecondsPerPixel[Segments] > 0)
+  {
+    if (this->SecondsPerPixel[Moments] <= 0)
+    {
+      this->Current = Moments; // segments were timed: time APC once
+      return this->Current;
+    }
+    moments = this->SecondsPerPixel[Moments];
+    segments = this->SecondsPerPixel[Segments];
+  }
   if (this->Current == Segments && moments < kHysteresis * segments)
   {
     this->Current = Moments;

@@ -111,8 +111,8 @@ COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "f
            [s + "_s" for s in STAGES] + ["tiles_s", "profile_s", "cut_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
-            "pass2_cached_share", "pass2_hidden_share",
-            "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
+            "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped",
+            "opaque_stop_redone", "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
             "cells_per_rank_after", "note"])
 
 # Runs on every rank inside a programmable filter (its input: the reader's piece on that rank).
@@ -393,6 +393,12 @@ def main(args):
                         t["pass1_samples"] for t in same)
                     for share in ("pass2_cached_share", "pass2_hidden_share"):
                         row[share] = "%.4f" % statistics.median(t[share] for t in same)
+                # Pass 2's samples: pass 1's with an opacity (less the opaque cut's).
+                row["pass2_samples"] = "%d" % statistics.median(
+                    t.get("pass2_samples", 0) for t in same)
+                # Bands marched without Stop Where Opaque, and again with it, in the later frames.
+                for s in ("opaque_stop_skipped", "opaque_stop_redone"):
+                    row[s] = "/".join("%d" % t.get(s, 0) for t in same)
             row["messages_display_rank"] = "%d" % timings[-1]["messages_sent"]
             row["bytes_display_rank"] = "%d" % statistics.median(t["bytes_sent"] for t in same)
             row["pixels_composited"] = "%d" % statistics.median(

@@ -67,4 +67,36 @@ TEST(AutoMode, OneProcessIsExact)
   EXPECT_EQ(mode.Choose(1, kMomentBytes), apc::AutoMode::Segments);
 }
 
+TEST(AutoMode, OneProcessFollowsTheMeasuredTime)
+{
+  // The wind data at 1 process, lower bytes irrelevant (none travel): the segments march every
+  // sample and sort them (9 s), APC stops where rays are opaque (3 s).
+  apc::AutoMode mode;
+  EXPECT_EQ(mode.Choose(1, kMomentBytes), apc::AutoMode::Segments);
+  mode.Record(1000, 1000, 50000, 9.0, true);
+  EXPECT_EQ(mode.Choose(1, kMomentBytes), apc::AutoMode::Moments) << "times APC once";
+  mode.Record(1000, 1000, -1, 3.0, false);
+  EXPECT_EQ(mode.Choose(1, kMomentBytes), apc::AutoMode::Moments);
+  EXPECT_DOUBLE_EQ(mode.GetSecondsPerPixel(apc::AutoMode::Moments), 3e-3);
+  // An untimed (interactive) frame keeps the measurements.
+  mode.Record(500, 500, -1);
+  EXPECT_EQ(mode.Choose(1, kMomentBytes), apc::AutoMode::Moments);
+}
+
+TEST(AutoMode, MeasuredTimeOverridesBytes)
+{
+  // Many segments (bytes favour APC), but the segment frames measured faster: they stay.
+  apc::AutoMode mode;
+  mode.Choose(8, kMomentBytes);
+  mode.Record(1000, 8000, 32000, 2.0, true);
+  EXPECT_EQ(mode.Choose(8, kMomentBytes), apc::AutoMode::Moments) << "times APC once";
+  mode.Record(1000, 8000, -1, 3.0, false);
+  EXPECT_EQ(mode.Choose(8, kMomentBytes), apc::AutoMode::Segments);
+  // Within the hysteresis (APC 10 % cheaper per pixel): segments stay; clearly cheaper: APC.
+  mode.Record(1000, 8000, 32000, 3.3, true);
+  EXPECT_EQ(mode.Choose(8, kMomentBytes), apc::AutoMode::Segments);
+  mode.Record(1000, 8000, 32000, 4.0, true);
+  EXPECT_EQ(mode.Choose(8, kMomentBytes), apc::AutoMode::Moments);
+}
+
 } // namespace
