@@ -153,7 +153,17 @@ public:
   // affine part of the map about the cell's parametric centre (its centre Jacobian),
   // p(t) = p0 + t dp, with a scalar error of at most GetLinearScalarError(). Exactly affine
   // cells get AffineRay's closed form bit for bit (LinearP is 0 and LinearX is C[0]).
-  void LinearRay(const double o[3], const double d[3], double p0[3], double dp[3]) const
+  // Inlined (as are its two halves): the marcher sets up a ray per (cell, ray) pair, which
+  // holds one or two samples.
+  [[gnu::always_inline]] void LinearRay(
+    const double o[3], const double d[3], double p0[3], double dp[3]) const
+  {
+    this->LinearRayOrigin(o, p0);
+    this->LinearRayDirection(d, dp);
+  }
+  // LinearRay's p0 alone: one per cell where every ray starts at the same point (a
+  // perspective camera's eye), with the same arithmetic, hence the same bits.
+  [[gnu::always_inline]] void LinearRayOrigin(const double o[3], double p0[3]) const
   {
     const double y[3] = { o[0] - this->LinearX[0], o[1] - this->LinearX[1],
       o[2] - this->LinearX[2] };
@@ -161,6 +171,13 @@ public:
     {
       p0[i] = this->LinearP[i] +
         (this->Inverse[i][0] * y[0] + this->Inverse[i][1] * y[1] + this->Inverse[i][2] * y[2]);
+    }
+  }
+  // LinearRay's dp alone.
+  [[gnu::always_inline]] void LinearRayDirection(const double d[3], double dp[3]) const
+  {
+    for (int i = 0; i < 3; ++i)
+    {
       dp[i] = this->Inverse[i][0] * d[0] + this->Inverse[i][1] * d[1] + this->Inverse[i][2] * d[2];
     }
   }

@@ -246,7 +246,7 @@ struct RayProgress
   }
   // Adds pass 1's sample k (in bin) to pixel p; true if it made the ray opaque (the walker
   // then stops it at the end of FarK's bin).
-  bool Add(int p, int64_t k, int bin, double absorbance)
+  [[gnu::always_inline]] bool Add(int p, int64_t k, int bin, double absorbance)
   {
     if (!this->Bins)
     {

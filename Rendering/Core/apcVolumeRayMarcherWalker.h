@@ -81,6 +81,8 @@ struct VolumeRayMarcher::Walker
     // pixel at about the same depth), then goes on from the previous sample.
     NewtonMemory FirstMemory;
     double Centre[3] = { 0, 0, 0 };
+    // With a shared origin: LinearRay's p0, the same for every ray of the cell.
+    double LinearOrigin[3] = { 0, 0, 0 };
     // The tile's rays clipped against the cell.
     walk::ClippedRays Clipped;
   };
@@ -191,6 +193,10 @@ struct VolumeRayMarcher::Walker
       ParametricCenter(state.Corners.Shape, state.Centre);
       state.Linear = state.Interpolator.IsAffine() ||
         state.Interpolator.GetLinearScalarError() <= this->LinearTolerance;
+      if (this->SharedOrigin && (state.Linear || state.Interpolator.HasPyramidInverse()))
+      {
+        state.Interpolator.LinearRayOrigin(ray.O, state.LinearOrigin);
+      }
       state.HaveCorners = true;
     }
     if (!state.Interpolate)
@@ -219,7 +225,15 @@ struct VolumeRayMarcher::Walker
     NewtonMemory memory;
     if (How == Sampling::Linear || How == Sampling::Pyramid)
     {
-      state.Interpolator.LinearRay(ray.O, ray.D, p0, dp);
+      if (this->SharedOrigin)
+      {
+        std::copy(state.LinearOrigin, state.LinearOrigin + 3, p0);
+        state.Interpolator.LinearRayDirection(ray.D, dp);
+      }
+      else
+      {
+        state.Interpolator.LinearRay(ray.O, ray.D, p0, dp);
+      }
     }
     else if (How == Sampling::Follow)
     {
@@ -310,8 +324,10 @@ struct VolumeRayMarcher::Walker
     TileRays packed;
     packed.Set(rays.data(), tile.Pixels(), this->FarLimit);
     visitor.BeginTile(inBand);
-    for (int64_t b = this->Bins.Start[tile.Index]; b < this->Bins.Start[tile.Index + 1]; ++b)
+    const int64_t end = this->Bins.Start[tile.Index + 1];
+    for (int64_t b = this->Bins.Start[tile.Index]; b < end; ++b)
     {
+      this->Prefetch(b, end);
       samples += this->Cell(this->Bins.Cells[b], rays, packed, tile, visitor, state, progress);
     }
     visitor.EndTile(inBand);
@@ -326,6 +342,33 @@ struct VolumeRayMarcher::Walker
       }
     }
     return samples;
+  }
+
+  // A tile's cells come in depth order, scattered over the mesh's arrays, and a cell's
+  // set-up waited on memory for its depth, rectangle, scalar range and face planes: these are
+  // requested a few cells ahead (the planes later, once the plane offsets have arrived).
+  void Prefetch(int64_t b, int64_t end) const
+  {
+    constexpr int64_t kAhead = 16;
+    if (b + kAhead < end)
+    {
+      const int64_t cell = this->Bins.Cells[b + kAhead];
+      __builtin_prefetch(&this->Bins.Near[cell]);
+      __builtin_prefetch(&this->Bins.Rects[cell]);
+      __builtin_prefetch(&this->Mesh.GetScalarRange(cell));
+    }
+    if (b + kAhead / 2 < end)
+    {
+      int count = 0;
+      const char* planes = reinterpret_cast<const char*>(
+        this->Mesh.GetPlanes(this->Bins.Cells[b + kAhead / 2], count));
+      const int bytes = count * static_cast<int>(sizeof(FacePlane));
+      for (int at = 0; at < bytes; at += 64)
+      {
+        __builtin_prefetch(planes + at);
+      }
+      __builtin_prefetch(planes + bytes - 1);
+    }
   }
 
   // Every ray of the tile stops at the end of its pixel's agreed last bin.
