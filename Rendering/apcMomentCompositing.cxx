@@ -318,6 +318,26 @@ void ResolveBand(const CompositeFrame& frame, size_t offset, size_t pixels, doub
   }
 }
 
+// Pass 1 of every volume into moments (the band's pixels, zero), and into own[e] too where
+// own is not empty (one per volume).
+void RenderPassOne(const CompositeFrame& frame, const RowBand& band, size_t pixels, double* moments,
+  std::vector<std::vector<double>>& own)
+{
+  const int stride = frame.Moments.Moments + 1;
+  for (size_t e = 0; e < frame.Engines.size(); ++e)
+  {
+    if (own.empty())
+    {
+      frame.Engines[e]->RenderMoments(frame.Moments, moments, band);
+      continue;
+    }
+    own[e].assign(pixels * stride, 0.0);
+    frame.Engines[e]->RenderMoments(frame.Moments, own[e].data(), band);
+    std::transform(
+      own[e].begin(), own[e].end(), moments, moments, [](double a, double b) { return a + b; });
+  }
+}
+
 // One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
 // agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
 // display process resolves the band into result at its rows.
@@ -341,18 +361,7 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   // The cut needs each volume's own moments: several volumes keep them apart until then.
   std::vector<std::vector<double>> own(
     stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
-  for (size_t e = 0; e < frame.Engines.size(); ++e)
-  {
-    if (own.empty())
-    {
-      frame.Engines[e]->RenderMoments(parameters, moments, band);
-      continue;
-    }
-    own[e].assign(pixels * stride, 0.0);
-    frame.Engines[e]->RenderMoments(parameters, own[e].data(), band);
-    std::transform(
-      own[e].begin(), own[e].end(), moments, moments, [](double a, double b) { return a + b; });
-  }
+  RenderPassOne(frame, band, pixels, moments, own);
   record.Clock.Lap("pass1");
   for (size_t p = 0; p < pixels; ++p)
   {
