@@ -21,6 +21,8 @@ struct FrameSettings
   bool DisplayDepthComposited = true;
   // APC mode composites a larger screen rectangle band by band (>= 1448^2 by default).
   vtkIdType MaxBandPixels = vtkIdType(1) << 21;
+  // APC mode's wire travels in MPI messages of at most this many bytes.
+  vtkIdType MaxMessageBytes = vtkIdType(8) << 20;
   // Interactive frames only: the factor on the sample distance and the image reduction.
   double InteractiveSampleDistanceFactor = 2.0;
   int InteractiveImageReduction = 4;
@@ -48,6 +50,7 @@ void ForEachAgreed(Settings& settings, F&& f)
   f("CompositeInDouble", settings.CompositeInDouble, AgreementRule::Same);
   f("DisplayDepthComposited", settings.DisplayDepthComposited, AgreementRule::Same);
   f("MaxBandPixels", settings.MaxBandPixels, AgreementRule::Smallest);
+  f("MaxMessageBytes", settings.MaxMessageBytes, AgreementRule::Smallest);
   f("InteractiveSampleDistanceFactor", settings.InteractiveSampleDistanceFactor,
     AgreementRule::Largest);
   f("InteractiveImageReduction", settings.InteractiveImageReduction, AgreementRule::Largest);

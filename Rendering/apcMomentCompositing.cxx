@@ -28,17 +28,42 @@ namespace apc
 {
 namespace
 {
-// The packed copies of a band are made and summed this many pixels at a time (~80 MB of
-// temporaries at 4 moments), so that they stay a bounded size whatever the band size; a
-// 1024^2 frame still sends each buffer in one message.
+// The packed copies of a band are made and summed this many pixels at a time, so that they
+// stay a bounded size whatever the band size; a 1024^2 frame still packs each buffer once.
 constexpr size_t kChunkPixels = size_t(1) << 20;
 
-// Sums the marked tiles of an image over all processes, in precision T: onto every process
-// (allreduce) or onto the display process (reduce). Returns the bytes this process sent.
+// v's first n values (v grows if it must and never shrinks: see MomentBuffers).
+template <class T>
+T* Hold(std::vector<T>& v, size_t n)
+{
+  if (v.size() < n)
+  {
+    v.resize(n);
+  }
+  return v.data();
+}
+
+// Calls message(offset, count) over [0, total) values of T, at most maxBytes at a time
+// (Settings.MaxMessageBytes: Open MPI maps a fresh temporary for an allreduce of 32 MB or
+// more on every call, see vtkAPCCompositePass.h). Every process cuts the same total the same
+// way, so the messages pair up.
+template <class T, class Message>
+void InMessages(size_t total, size_t maxBytes, Message message)
+{
+  const size_t step = std::max<size_t>(1, maxBytes / sizeof(T));
+  for (size_t offset = 0; offset < total; offset += step)
+  {
+    message(offset, static_cast<vtkIdType>(std::min(step, total - offset)));
+  }
+}
+
+// Sums the marked tiles of an image over all processes, in precision T (send and received:
+// the wire's buffers): onto every process (allreduce) or onto the display process (reduce).
+// Returns the bytes this process sent.
 template <class T>
 double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
-  const std::vector<unsigned char>& mask, std::vector<double>& image, int components,
-  bool everywhere, FrameRecord& record)
+  const std::vector<unsigned char>& mask, double* image, int components, bool everywhere,
+  size_t maxBytes, std::vector<T>& sendBuffer, std::vector<T>& receivedBuffer, FrameRecord& record)
 {
   const std::vector<size_t> chunks = tiles.Chunks(mask, kChunkPixels);
   double bytes = 0;
@@ -46,68 +71,75 @@ double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
   {
     const size_t first = chunks[c];
     const size_t last = chunks[c + 1];
-    const vtkIdType count = static_cast<vtkIdType>(tiles.PixelsIn(mask, first, last) * components);
+    const size_t count = tiles.PixelsIn(mask, first, last) * components;
     if (count == 0)
     {
       continue;
     }
-    std::vector<T> send(count);
-    std::vector<T> received(count);
-    tiles.Pack(mask, image.data(), components, send.data(), first, last);
+    T* send = Hold(sendBuffer, count);
+    T* received = Hold(receivedBuffer, count);
+    tiles.Pack(mask, image, components, send, first, last);
     group.Collective(everywhere ? "allreduce" : "reduce",
       [&]
       {
-        if (everywhere)
-        {
-          group.Controller->AllReduce(send.data(), received.data(), count, vtkCommunicator::SUM_OP);
-        }
-        else
-        {
-          group.Controller->Reduce(
-            send.data(), received.data(), count, vtkCommunicator::SUM_OP, group.Display);
-        }
+        InMessages<T>(count, maxBytes,
+          [&](size_t offset, vtkIdType length)
+          {
+            if (everywhere)
+            {
+              group.Controller->AllReduce(
+                send + offset, received + offset, length, vtkCommunicator::SUM_OP);
+            }
+            else
+            {
+              group.Controller->Reduce(
+                send + offset, received + offset, length, vtkCommunicator::SUM_OP, group.Display);
+            }
+            ++record.MessagesSent;
+          });
       });
     if (everywhere || group.IsDisplay())
     {
-      tiles.Unpack(mask, received.data(), components, image.data(), first, last);
+      tiles.Unpack(mask, received, components, image, first, last);
     }
-    bytes += static_cast<double>(sizeof(T)) * count;
-    ++record.MessagesSent;
+    bytes += static_cast<double>(sizeof(T) * count);
   }
   return bytes;
 }
 
-// The global moments of the marked tiles onto every process, through fixed point: a MAX
-// allreduce of each pixel's exponent byte, then a SUM allreduce of the int32 codes.
+// The global moments of the marked tiles of moments (band pixels) onto every process, through
+// fixed point: a MAX allreduce of each pixel's exponent byte, then a SUM allreduce of the
+// int32 codes.
 double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
-  const std::vector<unsigned char>& mask, std::vector<double>& moments, int stride,
-  FrameRecord& record)
+  const std::vector<unsigned char>& mask, double* moments, size_t band, int stride, size_t maxBytes,
+  MomentBuffers& buffers, FrameRecord& record)
 {
   const std::vector<size_t> chunks = tiles.Chunks(mask, kChunkPixels);
   const size_t pixels = tiles.PixelsIn(mask);
-  std::vector<unsigned char> exponents(pixels);
-  std::vector<double> packed;
-  for (size_t c = 0, offset = 0; c + 1 < chunks.size(); ++c)
+  // Each pixel's exponent byte straight from the image (a byte per pixel), then packed: the
+  // moments themselves are packed once, below.
+  unsigned char* all = Hold(buffers.Agreed, band); // agreed on below, in the same buffer
+  for (size_t p = 0; p < band; ++p)
   {
-    packed.resize(tiles.PixelsIn(mask, chunks[c], chunks[c + 1]) * stride);
-    tiles.Pack(mask, moments.data(), stride, packed.data(), chunks[c], chunks[c + 1]);
-    for (size_t p = 0; p < packed.size() / stride; ++p)
-    {
-      exponents[offset + p] = fixedpoint::ExponentByte(packed[p * stride]);
-    }
-    offset += packed.size() / stride;
+    all[p] = fixedpoint::ExponentByte(moments[p * stride]);
   }
-  std::vector<unsigned char> agreed(pixels);
+  unsigned char* exponents = Hold(buffers.Exponents, pixels);
+  tiles.Pack(mask, all, 1, exponents);
+  unsigned char* agreed = Hold(buffers.Agreed, pixels);
   group.Collective("allreduce",
     [&]
     {
-      group.Controller->AllReduce(
-        exponents.data(), agreed.data(), static_cast<vtkIdType>(pixels), vtkCommunicator::MAX_OP);
+      InMessages<unsigned char>(pixels, maxBytes,
+        [&](size_t offset, vtkIdType length)
+        {
+          group.Controller->AllReduce(
+            exponents + offset, agreed + offset, length, vtkCommunicator::MAX_OP);
+          ++record.MessagesSent;
+        });
     });
-  exponents = std::vector<unsigned char>();
-  ++record.MessagesSent;
 
   const int headroom = fixedpoint::HeadroomBits(group.Processes);
+  const double limit = fixedpoint::Limit(headroom);
   double bytes = static_cast<double>(pixels);
   for (size_t c = 0, offset = 0; c + 1 < chunks.size(); ++c)
   {
@@ -118,29 +150,31 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
     {
       continue;
     }
-    packed.resize(count * stride);
-    tiles.Pack(mask, moments.data(), stride, packed.data(), first, last);
-    std::vector<int32_t> codes(packed.size(), 0);
+    const size_t values = count * stride;
+    double* packed = Hold(buffers.Packed, values);
+    int32_t* codes = Hold(buffers.Codes, values);
+    int32_t* sums = Hold(buffers.Sums, values);
+    tiles.Pack(mask, moments, stride, packed, first, last);
     for (size_t p = 0; p < count; ++p)
     {
       const unsigned char e = agreed[offset + p];
-      if (e)
+      const double scale = e ? fixedpoint::Scale(e, headroom) : 1.0;
+      for (int k = 0; k < stride; ++k)
       {
-        const double scale = fixedpoint::Scale(e, headroom);
-        for (int k = 0; k < stride; ++k)
-        {
-          codes[p * stride + k] = fixedpoint::Encode(packed[p * stride + k], scale, headroom);
-        }
+        codes[p * stride + k] =
+          e ? fixedpoint::EncodeWithin(packed[p * stride + k], scale, limit) : 0;
       }
     }
-    std::vector<int32_t> sums(codes.size());
     group.Collective("allreduce",
       [&]
       {
-        group.Controller->AllReduce(
-          codes.data(), sums.data(), static_cast<vtkIdType>(codes.size()), vtkCommunicator::SUM_OP);
+        InMessages<int32_t>(values, maxBytes,
+          [&](size_t at, vtkIdType length)
+          {
+            group.Controller->AllReduce(codes + at, sums + at, length, vtkCommunicator::SUM_OP);
+            ++record.MessagesSent;
+          });
       });
-    ++record.MessagesSent;
     for (size_t p = 0; p < count; ++p)
     {
       const unsigned char e = agreed[offset + p];
@@ -150,16 +184,16 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
         packed[p * stride + k] = fixedpoint::Decode(sums[p * stride + k], scale);
       }
     }
-    tiles.Unpack(mask, packed.data(), stride, moments.data(), first, last);
+    tiles.Unpack(mask, packed, stride, moments, first, last);
     offset += count;
-    bytes += static_cast<double>(sizeof(int32_t) * codes.size());
+    bytes += static_cast<double>(sizeof(int32_t) * values);
   }
   return bytes;
 }
 
 // The union of every process's covered tiles, on every process.
 std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGrid& tiles,
-  const std::vector<double>& moments, int stride, FrameRecord& record)
+  const double* moments, int stride, FrameRecord& record)
 {
   std::vector<unsigned char> mine =
     tiles.Mark([&](size_t pixel) { return moments[pixel * stride] > 0.0; });
@@ -191,43 +225,54 @@ public:
 };
 
 // With Stop Where Opaque: every volume's opaque profile summed, over the covered tiles of
-// every process (one allreduce of OpaqueBins::kBins 16-bit values per pixel), then each
+// every process (an allreduce of OpaqueBins::kBins 16-bit values per pixel), then each
 // volume's own moments (own[e], or moments with one volume) cut where the sum is opaque and
-// summed into moments. Every process makes the same calls: the setting is the volume's.
+// summed into moments (pixels * stride values). Every process makes the same calls: the
+// setting is agreed, and a process without volumes sends zeros.
 void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
   const TileGrid& tiles, const std::vector<unsigned char>& covered,
-  std::vector<std::vector<double>>& own, std::vector<double>& moments, FrameRecord& record)
+  std::vector<std::vector<double>>& own, double* moments, size_t pixels, MomentBuffers& buffers,
+  FrameRecord& record)
 {
   constexpr int bins = OpaqueBins::kBins;
-  const size_t pixels = moments.size() / (frame.Moments.Moments + 1);
+  const size_t values = pixels * bins;
   // One volume's profile is this process's own (no copy); several are summed.
-  const std::vector<uint16_t>& first = frame.Engines.front()->GetOpaqueProfile();
-  const bool single = frame.Engines.size() == 1 && first.size() == pixels * bins;
-  std::vector<uint16_t> profile(single ? 0 : pixels * bins, 0);
+  const std::vector<uint16_t>* first =
+    frame.Engines.empty() ? nullptr : &frame.Engines.front()->GetOpaqueProfile();
+  const bool single = frame.Engines.size() == 1 && first->size() == values;
+  uint16_t* profile = single ? nullptr : Hold(buffers.Profile, values);
+  if (!single)
+  {
+    std::fill_n(profile, values, uint16_t(0));
+  }
   for (size_t e = 0; !single && e < frame.Engines.size(); ++e)
   {
     const std::vector<uint16_t>& volume = frame.Engines[e]->GetOpaqueProfile();
-    AddProfiles(profile.data(), volume.data(), std::min(volume.size(), profile.size()));
+    AddProfiles(profile, volume.data(), std::min(volume.size(), values));
   }
-  const uint16_t* mine = single ? first.data() : profile.data();
+  const uint16_t* mine = single ? first->data() : profile;
   const size_t count = tiles.PixelsIn(covered) * bins;
   if (group.Parallel && count > 0)
   {
-    std::vector<uint16_t> send(count);
-    std::vector<uint16_t> received(count);
-    tiles.Pack(covered, mine, bins, send.data());
-    profile.assign(pixels * bins, 0); // the uncovered tiles have no samples anywhere
-    mine = profile.data();
+    uint16_t* send = Hold(buffers.ProfileSend, count);
+    uint16_t* received = Hold(buffers.ProfileSum, count);
+    tiles.Pack(covered, mine, bins, send);
+    profile = Hold(buffers.Profile, values);
+    std::fill_n(profile, values, uint16_t(0)); // the uncovered tiles have no samples anywhere
+    mine = profile;
     SaturatingProfileSum sum;
     group.Collective("profile",
       [&]
       {
-        group.Controller->AllReduce(
-          send.data(), received.data(), static_cast<vtkIdType>(count), &sum);
+        InMessages<uint16_t>(count, static_cast<size_t>(frame.Settings.MaxMessageBytes),
+          [&](size_t offset, vtkIdType length)
+          {
+            group.Controller->AllReduce(send + offset, received + offset, length, &sum);
+            ++record.MessagesSent;
+          });
       });
-    tiles.Unpack(covered, received.data(), bins, profile.data());
+    tiles.Unpack(covered, received, bins, profile);
     record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
-    ++record.MessagesSent;
   }
   record.Clock.Lap("profile");
   for (size_t e = 0; e < frame.Engines.size(); ++e)
@@ -237,26 +282,68 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
       continue;
     }
     frame.Engines[e]->ApplyOpaqueCut(
-      frame.Moments, mine, own.empty() ? moments.data() : own[e].data(), band);
+      frame.Moments, mine, own.empty() ? moments : own[e].data(), band);
   }
   if (!own.empty())
   {
-    std::fill(moments.begin(), moments.end(), 0.0);
+    const size_t length = pixels * (frame.Moments.Moments + 1);
+    std::fill_n(moments, length, 0.0);
     for (const std::vector<double>& volume : own)
     {
-      std::transform(volume.begin(), volume.end(), moments.begin(), moments.begin(),
+      std::transform(volume.begin(), volume.begin() + length, moments, moments,
         [](double a, double b) { return a + b; });
     }
   }
   record.Clock.Lap("cut");
 }
 
-// Whether some pixel's absorbance (b0) reaches absorbance.
-bool AnyPixelReaches(const std::vector<double>& moments, int stride, double absorbance)
+// The display process's band of the result, from the global moments and colour sums.
+void ResolveBand(const CompositeFrame& frame, size_t offset, size_t pixels, double* moments,
+  double* colourSums, FrameResult& result)
 {
-  for (size_t at = 0; at < moments.size(); at += static_cast<size_t>(stride))
+  const MomentParameters& parameters = frame.Moments;
+  const int stride = parameters.Moments + 1;
+  float* rgba = result.RGBA.data() + 4 * offset;
+  if (frame.KeepFloatImages)
   {
-    if (moments[at] >= absorbance)
+    ResolveImage(parameters.Resolve, pixels, moments, stride, colourSums, rgba);
+    std::copy_n(moments, pixels * stride, result.Moments.begin() + stride * offset);
+    std::copy_n(colourSums, pixels * 4, result.ColourSums.begin() + 4 * offset);
+  }
+  else
+  {
+    // Resolved into the colour sums' own memory: no third band-sized buffer.
+    ResolveImageInPlace(parameters.Resolve, pixels, moments, stride, colourSums);
+    std::memcpy(rgba, colourSums, sizeof(float) * 4 * pixels);
+  }
+}
+
+// Pass 1 of every volume into moments (the band's pixels, zero), and into own[e] too where
+// own is not empty (one per volume).
+void RenderPassOne(const CompositeFrame& frame, const RowBand& band, size_t pixels, double* moments,
+  std::vector<std::vector<double>>& own)
+{
+  const int stride = frame.Moments.Moments + 1;
+  for (size_t e = 0; e < frame.Engines.size(); ++e)
+  {
+    if (own.empty())
+    {
+      frame.Engines[e]->RenderMoments(frame.Moments, moments, band);
+      continue;
+    }
+    own[e].assign(pixels * stride, 0.0);
+    frame.Engines[e]->RenderMoments(frame.Moments, own[e].data(), band);
+    std::transform(
+      own[e].begin(), own[e].end(), moments, moments, [](double a, double b) { return a + b; });
+  }
+}
+
+// Whether some pixel's absorbance (b0) of a band's moments reaches absorbance.
+bool AnyPixelReaches(const double* moments, size_t pixels, int stride, double absorbance)
+{
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    if (moments[p * stride] >= absorbance)
     {
       return true;
     }
@@ -264,30 +351,38 @@ bool AnyPixelReaches(const std::vector<double>& moments, int stride, double abso
   return false;
 }
 
-// A band's pass 1 into moments (zeroed), the tiles' agreement (covered), the opaque cut if
-// stops, and the moments' allreduce; ownCovered: the pixels this process's volumes cover.
-void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
-  const TileGrid& tiles, bool stops, std::vector<double>& moments,
-  std::vector<unsigned char>& covered, vtkIdType& ownCovered, FrameRecord& record)
+// Sums a band's image (components per pixel) over the marked tiles of every process, in the
+// wire's precision: onto every process (everywhere) or onto the display process.
+void SumImage(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
+  const std::vector<unsigned char>& covered, double* image, int components, bool everywhere,
+  MomentBuffers& buffers, FrameRecord& record)
 {
-  const MomentParameters& parameters = frame.Moments;
-  const int stride = parameters.Moments + 1;
-  const size_t pixels = moments.size() / stride;
+  if (!group.Parallel || tiles.Tiles() == 0)
+  {
+    return;
+  }
+  const size_t maxBytes = static_cast<size_t>(frame.Settings.MaxMessageBytes);
+  record.BytesSent += frame.Settings.CompositeInDouble
+    ? SumTiles(group, tiles, covered, image, components, everywhere, maxBytes, buffers.DoubleSend,
+        buffers.DoubleReceived, record)
+    : SumTiles(group, tiles, covered, image, components, everywhere, maxBytes, buffers.ColourSend,
+        buffers.ColourReceived, record);
+}
+
+// A band's pass 1 into moments (pixels * stride values, zeroed here), the tiles' agreement
+// (covered), the opaque cut if stops, and the moments' allreduce; ownCovered: the pixels this
+// process's volumes cover.
+void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  const TileGrid& tiles, bool stops, size_t pixels, double* moments,
+  std::vector<unsigned char>& covered, vtkIdType& ownCovered, MomentBuffers& buffers,
+  FrameRecord& record)
+{
+  const int stride = frame.Moments.Moments + 1;
+  std::fill_n(moments, pixels * stride, 0.0);
   // The cut needs each volume's own moments: several volumes keep them apart until then.
   std::vector<std::vector<double>> own(
     stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
-  for (size_t e = 0; e < frame.Engines.size(); ++e)
-  {
-    if (own.empty())
-    {
-      frame.Engines[e]->RenderMoments(parameters, moments.data(), band);
-      continue;
-    }
-    own[e].assign(pixels * stride, 0.0);
-    frame.Engines[e]->RenderMoments(parameters, own[e].data(), band);
-    std::transform(own[e].begin(), own[e].end(), moments.begin(), moments.begin(),
-      [](double a, double b) { return a + b; });
-  }
+  RenderPassOne(frame, band, pixels, moments, own);
   record.Clock.Lap("pass1");
   ownCovered = 0;
   for (size_t p = 0; p < pixels; ++p)
@@ -301,13 +396,16 @@ void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   record.Clock.Lap("tiles");
   if (stops)
   {
-    CutWhereOpaque(group, frame, band, tiles, covered, own, moments, record);
+    CutWhereOpaque(group, frame, band, tiles, covered, own, moments, pixels, buffers, record);
   }
-  if (group.Parallel && tiles.Tiles() > 0)
+  if (group.Parallel && tiles.Tiles() > 0 && !frame.Settings.CompositeInDouble)
   {
-    record.BytesSent += frame.Settings.CompositeInDouble
-      ? SumTiles<double>(group, tiles, covered, moments, stride, true, record)
-      : SumMomentsInFixedPoint(group, tiles, covered, moments, stride, record);
+    record.BytesSent += SumMomentsInFixedPoint(group, tiles, covered, moments, pixels, stride,
+      static_cast<size_t>(frame.Settings.MaxMessageBytes), buffers, record);
+  }
+  else
+  {
+    SumImage(group, frame, tiles, covered, moments, stride, true, buffers, record);
   }
   record.Clock.Lap("allreduce");
 }
@@ -316,22 +414,19 @@ void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
 // agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
 // display process resolves the band into result at its rows.
 void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
-  FrameRecord& record, FrameResult& result)
+  MomentBuffers& buffers, FrameRecord& record, FrameResult& result)
 {
-  const bool inDouble = frame.Settings.CompositeInDouble;
   const MomentParameters& parameters = frame.Moments;
   const int stride = parameters.Moments + 1;
   const int width = frame.RectWidth();
   const size_t pixels = static_cast<size_t>(width) * (band.J1 - band.J0);
-  const size_t offset = static_cast<size_t>(width) * band.J0; // of the band in the frame
   const TileGrid tiles(width, 0, 0, width, band.J1 - band.J0);
-  const bool exchange = group.Parallel && tiles.Tiles() > 0;
 
   // Agreed, not this process's own volumes: a process without volumes (or with the stop off
   // where others have it on) still joins the profile's allreduce.
   const bool stopping = frame.StopsWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
   bool stops = stopping && !frame.TryWithoutOpaqueStop;
-  std::vector<double> moments;
+  double* moments = Hold(buffers.Moments, pixels * stride);
   std::vector<unsigned char> covered;
   vtkIdType ownCovered = 0;
   // Without the stop, a pixel whose global absorbance reaches the threshold (less a margin
@@ -343,11 +438,11 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     {
       engine->SetOpaqueStopActive(stops);
     }
-    moments.assign(pixels * stride, 0.0);
-    PassOne(group, frame, band, tiles, stops, moments, covered, ownCovered, record);
+    PassOne(
+      group, frame, band, tiles, stops, pixels, moments, covered, ownCovered, buffers, record);
     // Such a band is marched again with the stop. The global moments are the same integer
     // sums on every process, so all decide alike.
-    if (stops || !stopping || !AnyPixelReaches(moments, stride, opaque))
+    if (stops || !stopping || !AnyPixelReaches(moments, pixels, stride, opaque))
     {
       break;
     }
@@ -363,38 +458,20 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     record.OpaquePixels += moments[p * stride] >= opaque ? 1 : 0;
   }
 
-  std::vector<double> colourSums(pixels * 4, 0.0);
+  double* colourSums = Hold(buffers.ColourSums, pixels * 4);
+  std::fill_n(colourSums, pixels * 4, 0.0);
   for (FrameEngine* engine : frame.Engines)
   {
-    engine->RenderColour(parameters, moments.data(), colourSums.data(), band);
+    engine->RenderColour(parameters, moments, colourSums, band);
   }
   record.Clock.Lap("pass2");
-  if (exchange)
-  {
-    record.BytesSent += inDouble
-      ? SumTiles<double>(group, tiles, covered, colourSums, 4, false, record)
-      : SumTiles<float>(group, tiles, covered, colourSums, 4, false, record);
-  }
+  SumImage(group, frame, tiles, covered, colourSums, 4, false, buffers, record);
   record.Clock.Lap("reduce");
-
-  if (!group.IsDisplay())
+  if (group.IsDisplay())
   {
-    return;
+    ResolveBand(frame, static_cast<size_t>(width) * band.J0, pixels, moments, colourSums, result);
+    record.Clock.Lap("resolve");
   }
-  float* rgba = result.RGBA.data() + 4 * offset;
-  if (frame.KeepFloatImages)
-  {
-    ResolveImage(parameters.Resolve, pixels, moments.data(), stride, colourSums.data(), rgba);
-    std::copy(moments.begin(), moments.end(), result.Moments.begin() + stride * offset);
-    std::copy(colourSums.begin(), colourSums.end(), result.ColourSums.begin() + 4 * offset);
-  }
-  else
-  {
-    // Resolved into the colour sums' own memory: no third band-sized buffer.
-    ResolveImageInPlace(parameters.Resolve, pixels, moments.data(), stride, colourSums.data());
-    std::memcpy(rgba, colourSums.data(), sizeof(float) * 4 * pixels);
-  }
-  record.Clock.Lap("resolve");
 }
 }
 
@@ -421,8 +498,8 @@ std::vector<RowBand> MomentBands(int width, int height, size_t maxPixels)
   return bands;
 }
 
-void RunMomentCompositing(
-  const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result)
+void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame,
+  FrameRecord& record, FrameResult& result, MomentBuffers& buffers)
 {
   record.Pixels = 0;
   if (group.IsDisplay())
@@ -439,7 +516,7 @@ void RunMomentCompositing(
   const size_t bandPixels = static_cast<size_t>(frame.Settings.MaxBandPixels);
   for (const RowBand& band : MomentBands(frame.RectWidth(), frame.RectHeight(), bandPixels))
   {
-    CompositeBand(group, frame, band, record, result);
+    CompositeBand(group, frame, band, buffers, record, result);
   }
   for (const FrameEngine* engine : frame.Engines)
   {

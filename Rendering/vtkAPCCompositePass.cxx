@@ -48,6 +48,7 @@ struct vtkAPCCompositePass::Internals
   apc::FrameSettings Settings; // this process's; every frame agrees on them first
   std::vector<VolumeEntry> Volumes;
   apc::FrameRecord Record;
+  apc::MomentBuffers Buffers; // APC mode's, kept between frames
   int LastMode = -1;
   int LastReduction = 0;
   bool LastInteractive = false;
@@ -138,6 +139,8 @@ APC_FRAME_SETTING(DisplayDepthComposited, bool, value)
 APC_FRAME_SETTING(CompositeInDouble, bool, value)
 APC_FRAME_SETTING(MaxBandPixels, vtkIdType,
   apc::CheckedSetting<vtkIdType>(this, "MaxBandPixels", value, 1, VTK_ID_MAX))
+APC_FRAME_SETTING(MaxMessageBytes, vtkIdType,
+  apc::CheckedSetting<vtkIdType>(this, "MaxMessageBytes", value, 64, VTK_ID_MAX))
 APC_FRAME_SETTING(CompositeMode, int,
   apc::CheckedSetting(
     this, "CompositeMode", value, int(APC), int(AUTO), "0 APC, 1 SEGMENTS, 2 LOCAL_EXACT, 3 AUTO"))
@@ -443,7 +446,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       apc::RunSegmentCompositing(group, frame, internal.Record, result);
       break;
     default:
-      apc::RunMomentCompositing(group, frame, internal.Record, result);
+      apc::RunMomentCompositing(group, frame, internal.Record, result, internal.Buffers);
       internal.Opaque = internal.Record.OpaquePixels > 0;
   }
   if (frame.Settings.CompositeMode == AUTO)
@@ -608,6 +611,7 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "DisplayDepthComposited: " << settings.DisplayDepthComposited << "\n";
   os << indent << "CompositeInDouble: " << settings.CompositeInDouble << "\n";
   os << indent << "MaxBandPixels: " << settings.MaxBandPixels << "\n";
+  os << indent << "MaxMessageBytes: " << settings.MaxMessageBytes << "\n";
   os << indent << "KeepLastImage: " << this->KeepLastImage << "\n";
   const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
   os << indent << "CompositeMode: " << modes[settings.CompositeMode] << "\n";

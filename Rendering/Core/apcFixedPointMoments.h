@@ -55,14 +55,24 @@ inline double Scale(unsigned char exponentByte, int headroomBits)
   return std::ldexp(1.0, 30 - headroomBits - (static_cast<int>(exponentByte) - 128));
 }
 
-// One process's moment as an integer: rounded to nearest and saturated (only a moment above
-// the agreed bound, which the bound excludes, could saturate).
-inline int32_t Encode(double moment, double scale, int headroomBits)
+// The largest code's magnitude, 2^(30 - headroomBits).
+inline double Limit(int headroomBits)
 {
-  const double limit = std::ldexp(1.0, 30 - headroomBits);
+  return std::ldexp(1.0, 30 - headroomBits);
+}
+
+// One process's moment as an integer: rounded to nearest and saturated at limit (Limit's; only
+// a moment above the agreed bound, which the bound excludes, could saturate).
+inline int32_t EncodeWithin(double moment, double scale, double limit)
+{
   double q = std::nearbyint(moment * scale);
   q = q > limit ? limit : (q < -limit ? -limit : q);
   return q == q ? static_cast<int32_t>(q) : 0;
+}
+
+inline int32_t Encode(double moment, double scale, int headroomBits)
+{
+  return EncodeWithin(moment, scale, Limit(headroomBits));
 }
 
 inline double Decode(int32_t sum, double scale)

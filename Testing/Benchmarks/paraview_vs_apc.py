@@ -104,11 +104,14 @@ def lower60(lo, hi):
 CAMERA = dict(CameraPosition=[-120, -260, 420], CameraFocalPoint=[155, 90, 40],
               CameraViewUp=[0, 0, 1], CameraViewAngle=30, CameraParallelProjection=0)
 STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", "blend"]
+# APC's collectives: each stage's wait for the slowest rank and its transfer after it.
+COLLECTIVES = ["tiles", "profile", "allreduce", "reduce"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s", "setup", "opacity",
             "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s", "profile_s", "cut_s"] + [s + "_s" for s in SEGMENT_STAGES] +
+           [c + p + "_s" for c in COLLECTIVES for p in ("_wait", "_transfer")] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
             "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped",
@@ -382,6 +385,10 @@ def main(args):
                 # Stop Where Opaque: the profiles' allreduce and the cut (0 without it).
                 for s in ("profile", "cut"):
                     row[s + "_s"] = "%.4f" % statistics.median(t.get(s, 0) for t in same)
+                for c in COLLECTIVES:
+                    for part in ("_wait", "_transfer"):
+                        row[c + part + "_s"] = "%.4f" % statistics.median(
+                            t.get(c + part, 0) for t in same)
                 covered = statistics.median(t["covered_pixels"] for t in same)
                 row["covered_pixels"] = "%d" % covered
                 if covered > 0:

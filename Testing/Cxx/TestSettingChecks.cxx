@@ -91,6 +91,9 @@ TEST(SettingChecks, CompositePassSetters)
     p, log, "MaxBandPixels", [&] { p->SetMaxBandPixels(0); },
     [&] { return static_cast<double>(p->GetMaxBandPixels()); }, 1.0);
   ExpectChecked(
+    p, log, "MaxMessageBytes", [&] { p->SetMaxMessageBytes(8); },
+    [&] { return static_cast<double>(p->GetMaxMessageBytes()); }, 64.0);
+  ExpectChecked(
     p, log, "CompositeMode", [&] { p->SetCompositeMode(9); }, [&] { return p->GetCompositeMode(); },
     vtkAPCCompositePass::AUTO);
   ExpectChecked(
@@ -109,6 +112,7 @@ TEST(SettingChecks, CompositePassSetters)
   vtkNew<vtkAPCCompositePass> fresh;
   EXPECT_EQ(fresh->GetCompositeMode(), vtkAPCCompositePass::APC);
   EXPECT_EQ(fresh->GetMaxBandPixels(), vtkIdType(1) << 21);
+  EXPECT_EQ(fresh->GetMaxMessageBytes(), vtkIdType(8) << 20);
   EXPECT_EQ(fresh->GetInteractiveImageReduction(), 4);
   EXPECT_EQ(fresh->GetInteractiveSampleDistanceFactor(), 2.0);
   EXPECT_FALSE(fresh->GetCompositeInDouble());
