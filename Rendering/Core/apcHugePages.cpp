@@ -47,6 +47,22 @@ void* AllocateHugeBlock(size_t bytes)
 #endif
 }
 
+void AdviseHugePages(void* memory, size_t bytes)
+{
+#if defined(APC_HUGE_MMAP) && defined(MADV_HUGEPAGE)
+  const uintptr_t start = reinterpret_cast<uintptr_t>(memory);
+  const uintptr_t first = (start + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+  const uintptr_t last = (start + bytes) / kHugePageBytes * kHugePageBytes;
+  if (memory && last > first)
+  {
+    madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+  }
+#else
+  (void)memory;
+  (void)bytes;
+#endif
+}
+
 void FreeHugeBlock(void* block, size_t bytes)
 {
   if (!block)

@@ -21,6 +21,10 @@ constexpr size_t kMinHugeBlockBytes = 2 * kHugePageBytes;
 void* AllocateHugeBlock(size_t bytes);
 void FreeHugeBlock(void* block, size_t bytes);
 
+// Asks for huge pages in the whole 2 MiB pages inside [memory, memory + bytes) (a heap
+// block: the allocator keeps owning it, so that its own reuse of freed memory is unchanged).
+void AdviseHugePages(void* memory, size_t bytes);
+
 } // namespace apc
 
 #endif

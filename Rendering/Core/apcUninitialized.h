@@ -29,31 +29,16 @@ struct UninitializedAllocator : std::allocator<T>
   UninitializedAllocator(const UninitializedAllocator<U>&) noexcept
   {
   }
-  static bool Huge(size_t n)
-  {
-    return n <= size_t(-1) / sizeof(T) && n * sizeof(T) >= kMinHugeBlockBytes;
-  }
   T* allocate(size_t n)
   {
-    if (!Huge(n))
+    T* memory = std::allocator<T>::allocate(n);
+    if (n * sizeof(T) >= kMinHugeBlockBytes)
     {
-      return std::allocator<T>::allocate(n);
+      // From the heap as any vector (its reuse of freed memory stays the allocator's), but
+      // in huge pages where the block has whole ones.
+      AdviseHugePages(memory, n * sizeof(T));
     }
-    void* block = AllocateHugeBlock(n * sizeof(T));
-    if (!block)
-    {
-      throw std::bad_alloc(); // not from the heap: deallocate must know where a block lives
-    }
-    return static_cast<T*>(block);
-  }
-  void deallocate(T* p, size_t n)
-  {
-    if (Huge(n))
-    {
-      FreeHugeBlock(p, n * sizeof(T));
-      return;
-    }
-    std::allocator<T>::deallocate(p, n);
+    return memory;
   }
   // resize() and the size constructor: default-initialised, i.e. nothing written for trivial T.
   template <class U>
