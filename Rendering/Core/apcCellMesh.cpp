@@ -100,6 +100,28 @@ void CellMesh::SetCells(UninitializedVector<CellShape> shapes, UninitializedVect
 }
 
 //------------------------------------------------------------------------------
+struct CellMesh::Summary
+{
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::array<double, 6> Bounds{ kInf, -kInf, kInf, -kInf, kInf, -kInf };
+  int64_t NonFiniteCorners = 0;
+  int64_t Flat = 0;
+  int64_t NonFiniteScalars = 0;
+
+  void Add(const Summary& other)
+  {
+    for (int d = 0; d < 3; ++d)
+    {
+      this->Bounds[2 * d] = std::min(this->Bounds[2 * d], other.Bounds[2 * d]);
+      this->Bounds[2 * d + 1] = std::max(this->Bounds[2 * d + 1], other.Bounds[2 * d + 1]);
+    }
+    this->NonFiniteCorners += other.NonFiniteCorners;
+    this->Flat += other.Flat;
+    this->NonFiniteScalars += other.NonFiniteScalars;
+  }
+};
+
+//------------------------------------------------------------------------------
 bool CellMesh::Finalize(std::string* error)
 {
   auto fail = [error](const std::string& message)
@@ -128,59 +150,45 @@ bool CellMesh::Finalize(std::string* error)
     }
   }
 
-  this->Bounds.resize(numCells);
+  // A plane slot for every face of every cell, from the shapes alone, so that each cell
+  // writes its planes in place: no per-block lists to join, and the planes' memory is written
+  // once (on the wind mesh the lists and their join cost as much as the planes).
+  this->PlaneOffsets.resize(static_cast<size_t>(numCells) + 1);
+  this->PlaneOffsets[0] = 0;
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    this->PlaneOffsets[cell + 1] = this->PlaneOffsets[cell] + FacesOf(this->Shapes[cell]).Count;
+  }
+  this->Planes.resize(static_cast<size_t>(this->PlaneOffsets[numCells]));
+  this->PlaneCounts.resize(numCells);
   this->ScalarRanges.resize(numCells);
-  std::vector<CellFate> fates(static_cast<size_t>(numCells));
-  std::vector<uint8_t> planeCounts(static_cast<size_t>(numCells));
-  // Cells are independent: fixed blocks of them derived in parallel, each into its own plane
-  // list, then joined in cell order, so the result is the serial one whatever the threads.
+  // Cells are independent: fixed blocks of them derived in parallel, each block summed on
+  // its own, the sums joined in block order (counts and min / max: the same whatever the
+  // threads).
   constexpr int64_t kBlock = 8192;
   const int64_t blocks = (numCells + kBlock - 1) / kBlock;
-  std::vector<std::vector<FacePlane>> blockPlanes(static_cast<size_t>(blocks));
+  std::vector<Summary> sums(static_cast<size_t>(blocks));
   ParallelFor(0, blocks, 1,
     [&](int64_t begin, int64_t end)
     {
       for (int64_t block = begin; block < end; ++block)
       {
-        std::vector<FacePlane>& planes = blockPlanes[block];
-        // At most six faces a cell: the block's planes never move while it grows.
-        planes.reserve(static_cast<size_t>(6 * kBlock));
         for (int64_t cell = block * kBlock; cell < std::min(numCells, (block + 1) * kBlock); ++cell)
         {
-          const size_t before = planes.size();
-          fates[cell] = this->DeriveCell(cell, planes);
-          planeCounts[cell] = static_cast<uint8_t>(planes.size() - before);
+          this->DeriveCell(cell, sums[block]);
         }
       }
     });
-
-  this->Planes.clear();
-  this->PlaneOffsets.assign(1, 0);
-  this->PlaneOffsets.reserve(static_cast<size_t>(numCells) + 1);
-  const double inf = std::numeric_limits<double>::infinity();
-  this->MeshBounds = { inf, -inf, inf, -inf, inf, -inf };
-  this->SkippedCells = 0;
-  this->NonFiniteCornerCells = 0;
-  this->FlatCells = 0;
-  this->NonFiniteScalarCells = 0;
-  for (int64_t cell = 0; cell < numCells; ++cell)
+  Summary total;
+  for (const Summary& sum : sums)
   {
-    this->PlaneOffsets.push_back(this->PlaneOffsets.back() + planeCounts[cell]);
-    this->CountFate(cell, fates[cell]);
+    total.Add(sum);
   }
-  // Each block's planes to where its first cell's go, blocks in parallel.
-  this->Planes.resize(static_cast<size_t>(this->PlaneOffsets.back()));
-  ParallelFor(0, blocks, 1,
-    [&](int64_t begin, int64_t end)
-    {
-      for (int64_t block = begin; block < end; ++block)
-      {
-        std::vector<FacePlane>& planes = blockPlanes[block];
-        std::copy(
-          planes.begin(), planes.end(), this->Planes.begin() + this->PlaneOffsets[block * kBlock]);
-        planes = std::vector<FacePlane>();
-      }
-    });
+  this->MeshBounds = total.Bounds;
+  this->SkippedCells = total.NonFiniteCorners + total.Flat;
+  this->NonFiniteCornerCells = total.NonFiniteCorners;
+  this->FlatCells = total.Flat;
+  this->NonFiniteScalarCells = total.NonFiniteScalars;
   if (!(this->MeshBounds[0] <= this->MeshBounds[1]))
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
@@ -189,14 +197,14 @@ bool CellMesh::Finalize(std::string* error)
 }
 
 //------------------------------------------------------------------------------
-CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, std::vector<FacePlane>& planes)
+CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
 {
   const int64_t* ids = this->GetCellPoints(cell);
   const int corners = static_cast<int>(this->Shapes[cell]);
   const double inf = std::numeric_limits<double>::infinity();
   this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
-  std::array<double, 6>& b = this->Bounds[cell];
-  b = { inf, -inf, inf, -inf, inf, -inf };
+  this->PlaneCounts[cell] = 0;
+  std::array<double, 6> b = { inf, -inf, inf, -inf, inf, -inf };
   double centroid[3] = { 0, 0, 0 };
   bool finite = true;
   std::array<std::array<double, 3>, 8> x;
@@ -214,15 +222,16 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, std::vector<FacePlane>& pl
   }
   if (!finite)
   {
-    b = { inf, -inf, inf, -inf, inf, -inf };
+    ++summary.NonFiniteCorners;
     return CellFate::NonFiniteCorners;
   }
   if (IsFlat(this->Shapes[cell], x))
   {
-    b = { inf, -inf, inf, -inf, inf, -inf };
+    ++summary.Flat;
     return CellFate::Flat;
   }
-  const size_t first = planes.size();
+  FacePlane* planes = this->Planes.data() + this->PlaneOffsets[cell];
+  int count = 0;
   const CellFaces& faces = FacesOf(this->Shapes[cell]);
   for (int f = 0; f < faces.Count; ++f)
   {
@@ -241,38 +250,45 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, std::vector<FacePlane>& pl
     const double side = static_cast<double>(n[0]) * centroid[0] +
       static_cast<double>(n[1]) * centroid[1] + static_cast<double>(n[2]) * centroid[2] - offset;
     const float sign = side > 0 ? -1.0f : 1.0f;
-    planes.push_back({ { sign * n[0], sign * n[1], sign * n[2] }, sign * offset });
+    planes[count++] = { { sign * n[0], sign * n[1], sign * n[2] }, sign * offset };
   }
   // A cell needs at least four faces with area to enclose anything; with fewer (collapsed
   // corners, a flat cell) its planes would leave rays unbounded, so it is left out.
-  if (planes.size() - first < 4)
+  if (count < 4)
   {
-    planes.resize(first);
-    b = { inf, -inf, inf, -inf, inf, -inf };
+    ++summary.Flat;
     return CellFate::Flat;
+  }
+  this->PlaneCounts[cell] = static_cast<uint8_t>(count);
+  summary.NonFiniteScalars += std::isnan(this->ScalarRanges[cell][0]) ? 1 : 0;
+  for (int d = 0; d < 3; ++d)
+  {
+    summary.Bounds[2 * d] = std::min(summary.Bounds[2 * d], b[2 * d]);
+    summary.Bounds[2 * d + 1] = std::max(summary.Bounds[2 * d + 1], b[2 * d + 1]);
   }
   return CellFate::Rendered;
 }
 
 //------------------------------------------------------------------------------
-void CellMesh::CountFate(int64_t cell, CellFate fate)
+std::array<double, 6> CellMesh::GetCellBounds(int64_t cell) const
 {
-  if (fate != CellFate::Rendered)
+  const double inf = std::numeric_limits<double>::infinity();
+  std::array<double, 6> b = { inf, -inf, inf, -inf, inf, -inf };
+  if (this->PlaneCounts[cell] == 0)
   {
-    ++this->SkippedCells;
-    ++(fate == CellFate::Flat ? this->FlatCells : this->NonFiniteCornerCells);
-    return;
+    return b; // left out: empty
   }
-  if (std::isnan(this->ScalarRanges[cell][0]))
+  const int64_t* ids = this->GetCellPoints(cell);
+  for (int i = 0; i < static_cast<int>(this->Shapes[cell]); ++i)
   {
-    ++this->NonFiniteScalarCells;
+    const auto& p = this->Points[ids[i]];
+    for (int d = 0; d < 3; ++d)
+    {
+      b[2 * d] = std::min(b[2 * d], p[d]);
+      b[2 * d + 1] = std::max(b[2 * d + 1], p[d]);
+    }
   }
-  const std::array<double, 6>& b = this->Bounds[cell];
-  for (int d = 0; d < 3; ++d)
-  {
-    this->MeshBounds[2 * d] = std::min(this->MeshBounds[2 * d], b[2 * d]);
-    this->MeshBounds[2 * d + 1] = std::max(this->MeshBounds[2 * d + 1], b[2 * d + 1]);
-  }
+  return b;
 }
 
 //------------------------------------------------------------------------------
@@ -283,7 +299,7 @@ bool CellMesh::RefreshScalarRanges(std::string* error)
   if ((cellScalars && static_cast<int64_t>(this->CellScalars.size()) != numCells) ||
     (!cellScalars && this->PointScalars.size() != this->Points.size()) ||
     static_cast<int64_t>(this->ScalarRanges.size()) != numCells ||
-    static_cast<int64_t>(this->PlaneOffsets.size()) != numCells + 1)
+    static_cast<int64_t>(this->PlaneCounts.size()) != numCells)
   {
     if (error)
     {
@@ -296,7 +312,7 @@ bool CellMesh::RefreshScalarRanges(std::string* error)
   {
     this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
     // Skipped cells (no planes) are not rendered: Finalize does not count them either.
-    const bool rendered = this->PlaneOffsets[cell + 1] > this->PlaneOffsets[cell];
+    const bool rendered = this->PlaneCounts[cell] > 0;
     this->NonFiniteScalarCells += rendered && std::isnan(this->ScalarRanges[cell][0]) ? 1 : 0;
   }
   return true;

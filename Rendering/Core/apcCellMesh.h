@@ -1,5 +1,5 @@
 // The ray marcher's own copy of a rank's cells: corner coordinates, scalars and, derived
-// once per data change, every cell's bounding box and face planes.
+// once per data change, every cell's face planes and scalar range.
 //
 // Exact ray entry and exit come from clipping the ray against the cell's face planes, which
 // is exact for cells with planar faces (tetrahedra, and the usual hexahedra, wedges and
@@ -74,11 +74,12 @@ public:
   }
   const FacePlane* GetPlanes(int64_t cell, int& count) const
   {
-    count = static_cast<int>(this->PlaneOffsets[cell + 1] - this->PlaneOffsets[cell]);
+    count = this->PlaneCounts[cell];
     return this->Planes.data() + this->PlaneOffsets[cell];
   }
-  // xmin, xmax, ymin, ymax, zmin, zmax of one cell / of the whole mesh.
-  const std::array<double, 6>& GetCellBounds(int64_t cell) const { return this->Bounds[cell]; }
+  // xmin, xmax, ymin, ymax, zmin, zmax of one cell (from its corners: nothing reads them
+  // per frame, so they are not stored) / of the whole mesh.
+  std::array<double, 6> GetCellBounds(int64_t cell) const;
   const std::array<double, 6>& GetBounds() const { return this->MeshBounds; }
 
   // The smallest and largest corner scalar of a cell (its own value for cell scalars), NaN
@@ -111,20 +112,22 @@ private:
     NonFiniteCorners,
     Flat
   };
-  // One cell's scalar range, bounds (empty if left out) and face planes (appended to planes;
-  // none if left out): independent of every other cell, so cells are derived in parallel.
-  CellFate DeriveCell(int64_t cell, std::vector<FacePlane>& planes);
-  // Adds a derived cell to the counts and the mesh bounds.
-  void CountFate(int64_t cell, CellFate fate);
+  // What Finalize sums over a block of cells: their fates and the rendered ones' bounds.
+  struct Summary;
+  // One cell's scalar range and face planes (written to its own slots; none if left out),
+  // added to summary: independent of every other cell, so cells are derived in parallel.
+  CellFate DeriveCell(int64_t cell, Summary& summary);
   std::array<float, 2> ScalarRangeOf(int64_t cell) const;
 
   UninitializedVector<CellShape> Shapes;
   UninitializedVector<int64_t> Offsets{ 0 };
   UninitializedVector<int64_t> Connectivity;
 
+  // Cell c's planes are Planes[PlaneOffsets[c] ..] (a slot for every face of its shape), the
+  // first PlaneCounts[c] of them used (faces without area constrain nothing; 0: left out).
   UninitializedVector<FacePlane> Planes;
   UninitializedVector<int64_t> PlaneOffsets;
-  UninitializedVector<std::array<double, 6>> Bounds;
+  UninitializedVector<uint8_t> PlaneCounts;
   UninitializedVector<std::array<float, 2>> ScalarRanges;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
   int64_t SkippedCells = 0;

@@ -21,10 +21,10 @@ inline void PrefixSum(std::vector<int64_t>& offsets)
 
 // Counting sort into compressed rows, stable within a row. forEachEntry(emit) must call
 // emit(row, value) for every entry, the same entries in the same order each time: it runs
-// twice, once to count and once to fill.
-template <class T, class ForEachEntry>
+// twice, once to count and once to fill. values: a std::vector of T (any allocator).
+template <class T, class ForEachEntry, class Values>
 void BuildCompressedRows(
-  int64_t rows, ForEachEntry&& forEachEntry, std::vector<int64_t>& offsets, std::vector<T>& values)
+  int64_t rows, ForEachEntry&& forEachEntry, std::vector<int64_t>& offsets, Values& values)
 {
   offsets.assign(static_cast<size_t>(rows) + 1, 0);
   forEachEntry([&](int64_t row, const T&) { ++offsets[row + 1]; });

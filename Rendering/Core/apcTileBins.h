@@ -6,6 +6,8 @@
 #ifndef apcTileBins_h
 #define apcTileBins_h
 
+#include "apcUninitialized.h"
+
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -48,22 +50,23 @@ struct TileGrid
   TileRect Tile(int64_t index) const;
 };
 
-// Cells per tile for one view.
+// Cells per tile for one view. The per-cell arrays are written whole by every binning
+// (uninitialised vectors, in huge pages when large: apcUninitialized.h).
 struct TileBins
 {
   TileGrid Grid;
   // Per cell: the covered pixel centres i0, j0, i1, j1 (inclusive); empty if i0 > i1.
-  std::vector<std::array<int, 4>> Rects;
+  UninitializedVector<std::array<int, 4>> Rects;
   // Per cell: a lower bound of the ray parameter t of any of its points on any ray (the
   // smallest depth of its corners along the view direction, which is t for a parallel camera
   // and at most t for a perspective one), so that a ray already opaque before it can skip it
   // without clipping.
-  std::vector<double> Near;
+  UninitializedVector<double> Near;
   // Compressed rows: tile t's cells are Cells[Start[t] .. Start[t + 1]), nearest first (by
   // Near, binned to a few thousand depths): a ray meets its front cells first and is opaque
   // sooner.
   std::vector<int64_t> Start{ 0 };
-  std::vector<int64_t> Cells;
+  UninitializedVector<int64_t> Cells;
 
   bool Empty(int64_t tile) const { return this->Start[tile] == this->Start[tile + 1]; }
 };

@@ -2,8 +2,11 @@
 // the large per-cell arrays of a mesh are then first written, and their memory pages first
 // touched, by the parallel loops that fill them, instead of by one thread zeroing them first
 // (on the meshes at hand that zeroing and its page faults cost more than filling them).
+// Large arrays take huge pages (apcHugePages.h): one page fault per 2 MiB instead of 512.
 #ifndef apcUninitialized_h
 #define apcUninitialized_h
+
+#include "apcHugePages.h"
 
 #include <memory>
 #include <new>
@@ -25,6 +28,17 @@ struct UninitializedAllocator : std::allocator<T>
   template <class U>
   UninitializedAllocator(const UninitializedAllocator<U>&) noexcept
   {
+  }
+  T* allocate(size_t n)
+  {
+    T* memory = std::allocator<T>::allocate(n);
+    if (n * sizeof(T) >= kMinHugeBlockBytes)
+    {
+      // From the heap as any vector (its reuse of freed memory stays the allocator's), but
+      // in huge pages where the block has whole ones.
+      AdviseHugePages(memory, n * sizeof(T));
+    }
+    return memory;
   }
   // resize() and the size constructor: default-initialised, i.e. nothing written for trivial T.
   template <class U>

@@ -1,0 +1,30 @@
+// Large blocks of memory in transparent huge pages where the system offers them. The first
+// write to a fresh page faults; in 4 KiB pages that is one fault per 4 KiB, which on the
+// virtual machines at hand costs about as much as the set-up's computing (each fault exits to
+// the hypervisor), while a 2 MiB page takes one fault for 512 of them. A block is aligned to
+// 2 MiB so that every whole 2 MiB of it can be a huge page.
+#ifndef apcHugePages_h
+#define apcHugePages_h
+
+#include <cstddef>
+
+namespace apc
+{
+
+// Blocks of at least this many bytes are worth huge pages (smaller ones come from the heap):
+// a block's last huge page is committed whole, so the waste stays under half the block.
+constexpr size_t kHugePageBytes = size_t(2) << 20;
+constexpr size_t kMinHugeBlockBytes = 2 * kHugePageBytes;
+
+// bytes of address space (committed page by page as it is first written), or null if the
+// system refuses them. Free with FreeHugeBlock and the same bytes.
+void* AllocateHugeBlock(size_t bytes);
+void FreeHugeBlock(void* block, size_t bytes);
+
+// Asks for huge pages in the whole 2 MiB pages inside [memory, memory + bytes) (a heap
+// block: the allocator keeps owning it, so that its own reuse of freed memory is unchanged).
+void AdviseHugePages(void* memory, size_t bytes);
+
+} // namespace apc
+
+#endif

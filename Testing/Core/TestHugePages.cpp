@@ -1,0 +1,107 @@
+// Large blocks for the sample arena and the mesh's per-cell arrays: aligned to a huge page,
+// usable to their last byte, and where the system offers transparent huge pages, filled with
+// far fewer page faults than 4 KiB pages would take.
+#include "apcHugePages.h"
+#include "apcUninitialized.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+#if defined(__linux__)
+#include <sys/resource.h>
+#endif
+
+namespace
+{
+long MinorFaults()
+{
+#if defined(__linux__)
+  rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_minflt;
+#else
+  return 0;
+#endif
+}
+
+// True where madvise(MADV_HUGEPAGE) regions get huge pages ("always" or "madvise").
+bool HugePagesOffered()
+{
+  std::ifstream file("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string line;
+  std::getline(file, line);
+  return line.find("[always]") != std::string::npos || line.find("[madvise]") != std::string::npos;
+}
+}
+
+TEST(HugePages, BlocksAreAlignedAndUsable)
+{
+  for (size_t bytes : { size_t(1), apc::kHugePageBytes - 8, apc::kMinHugeBlockBytes + 12345 })
+  {
+    auto* block = static_cast<unsigned char*>(apc::AllocateHugeBlock(bytes));
+    ASSERT_NE(block, nullptr);
+#if defined(__unix__) || defined(__APPLE__)
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(block) % apc::kHugePageBytes, 0u) << bytes;
+#endif
+    std::memset(block, 0x5a, bytes);
+    EXPECT_EQ(block[bytes - 1], 0x5a);
+    apc::FreeHugeBlock(block, bytes);
+  }
+  apc::FreeHugeBlock(nullptr, 0); // nothing to free
+}
+
+TEST(HugePages, LargeUninitializedVectorsWork)
+{
+  apc::UninitializedVector<double> values;
+  values.resize(apc::kMinHugeBlockBytes / sizeof(double) + 3); // advised huge pages
+  for (size_t i = 0; i < values.size(); ++i)
+  {
+    values[i] = static_cast<double>(i);
+  }
+  values.push_back(-1.0); // grows into a new block
+  EXPECT_EQ(values[values.size() - 2], static_cast<double>(values.size() - 2));
+  EXPECT_EQ(values.back(), -1.0);
+  apc::UninitializedVector<double> small(16, 2.0); // from the heap
+  EXPECT_EQ(small[15], 2.0);
+  values = apc::UninitializedVector<double>();
+  EXPECT_TRUE(values.empty());
+}
+
+// The faults of first writing every 4 KiB page of bytes at memory.
+long FaultsToFill(unsigned char* memory, size_t bytes)
+{
+  const long before = MinorFaults();
+  for (size_t i = 0; i < bytes; i += 4096)
+  {
+    memory[i] = 1;
+  }
+  return MinorFaults() - before;
+}
+
+TEST(HugePages, FillingABlockTakesFewPageFaults)
+{
+#if !defined(__linux__)
+  GTEST_SKIP() << "page faults are counted on Linux only";
+#else
+  if (!HugePagesOffered())
+  {
+    GTEST_SKIP() << "the system offers no transparent huge pages";
+  }
+  const size_t bytes = 8 * apc::kHugePageBytes; // 4096 pages of 4 KiB
+  auto* block = static_cast<unsigned char*>(apc::AllocateHugeBlock(bytes));
+  ASSERT_NE(block, nullptr);
+  // 8 with huge pages; 4096 in 4 KiB pages. A few huge pages may be refused (fragmented
+  // memory), not most of them.
+  EXPECT_LT(FaultsToFill(block, bytes), 1024);
+  apc::FreeHugeBlock(block, bytes);
+
+  // A heap block advised: its whole huge pages (at least 7 of the 9 it spans) in one fault.
+  const size_t heapBytes = bytes + apc::kHugePageBytes;
+  apc::UninitializedVector<unsigned char> heap(heapBytes);
+  EXPECT_LT(FaultsToFill(heap.data(), heapBytes), 2048);
+#endif
+}
