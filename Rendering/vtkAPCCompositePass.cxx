@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkAPCCompositePass.h"
 
-#include "vtkAPCVolumeMapper.h"
 #include "vtkCommunicator.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
@@ -10,19 +9,17 @@
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkRenderState.h"
-#include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkVolume.h"
 
 #include "apcAutoMode.h"
 #include "apcCompositeFrame.h"
-#include "apcFrameAgreement.h"
 #include "apcFrameEngine.h"
 #include "apcFrameSettings.h"
+#include "apcFrameStart.h"
 #include "apcFrameTimings.h"
 #include "apcImageOutput.h"
-#include "apcInputReport.h"
 #include "apcNodeThreads.h"
 #include "apcSettingChecks.h"
 #include "apcVolumeSettings.h"
@@ -35,18 +32,10 @@
 
 vtkStandardNewMacro(vtkAPCCompositePass);
 
-// A volume the pass renders, with the engine that runs its frames (the pass's own: the mapper
-// gives its settings, vtkAPCVolumeMapper::GetVolumeSettings, and its input, nothing else).
-struct VolumeEntry
-{
-  vtkSmartPointer<vtkVolume> Volume;
-  std::unique_ptr<apc::FrameEngine> Engine;
-};
-
 struct vtkAPCCompositePass::Internals
 {
   apc::FrameSettings Settings; // this process's; every frame agrees on them first
-  std::vector<VolumeEntry> Volumes;
+  std::vector<apc::VolumeEntry> Volumes;
   apc::FrameRecord Record;
   apc::MomentBuffers Buffers; // APC mode's, kept between frames
   int LastMode = -1;
@@ -87,7 +76,8 @@ void vtkAPCCompositePass::AddVolume(vtkVolume* volume)
 {
   auto& v = this->Internal->Volumes;
   if (volume &&
-    std::none_of(v.begin(), v.end(), [volume](const VolumeEntry& e) { return e.Volume == volume; }))
+    std::none_of(
+      v.begin(), v.end(), [volume](const apc::VolumeEntry& e) { return e.Volume == volume; }))
   {
     v.push_back({ volume, std::make_unique<apc::FrameEngine>() });
     this->Modified();
@@ -97,8 +87,8 @@ void vtkAPCCompositePass::AddVolume(vtkVolume* volume)
 void vtkAPCCompositePass::RemoveVolume(vtkVolume* volume)
 {
   auto& v = this->Internal->Volumes;
-  const auto it =
-    std::find_if(v.begin(), v.end(), [volume](const VolumeEntry& e) { return e.Volume == volume; });
+  const auto it = std::find_if(
+    v.begin(), v.end(), [volume](const apc::VolumeEntry& e) { return e.Volume == volume; });
   if (it != v.end())
   {
     v.erase(it);
@@ -258,132 +248,6 @@ vtkImageData* vtkAPCCompositePass::GetLastImage()
 }
 
 //------------------------------------------------------------------------------
-namespace
-{
-// This process's visible APC volumes: their engines begin the frame with the volumes' settings
-// (read once, at the VTK boundary) and take their inputs; their side of the agreement goes into
-// local; mappers lists their mappers in order (the first says the input reports).
-void CollectVolumes(const std::vector<VolumeEntry>& volumes, apc::LocalFrame& local,
-  apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible,
-  std::vector<vtkAPCVolumeMapper*>& mappers, apc::InputReport& reports, std::ostringstream& problem)
-{
-  for (const VolumeEntry& entry : volumes)
-  {
-    if (!entry.Volume->GetVisibility())
-    {
-      continue;
-    }
-    auto* mapper = vtkAPCVolumeMapper::SafeDownCast(entry.Volume->GetMapper());
-    if (!mapper)
-    {
-      problem << "a volume without a vtkAPCVolumeMapper; ";
-      local.Failed = true;
-      continue;
-    }
-    // The engine reads no mapper: it gets the volume's settings and input.
-    const apc::VolumeSettings volumeSettings = mapper->GetVolumeSettings();
-    apc::FrameEngine* engine = entry.Engine.get();
-    engine->BeginFrame(volumeSettings);
-    if (!engine->UpdateInput(mapper->GetInput(), mapper))
-    {
-      problem << "unusable input (see the mapper's error); ";
-      local.Failed = true;
-    }
-    local.ReportPending = engine->TakeNewInputReport() || local.ReportPending;
-    reports.Add(engine->GetInputReport());
-    double bounds[6];
-    local.AddVolume(volumeSettings.Moments.Moments,
-      engine->GetLocalBounds(bounds) ? bounds : nullptr, entry.Volume->GetProperty());
-    local.Cells += static_cast<double>(engine->GetNumberOfCells());
-    local.StopsWhereOpaque = local.StopsWhereOpaque || volumeSettings.StopWhereOpaque;
-    if (mappers.empty())
-    {
-      // The frame's moment settings: the first volume's beta, bias and resolve.
-      frame.Moments = volumeSettings.Moments;
-    }
-    mappers.push_back(mapper);
-    visible.push_back(entry.Volume);
-    frame.Engines.push_back(engine);
-  }
-}
-
-// Step 1 of a frame: this process's visible APC volumes and its side of the agreement, then
-// the agreement itself. False if the frame is skipped on every process (failures reported).
-bool AgreeOnFrame(vtkAPCCompositePass* self, const apc::ProcessGroup& group,
-  const std::vector<VolumeEntry>& volumes, const apc::FrameSettings& settings, vtkRenderer* ren,
-  apc::CompositeFrame& frame, std::vector<vtkVolume*>& visible, apc::FrameRecord& record,
-  bool& transferWarned, bool opaque)
-{
-  apc::LocalFrame local;
-  local.Settings = settings;
-  local.Opaque = opaque;
-  std::ostringstream problem;
-  apc::InputReport reports; // said once for all processes when any has news
-  std::vector<vtkAPCVolumeMapper*> mappers;
-  CollectVolumes(volumes, local, frame, visible, mappers, reports, problem);
-  vtkObject* reporter = mappers.empty() ? static_cast<vtkObject*>(self) : mappers.front();
-  // The screen rectangle and every image buffer derive from the viewport: sizes that differ
-  // between processes would make their collectives disagree in length.
-  ren->GetTiledSizeAndOrigin(&local.Width, &local.Height, &frame.X0, &frame.Y0);
-  // Whether this frame may be cheap is the window's word (ParaView's and VTK's interactive
-  // renders raise its desired update rate); how cheap is this pass's setting. Both are
-  // agreed, so no process renders a different lattice or image size than the others.
-  vtkRenderWindow* window = ren->GetRenderWindow();
-  local.Interactive = window && window->GetDesiredUpdateRate() >= 1.0;
-  const apc::FrameAgreement agreed = apc::FrameAgreement::Agree(group, local);
-  if (agreed.AnyReportPending)
-  {
-    apc::ShareInputReports(group, reports, reporter);
-  }
-  apc::WarnOnceIfTransferFunctionsDiffer(self, group, agreed, mappers, transferWarned);
-  record.Clock.Lap("agree");
-  if (agreed.NoVolumes())
-  {
-    return false;
-  }
-  const std::string why = agreed.Problem();
-  if (!why.empty())
-  {
-    record.Failed = true;
-    if (!problem.str().empty())
-    {
-      vtkErrorWithObjectMacro(self, "APC on process " << group.Rank << ": " << problem.str());
-    }
-    if (group.IsDisplay())
-    {
-      vtkErrorWithObjectMacro(self, "APC frame skipped: " << why);
-    }
-    return false;
-  }
-  if (!agreed.HasCells() || agreed.Width < 1 || agreed.Height < 1)
-  {
-    return false; // nothing to draw anywhere (the same on every process)
-  }
-  frame.Renderer = ren;
-  frame.ViewWidth = agreed.Width;
-  frame.ViewHeight = agreed.Height;
-  frame.Interactive = agreed.Interactive;
-  frame.Settings = agreed.Settings;
-  const int reduction = frame.Reduction();
-  frame.Width = (agreed.Width + reduction - 1) / reduction;
-  frame.Height = (agreed.Height + reduction - 1) / reduction;
-  frame.Rect = apc::ScreenRectOf(ren, agreed.Bounds, frame.Width, frame.Height, frame.Aspect());
-  const apc::ScreenRect& r = frame.Rect;
-  frame.Tiles =
-    r.Pixels() > 0 ? apc::TileGrid(r.Width(), 0, 0, r.Width(), r.Height()) : apc::TileGrid();
-  frame.Moments.Moments = agreed.MaxMoments;
-  frame.Volumes = agreed.MaxVolumes;
-  frame.StopsWhereOpaque = agreed.AnyStopsWhereOpaque;
-  // The double wire's sums may round differently on each process: no retry decided from them.
-  frame.TryWithoutOpaqueStop = !agreed.AnyOpaque && !agreed.Settings.CompositeInDouble;
-  std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
-  frame.Cells = agreed.Cells;
-  return true;
-}
-
-}
-
-//------------------------------------------------------------------------------
 void vtkAPCCompositePass::Render(const vtkRenderState* s)
 {
   this->NumberOfRenderedProps = 0;
@@ -412,7 +276,7 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   }
   apc::CompositeFrame frame;
   std::vector<vtkVolume*> volumes;
-  if (!AgreeOnFrame(this, group, internal.Volumes, internal.Settings, s->GetRenderer(), frame,
+  if (!apc::AgreeOnFrame(this, group, internal.Volumes, internal.Settings, s->GetRenderer(), frame,
         volumes, internal.Record, internal.TransferWarned, internal.Opaque))
   {
     return;
