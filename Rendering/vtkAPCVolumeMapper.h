@@ -101,7 +101,7 @@ public:
    * Power moments in MBOIT mode: 4 (default, the paper's choice), 6 or 8. With beta 0.5, 6
    * had the best mean SSIM against the exact render in docs/evaluation.md, but its
    * transmittance query made pass 2 about 3.4 times slower on the gear teeth, it sends 16 more
-   * bytes per pixel and rank, and close-up translucent shells lose (see the issue 5 note).
+   * bytes per pixel and rank, and close-up translucent shells lose (docs/evaluation.md, section 4).
    */
   void SetNumberOfMoments(int n);
   int GetNumberOfMoments() const;

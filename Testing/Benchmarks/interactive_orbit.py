@@ -15,7 +15,7 @@ UseInteractiveRenderingForScreenshots) and their SSIM (APC's metrics, held to sc
 
 Cases: "volume" (ParaView's Volume, Projected tetra), and "apc:<factor>x<reduction>" (APC
 Volume with that interactive sample distance factor and image reduction; apc:1x1 renders
-interactive frames at full quality, as before issue 11).
+interactive frames at full quality, as before interactive frames existed).
 
 Prints one CSV row per frame (--csv: per_frame rows) and one summary row per case (--summary):
 median interactive seconds, still seconds, their ratio, SSIM. Times are wall clock on the

@@ -56,7 +56,7 @@ def main():
         GetOpacityTransferFunction(array).Points = [lo, 0.05, 0.5, 0.0, hi, 0.6, 0.5, 0.0]
         display.ScalarOpacityUnitDistance = unit
         display.APCSampleDistance = spacing
-        if args.sample_cache != 1024:  # the property exists since issue 14
+        if args.sample_cache != 1024:  # older builds lack the property
             display.APCSampleCacheSize = args.sample_cache
         if args.band_megapixels > 0:  # the property exists since the bands
             display.APCBandMegapixels = args.band_megapixels

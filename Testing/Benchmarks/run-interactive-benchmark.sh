@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Interactive orbit on the wind data (interactive_orbit.py): 36 interactive renders with camera
 # azimuth steps, then one still render, for APC Volume with interactive frames off (apc:1x1,
-# every frame full quality: the behaviour before issue 11) and with the defaults (apc:2x2), and
+# every frame full quality: the behaviour before interactive frames) and with the defaults (apc:2x2), and
 # for ParaView's own Volume, at 1024x768, in pvbatch and in client-server (pvserver + pvpython
 # client), on 2 and 4 ranks ($APC_ORBIT_RANKS). Writes per-frame and summary CSVs into
 # $APC_ORBIT_OUT (default out/interactive) and prints the summaries. Arguments go to

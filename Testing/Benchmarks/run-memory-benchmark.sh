@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Peak memory per rank of an APC frame (issue 14): for each scene, view size and rank count,
+# Peak memory per rank of an APC frame: for each scene, view size and rank count,
 # one pvbatch run showing APC Volume and one showing an outline of the same data at the same
 # size (the floor: ParaView, the data, the window). Each rank's peak resident set comes from
 # /usr/bin/time. Writes $APC_MEMORY_OUT/memory.csv (default out/memory) and prints a summary:

@@ -1,4 +1,4 @@
-// Run under mpirun -np N. What the inputs' conversion finds (issue 14, point 6) is said once
+// Run under mpirun -np N. What the inputs' conversion finds is said once
 // for all ranks, on the display rank, with the global counts: rank r's piece holds r + 1 flat
 // cells and one triangle, so the display rank must say "N(N+1)/2 cells with no volume" and
 // "N x vtkTriangle" once, and no other rank anything. A frame without a data change says

@@ -1,4 +1,4 @@
-// Inputs a user meets that used to give a silently wrong picture (issue 14), each held to
+// Inputs a user meets that used to give a silently wrong picture, each held to
 // the picture it must give: one component of a vector renders like a scalar array equal to
 // that component (point and cell arrays); flat cells render like no cell at all; an infinite
 // scalar like a NaN one (transparent); quadratic cells like the tetrahedra

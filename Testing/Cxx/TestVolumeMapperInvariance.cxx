@@ -687,7 +687,7 @@ TEST(VolumeMapperInvariance, BandsAreTheRowsOfTheWholeImage)
   }
 }
 
-// Memory follows the data's footprint on screen (issue 14): a block seen small in a large
+// Memory follows the data's footprint on screen: a block seen small in a large
 // view is rendered into buffers of its screen rectangle only, and the picture is the one the
 // full view would show (nothing drawn outside the rectangle, the same pixels inside as a
 // view that the block fills, shifted).

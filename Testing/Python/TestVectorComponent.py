@@ -1,4 +1,4 @@
-"""ColorBy(display, ('POINTS', 'v', 'X')) on an APC Volume renders v_x (issue 14, point 1):
+"""ColorBy(display, ('POINTS', 'v', 'X')) on an APC Volume renders v_x:
 the same picture as colouring by a scalar array equal to v_x, and not the picture of |v|.
 Point and cell arrays, on however many ranks pvbatch runs. Prints APC-TEST-PASSED or
 APC-TEST-FAILED."""
