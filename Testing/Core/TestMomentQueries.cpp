@@ -21,11 +21,7 @@
 namespace
 {
 
-using apc::Sample;
-using apctest::MomentsOf;
-using apctest::RandomSamples;
 using apctest::RayMoments;
-using apctest::WithBeta;
 
 template <typename T>
 class MomentQueryTest : public ::testing::Test

@@ -25,7 +25,6 @@ namespace
 using apc::Sample;
 using apctest::MomentsOf;
 using apctest::RandomSamples;
-using apctest::RayMoments;
 using apctest::WithBeta;
 
 template <typename T>
