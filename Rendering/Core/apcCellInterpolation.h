@@ -193,7 +193,8 @@ public:
   // (rs term): x = C0 + C1 u + C2 v + C3 t + C4 uv / (1-t). The scalar is
   // S0 + SC3 t + SC1 u + SC2 v + SC4 r s (1-t), with r and s clamped to [0,1] so that it
   // stays bounded (and Lipschitz) near the apex.
-  double LinearScalarAt(const double q[3]) const
+  // Always inlined, as ScalarAt and PyramidScalarAt: the marcher calls them per sample.
+  [[gnu::always_inline]] double LinearScalarAt(const double q[3]) const
   {
     if (this->CellType != CellShape::Pyramid)
     {
@@ -249,7 +250,7 @@ public:
 
   // The scalar at a pyramid's point with coordinates a (above): S0 + SC1 u + SC2 v + SC3 t +
   // SC4 w, VTK's interpolant at the exact inverse.
-  double PyramidScalarAt(const double a[3]) const
+  [[gnu::always_inline]] double PyramidScalarAt(const double a[3]) const
   {
     double q[3];
     double w = 0;
@@ -263,7 +264,7 @@ public:
 
   // The same interpolant in monomial form, cheaper per sample (the marcher's form); it
   // differs from InterpolateScalar by rounding only.
-  double ScalarAt(const double p[3]) const
+  [[gnu::always_inline]] double ScalarAt(const double p[3]) const
   {
     const double r = p[0], s = p[1], t = p[2];
     const double rs = r * s;

@@ -5,6 +5,8 @@
 #define apcDepthWarp_h
 
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 namespace apc
 {
@@ -59,6 +61,42 @@ private:
   double LogZMin = 0.0;
   double Scale = 0.0; // 2 / (ln zmax - ln zmin)
   bool Degenerate = false;
+};
+
+// The warp of the sample lattice's depths t_k = (k + 0) * spacing, tabulated for the k
+// between the warp's near and far: pass 1 warps every sample, and a table read costs a small
+// fraction of the logarithm (a call per sample, with the sample loop's registers saved
+// around it). The value is the warp's own, bit for bit: entry k holds warp(t_k) for t_k
+// computed as the lattice computes it, and a depth that is not its index's t_k (a jittered
+// ray, whose offset is not 0) or an index outside the table is warped directly.
+class LatticeDepthWarp
+{
+public:
+  // No table beyond this many indices (a lattice far finer than the depth range needs):
+  // every depth is then warped directly.
+  static constexpr int64_t kMaxEntries = int64_t(1) << 16;
+
+  LatticeDepthWarp(const LogDepthWarp& warp, double spacing);
+
+  // The warp of depth t, the lattice's sample k (t = Lattice::At(k, offset)).
+  double operator()(int64_t k, double t) const
+  {
+    const uint64_t i = static_cast<uint64_t>(k) - static_cast<uint64_t>(this->Base);
+    if (i < this->Z.size() && t == static_cast<double>(k) * this->Spacing)
+    {
+      return this->Z[i];
+    }
+    return this->Warp(t);
+  }
+
+  const LogDepthWarp& GetWarp() const { return this->Warp; }
+  int64_t GetNumberOfEntries() const { return static_cast<int64_t>(this->Z.size()); }
+
+private:
+  LogDepthWarp Warp;
+  double Spacing;
+  int64_t Base = 0;
+  std::vector<double> Z; // Z[i] = Warp(t_(Base + i))
 };
 
 } // namespace apc

@@ -171,7 +171,7 @@ struct Moments : NoSegments
   double* Output;
   double* Own = nullptr;
   int Width;
-  const LogDepthWarp* Warp;
+  const LatticeDepthWarp* Warp;
   SampleCache* Cache;
   std::vector<double> Sums;
   // The tile's samples are recorded in this thread's own buffer (the cache's, kept from tile
@@ -183,7 +183,7 @@ struct Moments : NoSegments
   bool Recording = false;
   bool KeepOrder = false; // the cache keeps the lattice bits (the opaque cut reads them)
 
-  Moments(double* output, int width, const LogDepthWarp* warp, SampleCache* cache)
+  Moments(double* output, int width, const LatticeDepthWarp* warp, SampleCache* cache)
     : Output(output)
     , Width(width)
     , Warp(warp)
@@ -203,7 +203,7 @@ struct Moments : NoSegments
   }
   void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
-    const double z = (*this->Warp)(t);
+    const double z = (*this->Warp)(k, t);
     AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
     if (this->Recording)
     {

@@ -172,6 +172,33 @@ struct SampleCache
     this->Arena.Release();
     this->Buffers.clear();
   }
+  // The counting sort's scatter: each record to its pixel's next slot (starts[p] ends at
+  // pixel p's end). A (cell, ray) pair's samples arrive together, so the records come in runs
+  // of one pixel: a run's slot is kept in a register, not incremented in starts[] per
+  // sample, whose store and reload chained every sample of a run to the one before.
+  template <bool WithOrder>
+  static void Scatter(const std::vector<RecordedSample>& recorded, uint32_t* starts,
+    CachedSample* samples, uint16_t* order)
+  {
+    const RecordedSample* r = recorded.data();
+    const RecordedSample* const end = r + recorded.size();
+    while (r < end)
+    {
+      const uint16_t pixel = r->Pixel;
+      uint32_t at = starts[pixel];
+      do
+      {
+        samples[at] = { r->Z, r->Scalar };
+        if (WithOrder)
+        {
+          order[at] = r->K16;
+        }
+        ++at;
+        ++r;
+      } while (r < end && r->Pixel == pixel);
+      starts[pixel] = at;
+    }
+  }
   // Groups a marched tile's recorded samples by pixel into Tiles[tile] (counts[p]: pixel p's
   // samples among them; withOrder: keep the lattice bits) if they fit in the budget; else
   // frees the tile's memory and stops the recording.
@@ -209,16 +236,13 @@ struct SampleCache
     {
       starts[p + 1] = starts[p] + counts[p];
     }
-    CachedSample* samples = cached.Samples.data();
-    uint16_t* order = cached.K16.data();
-    for (const RecordedSample& r : recorded)
+    if (withOrder)
     {
-      const uint32_t at = starts[r.Pixel]++;
-      samples[at] = { r.Z, r.Scalar };
-      if (withOrder)
-      {
-        order[at] = r.K16;
-      }
+      Scatter<true>(recorded, starts, cached.Samples.data(), cached.K16.data());
+    }
+    else
+    {
+      Scatter<false>(recorded, starts, cached.Samples.data(), nullptr);
     }
     // starts[p] now holds pixel p's end: shift back to the starts.
     for (int p = pixels; p > 0; --p)

@@ -177,7 +177,8 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   this->TilesOf(rows, first, last);
   cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()), static_cast<size_t>(first),
     static_cast<size_t>(last));
-  visitors::Moments<N> visitor(moments, this->Width(), &warp, &cache);
+  const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
+  visitors::Moments<N> visitor(moments, this->Width(), &latticeWarp, &cache);
   this->OwnMomentsOrder = 0;
   // Hybrid (keepOwn) promises the exact ordered blend of a rank's own samples: every sample
   // is marched. Pass 2 stops where this pass did, or at the cut ApplyOpaqueCut agreed.
@@ -270,7 +271,8 @@ void VolumeRayMarcher::ApplyOpaqueCut(const TransferTable& table, const LogDepth
   this->LastCutSamples = 0;
   if (march)
   {
-    visitors::Moments<N> visitor(moments, width, &warp, nullptr);
+    const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
+    visitors::Moments<N> visitor(moments, width, &latticeWarp, nullptr);
     this->March(visitor, table, &skip, rows);
     this->LastCutSamples = this->LastSamples;
   }

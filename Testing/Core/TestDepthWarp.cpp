@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 namespace
@@ -66,6 +69,56 @@ TEST(DepthWarp, DegenerateRangesAreFinite)
       EXPECT_EQ(warp(d), 0.0) << "documented: a degenerate range maps everything to 0";
     }
   }
+}
+
+// The tabulated warp of lattice depths is the warp itself, bit for bit: at every lattice depth
+// (the lattice's own arithmetic, offset 0), at jittered depths between them, beyond near and
+// far, and where no table is built (a degenerate warp, a range of too many indices).
+TEST(DepthWarp, LatticeTableIsTheWarpBitForBit)
+{
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  struct Case
+  {
+    double Near, Far, Spacing;
+    bool Tabulated;
+  };
+  const Case cases[] = { { 2.0, 50.0, 0.37, true }, { 1234.5, 1300.25, 0.0183, true },
+    { 0.0, 10.0, 0.01, true }, { 5.0, 5.0, 0.1, false }, { nan, 3.0, 0.1, false },
+    { 1.0, 1e4, 1e-3, false } };
+  for (const Case& c : cases)
+  {
+    const apc::LogDepthWarp warp(c.Near, c.Far);
+    const apc::LatticeDepthWarp lattice(warp, c.Spacing);
+    EXPECT_EQ(lattice.GetNumberOfEntries() > 0, c.Tabulated) << c.Near;
+    const int64_t first = static_cast<int64_t>(std::floor(warp.Near() / c.Spacing)) - 20;
+    const int64_t last = static_cast<int64_t>(std::ceil(c.Far / c.Spacing)) + 20;
+    const int64_t step = std::max<int64_t>(1, (last - first) / 5000);
+    for (int64_t k = first; k <= last; k += step)
+    {
+      for (const double offset : { 0.0, -0.0, 0.25, 0.5, 1e-9 })
+      {
+        // Lattice::At's expression.
+        const double t = (static_cast<double>(k) + offset) * c.Spacing;
+        const double expected = warp(t);
+        const double got = lattice(k, t);
+        ASSERT_EQ(std::memcmp(&expected, &got, sizeof got), 0)
+          << "near " << c.Near << " k " << k << " offset " << offset;
+      }
+    }
+  }
+}
+
+// The table's entries are read only where the depth is its index's lattice depth: a wrong
+// index, or a depth that is not t_k, gets the warp of the depth given.
+TEST(DepthWarp, LatticeTableChecksTheDepth)
+{
+  const apc::LogDepthWarp warp(2.0, 50.0);
+  const apc::LatticeDepthWarp lattice(warp, 0.5);
+  ASSERT_GT(lattice.GetNumberOfEntries(), 0);
+  EXPECT_EQ(lattice(20, 10.0), warp(10.0));
+  EXPECT_EQ(lattice(21, 10.0), warp(10.0));
+  EXPECT_EQ(lattice(20, std::nextafter(10.0, 11.0)), warp(std::nextafter(10.0, 11.0)));
+  EXPECT_NE(warp(10.0), warp(10.5));
 }
 
 } // namespace

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -65,6 +66,45 @@ TEST(SampleCache, GroupsByPixelInTakenOrder)
     EXPECT_LE(cache.Bytes.load(),
       (kPixels + 1) * sizeof(uint32_t) + 6 * sizeof(apc::CachedSample) +
         (withOrder ? 7 * sizeof(uint16_t) : 0));
+  }
+}
+
+// Runs of one pixel (a cell's samples along a ray arrive together), runs that end at the
+// last record, a pixel coming back after others, against a stable sort by pixel.
+TEST(SampleCache, GroupsRunsOfOnePixelInTakenOrder)
+{
+  const uint16_t pixels[] = { 7, 7, 7, 3, 7, 7, 0, 0, 255, 3, 3, 7, 255, 255 };
+  const int n = static_cast<int>(sizeof(pixels) / sizeof(pixels[0]));
+  std::vector<apc::RecordedSample> recorded;
+  std::vector<uint32_t> counts(kPixels, 0);
+  for (int i = 0; i < n; ++i)
+  {
+    recorded.push_back({ 0.25f * i, 2.0f + i, pixels[i], static_cast<uint16_t>(1000 + i) });
+    ++counts[pixels[i]];
+  }
+  std::vector<apc::RecordedSample> expected = recorded;
+  std::stable_sort(expected.begin(), expected.end(),
+    [](const apc::RecordedSample& a, const apc::RecordedSample& b) { return a.Pixel < b.Pixel; });
+  for (bool withOrder : { false, true })
+  {
+    apc::SampleCache cache;
+    cache.Empty(1, 0, 1);
+    cache.Keep(0, recorded, counts.data(), kPixels, withOrder);
+    const apc::CachedTile& tile = cache.Tiles[0];
+    ASSERT_EQ(tile.Samples.size(), size_t(n));
+    for (int i = 0; i < n; ++i)
+    {
+      EXPECT_EQ(tile.Samples[i].Z, expected[i].Z) << i;
+      EXPECT_EQ(tile.Samples[i].Scalar, expected[i].Scalar) << i;
+      if (withOrder)
+      {
+        EXPECT_EQ(tile.K16[i], expected[i].K16) << i;
+      }
+    }
+    for (int p = 0; p < kPixels; ++p)
+    {
+      EXPECT_EQ(tile.Starts[p + 1] - tile.Starts[p], counts[p]) << p;
+    }
   }
 }
 
