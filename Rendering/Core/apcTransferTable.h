@@ -38,16 +38,37 @@ public:
   // sample, and a call per sample costs pass 1 about a twentieth.
   [[gnu::always_inline]] TransferSample Lookup(double scalar) const
   {
+    return Lookup(this->GetLayout(), scalar);
+  }
+
+  // The table as a vectorised lookup reads it, with Lookup's arithmetic (pass 2's replay).
+  struct Layout
+  {
+    const TransferSample* Entries;
+    int Count;
+    double Min;
+    double Scale;
+    double Last;
+  };
+  Layout GetLayout() const
+  {
+    return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last };
+  }
+  // Lookup from a layout held in registers: a loop that stores samples between its look-ups
+  // (the marcher's) otherwise reloads the table's fields through the table for every one.
+  [[gnu::always_inline]] static TransferSample Lookup(const Layout& table, double scalar)
+  {
     if (!std::isfinite(scalar))
     {
       return { { 0.f, 0.f, 0.f }, 0.f };
     }
-    const double x = this->Position(scalar);
+    const double position = (scalar - table.Min) * table.Scale;
+    const double x = position < 0 ? 0 : (position > table.Last ? table.Last : position);
     const int i = static_cast<int>(x);
-    const int j = i + 1 < static_cast<int>(this->Entries.size()) ? i + 1 : i;
+    const int j = i + 1 < table.Count ? i + 1 : i;
     const float f = static_cast<float>(x - i);
-    const TransferSample& a = this->Entries[i];
-    const TransferSample& b = this->Entries[j];
+    const TransferSample& a = table.Entries[i];
+    const TransferSample& b = table.Entries[j];
     return { { a.Colour[0] + f * (b.Colour[0] - a.Colour[0]),
                a.Colour[1] + f * (b.Colour[1] - a.Colour[1]),
                a.Colour[2] + f * (b.Colour[2] - a.Colour[2]) },
@@ -68,20 +89,6 @@ public:
     const int first = static_cast<int>(this->Position(lo));
     const int last = std::min(static_cast<int>(this->Position(hi)) + 1, this->Count() - 1);
     return this->VisibleBefore[last + 1] > this->VisibleBefore[first];
-  }
-
-  // The table as a vectorised lookup reads it, with Lookup's arithmetic (pass 2's replay).
-  struct Layout
-  {
-    const TransferSample* Entries;
-    int Count;
-    double Min;
-    double Scale;
-    double Last;
-  };
-  Layout GetLayout() const
-  {
-    return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last };
   }
 
   double GetSampleSpacing() const { return this->Spacing; }

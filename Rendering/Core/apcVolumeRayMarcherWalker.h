@@ -227,7 +227,11 @@ struct VolumeRayMarcher::Walker
     {
       if (this->SharedOrigin)
       {
-        std::copy(state.LinearOrigin, state.LinearOrigin + 3, p0);
+        // Element by element: std::copy of three doubles compiled to a call to memcpy
+        // per (cell, ray) pair.
+        p0[0] = state.LinearOrigin[0];
+        p0[1] = state.LinearOrigin[1];
+        p0[2] = state.LinearOrigin[2];
         state.Interpolator.LinearRayDirection(ray.D, dp);
       }
       else
@@ -240,6 +244,7 @@ struct VolumeRayMarcher::Walker
       memory = state.FirstMemory;
     }
     double pcoords[3] = { state.Centre[0], state.Centre[1], state.Centre[2] };
+    const TransferTable::Layout table = this->Table.GetLayout();
     bool first = How == Sampling::Follow;
     int64_t samples = 0;
     // Pass 1's own stop: the bin of k, and the first index past it.
@@ -278,7 +283,7 @@ struct VolumeRayMarcher::Walker
           : (How == Sampling::Pyramid ? state.Interpolator.PyramidScalarAt(pcoords)
                                       : state.Interpolator.ScalarAt(pcoords));
         scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
-        s = this->Table.Lookup(scalar);
+        s = TransferTable::Lookup(table, scalar);
       }
       ++samples;
       if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
