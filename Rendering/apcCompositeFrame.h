@@ -10,6 +10,7 @@
 #include "apcCoveredTiles.h"
 #include "apcFrameSettings.h"
 #include "apcMomentParameters.h"
+#include "apcOpaquePrediction.h"
 #include "apcRaySegments.h"
 #include "apcScreenRect.h"
 #include "apcStageClock.h"
@@ -144,6 +145,10 @@ struct FrameRecord
   vtkIdType OpaquePixels = 0;
   int OpaqueStopSkipped = 0;
   int OpaqueStopRedone = 0;
+  // APC on several processes: pixels whose cut pass 1's predicted bound left unknown, and the
+  // marcher tiles marched again for them (docs/sampler.md).
+  vtkIdType OpaquePredictedUnresolved = 0;
+  vtkIdType OpaquePredictedRedone = 0;
   SegmentStatistics Segments;
   bool Failed = false;
 };
@@ -176,6 +181,14 @@ struct MomentBuffers
   std::vector<uint16_t> Profile; // the opaque profiles, over the band
   std::vector<uint16_t> ProfileSend;
   std::vector<uint16_t> ProfileSum;
+  std::vector<uint16_t> ProfileLocal; // several volumes' profiles summed
+  // The opaque cut agreed over the last frame's rectangle and the one this frame agrees
+  // (several processes only), pass 1's bound predicted from it, and the pixels it leaves
+  // unresolved (apcOpaquePrediction.h).
+  OpaqueCutMemory PreviousCuts;
+  OpaqueCutMemory Cuts;
+  std::vector<uint8_t> Bound;
+  std::vector<uint8_t> Unresolved;
   std::vector<float> ColourSend; // the colour sums' wire (CompositeInDouble: the double pair)
   std::vector<float> ColourReceived;
   std::vector<double> DoubleSend;
