@@ -218,6 +218,19 @@ void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
 // band (see MomentBands), so that its buffers are a band's size, not the rectangle's.
 void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame,
   FrameRecord& record, FrameResult& result, MomentBuffers& buffers);
+// APC mode with Stop Where Opaque (apcOpaqueCompositing.cxx). On several processes, the
+// band's predicted last bins into buffers.Bound, from the last frame's agreed cut; false if
+// there is none (another image, the first frame).
+bool PredictOpaqueBand(
+  const CompositeFrame& frame, const RowBand& band, size_t pixels, MomentBuffers& buffers);
+// After pass 1 of band (pixels of it): every volume's opaque profile summed over the covered
+// tiles of every process, then each volume's own moments (own[e], or moments with one volume)
+// cut where the sum is opaque and summed into moments. bounded: pass 1 took buffers.Bound,
+// whose unresolved pixels are marched again first (their tiles join covered). The agreed cut
+// goes to buffers.Cuts. Every process makes the same calls.
+void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  const TileGrid& tiles, std::vector<unsigned char>& covered, std::vector<std::vector<double>>& own,
+  double* moments, size_t pixels, bool bounded, MomentBuffers& buffers, FrameRecord& record);
 void RunSegmentCompositing(
   const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result);
 
