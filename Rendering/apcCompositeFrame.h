@@ -10,6 +10,7 @@
 #include "apcCoveredTiles.h"
 #include "apcFrameSettings.h"
 #include "apcMomentParameters.h"
+#include "apcOpaquePrediction.h"
 #include "apcRaySegments.h"
 #include "apcScreenRect.h"
 #include "apcStageClock.h"
@@ -144,6 +145,10 @@ struct FrameRecord
   vtkIdType OpaquePixels = 0;
   int OpaqueStopSkipped = 0;
   int OpaqueStopRedone = 0;
+  // APC on several processes: pixels whose cut pass 1's predicted bound left unknown, and the
+  // marcher tiles marched again for them (docs/sampler.md).
+  vtkIdType OpaquePredictedUnresolved = 0;
+  vtkIdType OpaquePredictedRedone = 0;
   SegmentStatistics Segments;
   bool Failed = false;
 };
@@ -176,6 +181,14 @@ struct MomentBuffers
   std::vector<uint16_t> Profile; // the opaque profiles, over the band
   std::vector<uint16_t> ProfileSend;
   std::vector<uint16_t> ProfileSum;
+  std::vector<uint16_t> ProfileLocal; // several volumes' profiles summed
+  // The opaque cut agreed over the last frame's rectangle and the one this frame agrees
+  // (several processes only), pass 1's bound predicted from it, and the pixels it leaves
+  // unresolved (apcOpaquePrediction.h).
+  OpaqueCutMemory PreviousCuts;
+  OpaqueCutMemory Cuts;
+  std::vector<uint8_t> Bound;
+  std::vector<uint8_t> Unresolved;
   std::vector<float> ColourSend; // the colour sums' wire (CompositeInDouble: the double pair)
   std::vector<float> ColourReceived;
   std::vector<double> DoubleSend;
@@ -205,6 +218,19 @@ void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
 // band (see MomentBands), so that its buffers are a band's size, not the rectangle's.
 void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame,
   FrameRecord& record, FrameResult& result, MomentBuffers& buffers);
+// APC mode with Stop Where Opaque (apcOpaqueCompositing.cxx). On several processes, the
+// band's predicted last bins into buffers.Bound, from the last frame's agreed cut; false if
+// there is none (another image, the first frame).
+bool PredictOpaqueBand(
+  const CompositeFrame& frame, const RowBand& band, size_t pixels, MomentBuffers& buffers);
+// After pass 1 of band (pixels of it): every volume's opaque profile summed over the covered
+// tiles of every process, then each volume's own moments (own[e], or moments with one volume)
+// cut where the sum is opaque and summed into moments. bounded: pass 1 took buffers.Bound,
+// whose unresolved pixels are marched again first (their tiles join covered). The agreed cut
+// goes to buffers.Cuts. Every process makes the same calls.
+void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  const TileGrid& tiles, std::vector<unsigned char>& covered, std::vector<std::vector<double>>& own,
+  double* moments, size_t pixels, bool bounded, MomentBuffers& buffers, FrameRecord& record);
 void RunSegmentCompositing(
   const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result);
 

@@ -370,7 +370,7 @@ std::string FrameEngine::TakeSpacingNote()
 
 //------------------------------------------------------------------------------
 void FrameEngine::RenderMoments(
-  const MomentParameters& parameters, double* moments, const RowBand& band)
+  const MomentParameters& parameters, double* moments, const RowBand& band, const uint8_t* bound)
 {
   if (!this->Ready)
   {
@@ -378,9 +378,11 @@ void FrameEngine::RenderMoments(
   }
   // Hybrid's pass 2 needs this volume's own moments next to the global ones.
   const bool hybrid = parameters.Resolve == ResolveMode::Hybrid;
+  this->Marcher.SetOpaqueBound(bound);
   DispatchMoments(parameters.Moments,
     [&](auto n)
     { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments, hybrid, band); });
+  this->Marcher.SetOpaqueBound(nullptr);
   this->Samples += this->Marcher.GetLastSampleCount(); // summed over the frame's bands
   this->Clock.Lap("moments");
 }
@@ -419,6 +421,20 @@ void FrameEngine::ApplyOpaqueCut(
     { this->Marcher.ApplyOpaqueCut<n()>(*this->Table, *this->Warp, profile, moments, band); });
   this->CutSamples += this->Marcher.GetLastCutSampleCount();
   this->Clock.Lap("cut");
+}
+
+void FrameEngine::RedoOpaqueTiles(const MomentParameters& parameters, const uint8_t* unresolved,
+  double* moments, const RowBand& band)
+{
+  if (!this->Ready)
+  {
+    return;
+  }
+  DispatchMoments(parameters.Moments,
+    [&](auto n)
+    { this->Marcher.RedoOpaqueTiles<n()>(*this->Table, *this->Warp, unresolved, moments, band); });
+  this->Samples += this->Marcher.GetLastRedoSampleCount();
+  this->Clock.Lap("moments");
 }
 
 //------------------------------------------------------------------------------

@@ -143,7 +143,10 @@ public:
 
   /// MBOIT's passes over the rows of band (all by default; see RowBand): the buffers hold
   /// those rows alone.
-  void RenderMoments(const MomentParameters& parameters, double* moments, const RowBand& band = {});
+  /// bound: with Stop Where Opaque, a predicted last bin per pixel of band that pass 1 passes
+  /// on no ray (VolumeRayMarcher::SetOpaqueBound), or null.
+  void RenderMoments(const MomentParameters& parameters, double* moments, const RowBand& band = {},
+    const uint8_t* bound = nullptr);
   void RenderColour(const MomentParameters& parameters, const double* moments, double* colourSums,
     const RowBand& band = {});
   /// True if this volume's pass 1 stops where opaque (the same on every process), and after
@@ -158,6 +161,11 @@ public:
   /// holds this volume's own pass-1 moments of band, which lose the samples past it.
   void ApplyOpaqueCut(const MomentParameters& parameters, const uint16_t* profile, double* moments,
     const RowBand& band);
+  /// After a bounded RenderMoments of band: marches again, without the bound, the tiles holding
+  /// a pixel with unresolved[pixel] set (VolumeRayMarcher::RedoOpaqueTiles), whose moments
+  /// (this volume's own) and profile are replaced. Its samples count as pass 1's.
+  void RedoOpaqueTiles(const MomentParameters& parameters, const uint8_t* unresolved,
+    double* moments, const RowBand& band);
   /// Samples marched again by the cuts since Prepare (tiles the sample cache did not hold).
   int64_t GetCutSampleCount() const { return this->CutSamples; }
   void RenderExact(float* rgba);

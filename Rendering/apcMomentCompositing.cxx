@@ -13,49 +13,27 @@
 #include "apcFixedPointMoments.h"
 #include "apcFrameEngine.h"
 #include "apcResolve.h"
+#include "apcWireMessages.h"
 
 #include "vtkCommunicator.h"
 #include "vtkMultiProcessController.h"
 
-#include "apcOpaqueBins.h"
-
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 namespace apc
 {
+using wire::Hold;
+using wire::InMessages;
+
 namespace
 {
 // The packed copies of a band are made and summed this many pixels at a time, so that they
 // stay a bounded size whatever the band size; a 1024^2 frame still packs each buffer once.
 constexpr size_t kChunkPixels = size_t(1) << 20;
-
-// v's first n values (v grows if it must and never shrinks: see MomentBuffers).
-template <class T>
-T* Hold(std::vector<T>& v, size_t n)
-{
-  if (v.size() < n)
-  {
-    v.resize(n);
-  }
-  return v.data();
-}
-
-// Calls message(offset, count) over [0, total) values of T, at most maxBytes at a time
-// (Settings.MaxMessageBytes: Open MPI maps a fresh temporary for an allreduce of 32 MB or
-// more on every call, see vtkAPCCompositePass.h). Every process cuts the same total the same
-// way, so the messages pair up.
-template <class T, class Message>
-void InMessages(size_t total, size_t maxBytes, Message message)
-{
-  const size_t step = std::max<size_t>(1, maxBytes / sizeof(T));
-  for (size_t offset = 0; offset < total; offset += step)
-  {
-    message(offset, static_cast<vtkIdType>(std::min(step, total - offset)));
-  }
-}
 
 // Sums the marked tiles of an image over all processes, in precision T (send and received:
 // the wire's buffers): onto every process (allreduce) or onto the display process (reduce).
@@ -213,90 +191,6 @@ std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGri
   return all;
 }
 
-// Saturating sums of opaque profiles (apcOpaqueBins.h): exact and order-independent.
-class SaturatingProfileSum : public vtkCommunicator::Operation
-{
-public:
-  void Function(const void* a, void* b, vtkIdType length, int) override
-  {
-    AddProfiles(static_cast<uint16_t*>(b), static_cast<const uint16_t*>(a), length);
-  }
-  int Commutative() override { return 1; }
-};
-
-// With Stop Where Opaque: every volume's opaque profile summed, over the covered tiles of
-// every process (an allreduce of OpaqueBins::kBins 16-bit values per pixel), then each
-// volume's own moments (own[e], or moments with one volume) cut where the sum is opaque and
-// summed into moments (pixels * stride values). Every process makes the same calls: the
-// setting is agreed, and a process without volumes sends zeros.
-void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
-  const TileGrid& tiles, const std::vector<unsigned char>& covered,
-  std::vector<std::vector<double>>& own, double* moments, size_t pixels, MomentBuffers& buffers,
-  FrameRecord& record)
-{
-  constexpr int bins = OpaqueBins::kBins;
-  const size_t values = pixels * bins;
-  // One volume's profile is this process's own (no copy); several are summed.
-  const std::vector<uint16_t>* first =
-    frame.Engines.empty() ? nullptr : &frame.Engines.front()->GetOpaqueProfile();
-  const bool single = frame.Engines.size() == 1 && first->size() == values;
-  uint16_t* profile = single ? nullptr : Hold(buffers.Profile, values);
-  if (!single)
-  {
-    std::fill_n(profile, values, uint16_t(0));
-  }
-  for (size_t e = 0; !single && e < frame.Engines.size(); ++e)
-  {
-    const std::vector<uint16_t>& volume = frame.Engines[e]->GetOpaqueProfile();
-    AddProfiles(profile, volume.data(), std::min(volume.size(), values));
-  }
-  const uint16_t* mine = single ? first->data() : profile;
-  const size_t count = tiles.PixelsIn(covered) * bins;
-  if (group.Parallel && count > 0)
-  {
-    uint16_t* send = Hold(buffers.ProfileSend, count);
-    uint16_t* received = Hold(buffers.ProfileSum, count);
-    tiles.Pack(covered, mine, bins, send);
-    profile = Hold(buffers.Profile, values);
-    std::fill_n(profile, values, uint16_t(0)); // the uncovered tiles have no samples anywhere
-    mine = profile;
-    SaturatingProfileSum sum;
-    group.Collective("profile",
-      [&]
-      {
-        InMessages<uint16_t>(count, static_cast<size_t>(frame.Settings.MaxMessageBytes),
-          [&](size_t offset, vtkIdType length)
-          {
-            group.Controller->AllReduce(send + offset, received + offset, length, &sum);
-            ++record.MessagesSent;
-          });
-      });
-    tiles.Unpack(covered, received, bins, profile);
-    record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
-  }
-  record.Clock.Lap("profile");
-  for (size_t e = 0; e < frame.Engines.size(); ++e)
-  {
-    if (!frame.Engines[e]->StopsWhereOpaque(frame.Moments))
-    {
-      continue;
-    }
-    frame.Engines[e]->ApplyOpaqueCut(
-      frame.Moments, mine, own.empty() ? moments : own[e].data(), band);
-  }
-  if (!own.empty())
-  {
-    const size_t length = pixels * (frame.Moments.Moments + 1);
-    std::fill_n(moments, length, 0.0);
-    for (const std::vector<double>& volume : own)
-    {
-      std::transform(volume.begin(), volume.begin() + length, moments, moments,
-        [](double a, double b) { return a + b; });
-    }
-  }
-  record.Clock.Lap("cut");
-}
-
 // The display process's band of the result, from the global moments and colour sums.
 void ResolveBand(const CompositeFrame& frame, size_t offset, size_t pixels, double* moments,
   double* colourSums, FrameResult& result)
@@ -319,20 +213,20 @@ void ResolveBand(const CompositeFrame& frame, size_t offset, size_t pixels, doub
 }
 
 // Pass 1 of every volume into moments (the band's pixels, zero), and into own[e] too where
-// own is not empty (one per volume).
+// own is not empty (one per volume); bound: the predicted last bins, or null.
 void RenderPassOne(const CompositeFrame& frame, const RowBand& band, size_t pixels, double* moments,
-  std::vector<std::vector<double>>& own)
+  std::vector<std::vector<double>>& own, const uint8_t* bound)
 {
   const int stride = frame.Moments.Moments + 1;
   for (size_t e = 0; e < frame.Engines.size(); ++e)
   {
     if (own.empty())
     {
-      frame.Engines[e]->RenderMoments(frame.Moments, moments, band);
+      frame.Engines[e]->RenderMoments(frame.Moments, moments, band, bound);
       continue;
     }
     own[e].assign(pixels * stride, 0.0);
-    frame.Engines[e]->RenderMoments(frame.Moments, own[e].data(), band);
+    frame.Engines[e]->RenderMoments(frame.Moments, own[e].data(), band, bound);
     std::transform(
       own[e].begin(), own[e].end(), moments, moments, [](double a, double b) { return a + b; });
   }
@@ -377,12 +271,13 @@ void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   std::vector<unsigned char>& covered, vtkIdType& ownCovered, MomentBuffers& buffers,
   FrameRecord& record)
 {
+  const bool bounded = stops && PredictOpaqueBand(frame, band, pixels, buffers);
   const int stride = frame.Moments.Moments + 1;
   std::fill_n(moments, pixels * stride, 0.0);
   // The cut needs each volume's own moments: several volumes keep them apart until then.
   std::vector<std::vector<double>> own(
     stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
-  RenderPassOne(frame, band, pixels, moments, own);
+  RenderPassOne(frame, band, pixels, moments, own, bounded ? buffers.Bound.data() : nullptr);
   record.Clock.Lap("pass1");
   ownCovered = 0;
   for (size_t p = 0; p < pixels; ++p)
@@ -396,7 +291,8 @@ void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   record.Clock.Lap("tiles");
   if (stops)
   {
-    CutWhereOpaque(group, frame, band, tiles, covered, own, moments, pixels, buffers, record);
+    CutWhereOpaque(
+      group, frame, band, tiles, covered, own, moments, pixels, bounded, buffers, record);
   }
   if (group.Parallel && tiles.Tiles() > 0 && !frame.Settings.CompositeInDouble)
   {
@@ -511,6 +407,16 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
       result.Moments.assign(pixels * (frame.Moments.Moments + 1), 0.0);
       result.ColourSums.assign(pixels * 4, 0.0);
     }
+  }
+  // Several processes predict pass 1's cut from the last frame's if it was of the same image
+  // (every process holds the same agreed cuts).
+  std::swap(buffers.PreviousCuts, buffers.Cuts);
+  buffers.Cuts.Valid = false;
+  if (group.Parallel && frame.StopsWhereOpaque && frame.Moments.Resolve != ResolveMode::Hybrid)
+  {
+    buffers.Cuts.Begin({ frame.Width, frame.Height, frame.X0, frame.Y0, frame.ViewWidth,
+                         frame.ViewHeight, frame.Interactive ? frame.Reduction() : 0 },
+      frame.Rect.I0, frame.Rect.J0, frame.RectWidth(), frame.RectHeight());
   }
   // The same bands on every process: they follow from the agreed rectangle and band size.
   const size_t bandPixels = static_cast<size_t>(frame.Settings.MaxBandPixels);

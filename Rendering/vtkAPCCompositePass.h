@@ -361,6 +361,11 @@ public:
     // reached the threshold after all).
     double OpaqueStopSkipped = 0;
     double OpaqueStopRedone = 0;
+    // On several processes, pass 1 also stops each ray at a cut predicted from the last
+    // frame's: the pixels whose cut that left unknown, and the 16x16 tiles marched again
+    // without it for them.
+    double OpaquePredictedUnresolved = 0;
+    double OpaquePredictedRedone = 0;
     // Each stage's wait for the last process and transfer after it (see above).
     double AgreeWait = 0, AgreeTransfer = 0;
     double DepthWait = 0, DepthTransfer = 0;
@@ -426,6 +431,8 @@ public:
     f("pass2_samples", timings.Pass2Samples);
     f("opaque_stop_skipped", timings.OpaqueStopSkipped);
     f("opaque_stop_redone", timings.OpaqueStopRedone);
+    f("opaque_predicted_unresolved", timings.OpaquePredictedUnresolved);
+    f("opaque_predicted_redone", timings.OpaquePredictedRedone);
     f("agree_wait", timings.AgreeWait);
     f("agree_transfer", timings.AgreeTransfer);
     f("depth_wait", timings.DepthWait);
@@ -457,7 +464,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 64;
+  static constexpr int NumberOfTimings = 66;
 
   ///@{
   /**

@@ -209,7 +209,8 @@ struct Lattice
 // pixel sums its samples' absorbance per bin in quanta; once its total reaches the threshold
 // it takes no sample past the end of the bin of its farthest sample so far (Stop, set by the
 // walker), so its profile is complete up to that edge and zero beyond it. A pass that knows
-// the agreed cut instead gets every pixel's Stop preset and sums nothing. The walker keeps
+// the agreed cut instead gets every pixel's Stop preset and sums nothing; a pass 1 bounded by
+// a predicted cut gets its Stop preset and sums too. The walker keeps
 // this, not the visitor, so that pass 1 and a pass 2 that marches a tile again make the same
 // decisions from the same samples in the same order.
 struct RayProgress
@@ -226,7 +227,8 @@ struct RayProgress
   // skipped without looking at its rays.
   double TileStop = std::numeric_limits<double>::infinity();
   int Pixels = 0;
-  int Open = 0; // pixels without a stop
+  int Open = 0;         // pixels without a stop
+  bool Lowered = false; // a stop came nearer since TileStop was set
 
   // own: pass 1's bins (null: no pixel stops unless SetStop presets it).
   void Begin(int pixels, const OpaqueBins* own)
@@ -235,6 +237,7 @@ struct RayProgress
     this->Pixels = pixels;
     this->Open = pixels;
     this->TileStop = std::numeric_limits<double>::infinity();
+    this->Lowered = false;
     std::fill(this->Stop, this->Stop + pixels, std::numeric_limits<double>::infinity());
     if (own)
     {
@@ -263,13 +266,32 @@ struct RayProgress
     this->Opaque[p] = this->Total[p] >= OpaqueBins::kOpaque;
     return this->Opaque[p];
   }
-  // Pixel p takes no sample at or past t.
+  // Pixel p takes no sample at or past t (nor past a stop it already has: a pass 1 bounded
+  // by a predicted cut also stops where its own absorbance turns opaque, whichever is first).
   void SetStop(int p, double t)
   {
+    const bool first = this->Stop[p] == std::numeric_limits<double>::infinity();
+    if (!first && !(t < this->Stop[p]))
+    {
+      return;
+    }
     this->Stop[p] = t;
-    if (--this->Open == 0)
+    if (first && --this->Open == 0)
     {
       this->TileStop = *std::max_element(this->Stop, this->Stop + this->Pixels);
+    }
+    else if (!first && this->Open == 0)
+    {
+      this->Lowered = true; // TileStop may come nearer: refreshed before the next cell
+    }
+  }
+  // The largest stop again after some were lowered (a bound still holds until then).
+  void RefreshTileStop()
+  {
+    if (this->Lowered)
+    {
+      this->TileStop = *std::max_element(this->Stop, this->Stop + this->Pixels);
+      this->Lowered = false;
     }
   }
   // Where an opaque pixel p stops: the first lattice index past the bin of its farthest

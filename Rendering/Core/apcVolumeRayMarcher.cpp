@@ -120,6 +120,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   {
     walker.ProfileOut = this->Profile.data();
     walker.LastBinOut = this->LastBin.data();
+    walker.Bound = this->Bound;
   }
   tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
@@ -281,6 +282,73 @@ void VolumeRayMarcher::ApplyOpaqueCut(const TransferTable& table, const LogDepth
 
 //------------------------------------------------------------------------------
 template <int N>
+void VolumeRayMarcher::RedoOpaqueTiles(const TransferTable& table, const LogDepthWarp& warp,
+  const uint8_t* unresolved, double* moments, const RowBand& rows)
+{
+  this->LastRedoSamples = 0;
+  if (!this->Opaque.Active() || !this->Camera || this->CutSet)
+  {
+    return;
+  }
+  // The tiles to march again start afresh: no moments, no cached samples (the cache's
+  // budget gets their bytes back; pass 2 marches a tile that does not fit again).
+  SampleCache& cache = *this->Cache;
+  const TileGrid& grid = this->Bins->Grid;
+  std::vector<uint8_t> skip(static_cast<size_t>(grid.Count()), 1);
+  int64_t first = 0;
+  int64_t last = 0;
+  this->TilesOf(rows, first, last);
+  const int width = this->Width();
+  bool any = false;
+  for (int64_t t = first; t < last; ++t)
+  {
+    const TileRect inBand = Walker::Shifted(grid.Tile(t), rows.J0);
+    bool open = false;
+    for (int p = 0; p < inBand.Pixels() && !open; ++p)
+    {
+      open = unresolved[inBand.ImagePixel(p, width)] != 0;
+    }
+    if (!open)
+    {
+      continue;
+    }
+    skip[t] = 0;
+    any = true;
+    for (int p = 0; p < inBand.Pixels(); ++p)
+    {
+      std::fill_n(moments + (N + 1) * inBand.ImagePixel(p, width), N + 1, 0.0);
+    }
+    if (static_cast<size_t>(t) < cache.Tiles.size())
+    {
+      if (cache.Kept[t])
+      {
+        cache.Bytes -= cache.Tiles[t].Bytes();
+      }
+      cache.Tiles[t].Clear();
+      cache.Kept[t] = 0;
+    }
+  }
+  if (!any)
+  {
+    return;
+  }
+  const bool caching = cache.Valid && cache.Table == &table && cache.Moments == N;
+  cache.Record = caching && cache.Arena.Capacity() > 0;
+  visitors::Moments<N> visitor(moments, width, &warp, caching ? &cache : nullptr);
+  visitor.KeepOrder = true;
+  const uint8_t* bound = this->Bound;
+  this->Bound = nullptr;
+  const int64_t pass1 = this->LastSamples;
+  this->RecordProfile = true;
+  this->March(visitor, table, &skip, rows);
+  this->RecordProfile = false;
+  this->Bound = bound;
+  this->LastRedoSamples = this->LastSamples;
+  this->LastSamples = pass1;
+}
+
+//------------------------------------------------------------------------------
+template <int N>
 void VolumeRayMarcher::AccumulateColour(const TransferTable& table, const LogDepthWarp& warp,
   const double* moments, const MomentSettings<N>& settings, double* colourSums, bool hybrid,
   const RowBand& rows)
@@ -421,6 +489,12 @@ template void VolumeRayMarcher::ApplyOpaqueCut<6>(
   const TransferTable&, const LogDepthWarp&, const uint16_t*, double*, const RowBand&);
 template void VolumeRayMarcher::ApplyOpaqueCut<8>(
   const TransferTable&, const LogDepthWarp&, const uint16_t*, double*, const RowBand&);
+template void VolumeRayMarcher::RedoOpaqueTiles<4>(
+  const TransferTable&, const LogDepthWarp&, const uint8_t*, double*, const RowBand&);
+template void VolumeRayMarcher::RedoOpaqueTiles<6>(
+  const TransferTable&, const LogDepthWarp&, const uint8_t*, double*, const RowBand&);
+template void VolumeRayMarcher::RedoOpaqueTiles<8>(
+  const TransferTable&, const LogDepthWarp&, const uint8_t*, double*, const RowBand&);
 template void VolumeRayMarcher::AccumulateColour<4>(const TransferTable&, const LogDepthWarp&,
   const double*, const MomentSettings<4>&, double*, bool, const RowBand&);
 template void VolumeRayMarcher::AccumulateColour<6>(const TransferTable&, const LogDepthWarp&,

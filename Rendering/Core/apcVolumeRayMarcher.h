@@ -99,6 +99,19 @@ public:
   void ApplyOpaqueCut(const TransferTable& table, const LogDepthWarp& warp, const uint16_t* profile,
     double* moments, const RowBand& rows = {});
   int64_t GetLastCutSampleCount() const { return this->LastCutSamples; }
+  // A last bin per pixel of the next pass 1's rows (W*rows bytes, kept by pointer until
+  // reset) that no ray of it passes, besides its own stop: a cut predicted alike on every
+  // process (apcOpaquePrediction.h). Null: none. The profile is then complete only up to the
+  // nearer of the two; pixels whose summed profile does not reach the threshold by their
+  // bound must be marched again (RedoOpaqueTiles) before ApplyOpaqueCut.
+  void SetOpaqueBound(const uint8_t* bound) { this->Bound = bound; }
+  // After a bounded pass 1: marches again, without the bound, every tile holding a pixel with
+  // unresolved[pixel] set (W*rows bytes), replacing those tiles' moments (this mesh's, as
+  // pass 1 wrote them), profile and cached samples. Samples: GetLastRedoSampleCount.
+  template <int N>
+  void RedoOpaqueTiles(const TransferTable& table, const LogDepthWarp& warp,
+    const uint8_t* unresolved, double* moments, const RowBand& rows = {});
+  int64_t GetLastRedoSampleCount() const { return this->LastRedoSamples; }
 
   // Nearly affine cells take their parametric coordinates linearly along a ray (the inverse
   // of the map's affine part about the cell's centre) where that moves no sample's scalar by
@@ -207,7 +220,9 @@ private:
   std::vector<uint8_t> Cut;
   bool CutSet = false;
   bool RecordProfile = false;
+  const uint8_t* Bound = nullptr;
   int64_t LastCutSamples = 0;
+  int64_t LastRedoSamples = 0;
   int64_t LastSamples = 0;
   int64_t LastReplayed = 0;
   int64_t LastHidden = 0;

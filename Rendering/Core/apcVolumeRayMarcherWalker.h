@@ -50,6 +50,9 @@ struct VolumeRayMarcher::Walker
   const uint8_t* Cut = nullptr;
   uint16_t* ProfileOut = nullptr;
   uint8_t* LastBinOut = nullptr;
+  // With pass 1's own stop: a last bin per pixel of the band that no ray passes either (a
+  // predicted cut, the same on every process; kBins - 1 bounds nothing), or null.
+  const uint8_t* Bound = nullptr;
   int BandWidth = 0;
 
   // A cell's scalars: its own (or none needed), linear along the ray, a twisted pyramid's
@@ -135,6 +138,10 @@ struct VolumeRayMarcher::Walker
   int64_t Cell(int64_t cell, const std::vector<RaySetup>& rays, const TileRays& packed,
     const TileRect& tile, Visitor& visitor, CellState& state, RayProgress& progress) const
   {
+    if (Visitor::StopsWhenOpaque)
+    {
+      progress.RefreshTileStop(); // an own stop may have come before a bound's
+    }
     if (!this->SetUp<Visitor>(cell, rays.front(), state, progress))
     {
       return 0;
@@ -302,8 +309,8 @@ struct VolumeRayMarcher::Walker
             const double stop = edge == std::numeric_limits<int64_t>::max()
               ? std::numeric_limits<double>::infinity()
               : this->Grid.At(edge, ray.Offset);
-            progress.SetStop(local, stop);
-            tout = std::min(tout, stop);
+            progress.SetStop(local, stop); // the nearer of this and a bound's stop
+            tout = std::min(tout, progress.Stop[local]);
           }
         }
       }
@@ -324,7 +331,11 @@ struct VolumeRayMarcher::Walker
     const TileRect inBand = Shifted(tile, rowOffset);
     if (stops && this->Cut)
     {
-      this->StopAtCut(rays, inBand, progress);
+      this->StopAtCut(rays, inBand, this->Cut, progress);
+    }
+    else if (stops && this->Bound)
+    {
+      this->StopAtCut(rays, inBand, this->Bound, progress);
     }
     TileRays packed;
     packed.Set(rays.data(), tile.Pixels(), this->FarLimit);
@@ -376,13 +387,14 @@ struct VolumeRayMarcher::Walker
     }
   }
 
-  // Every ray of the tile stops at the end of its pixel's agreed last bin.
-  void StopAtCut(
-    const std::vector<RaySetup>& rays, const TileRect& inBand, RayProgress& progress) const
+  // Every ray of the tile stops at the end of its pixel's last bin (cut: the agreed cut, or
+  // pass 1's predicted bound).
+  void StopAtCut(const std::vector<RaySetup>& rays, const TileRect& inBand, const uint8_t* cut,
+    RayProgress& progress) const
   {
     for (int p = 0; p < inBand.Pixels(); ++p)
     {
-      const int last = this->Cut[inBand.ImagePixel(p, this->BandWidth)];
+      const int last = cut[inBand.ImagePixel(p, this->BandWidth)];
       if (last < OpaqueBins::kBins - 1)
       {
         progress.SetStop(p, this->Grid.At(this->Opaque->End(last), rays[p].Offset));

@@ -115,7 +115,8 @@ COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "f
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
             "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped",
-            "opaque_stop_redone", "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
+            "opaque_stop_redone", "opaque_predicted_unresolved", "opaque_predicted_redone",
+            "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
             "cells_per_rank_after", "note"])
 
 # Runs on every rank inside a programmable filter (its input: the reader's piece on that rank).
@@ -404,7 +405,9 @@ def main(args):
                 row["pass2_samples"] = "%d" % statistics.median(
                     t.get("pass2_samples", 0) for t in same)
                 # Bands marched without Stop Where Opaque, and again with it, in the later frames.
-                for s in ("opaque_stop_skipped", "opaque_stop_redone"):
+                # On several ranks: pixels the predicted cut left unknown, tiles marched again.
+                for s in ("opaque_stop_skipped", "opaque_stop_redone", "opaque_predicted_unresolved",
+                          "opaque_predicted_redone"):
                     row[s] = "/".join("%d" % t.get(s, 0) for t in same)
             row["messages_display_rank"] = "%d" % timings[-1]["messages_sent"]
             row["bytes_display_rank"] = "%d" % statistics.median(t["bytes_sent"] for t in same)

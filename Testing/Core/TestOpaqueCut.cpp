@@ -2,8 +2,11 @@
 // random numbers of processes, each visiting its samples roughly front to back and stopping
 // as pass 1 does (RayProgress). The cut from the summed per-process profiles must be the one
 // the complete profile gives, and every sample the cut keeps must be one its process took,
-// so that N processes keep exactly the samples one process keeps.
+// so that N processes keep exactly the samples one process keeps. With a predicted bound
+// (apcOpaquePrediction.h) the summed profile gives that cut wherever it reaches the threshold
+// by the bound, and flags the pixel unresolved otherwise.
 #include "apcOpaqueBins.h"
+#include "apcOpaquePrediction.h"
 #include "apcRayWalk.h"
 
 #include <gtest/gtest.h>
@@ -27,9 +30,10 @@ struct Sample
   double Order; // when its process visits it: k plus noise (cells binned by depth)
 };
 
-// One process's pass 1 over its samples: its profile, and whether it took each sample.
-std::array<uint16_t, OpaqueBins::kBins> Pass1(
-  const OpaqueBins& bins, std::vector<Sample>& samples, int process, std::vector<bool>& taken)
+// One process's pass 1 over its samples: its profile, and whether it took each sample. No
+// sample past the end of bin bound is taken either (kBins - 1: no bound).
+std::array<uint16_t, OpaqueBins::kBins> Pass1(const OpaqueBins& bins, std::vector<Sample>& samples,
+  int process, std::vector<bool>& taken, int bound = OpaqueBins::kBins - 1)
 {
   std::vector<size_t> visit;
   for (size_t s = 0; s < samples.size(); ++s)
@@ -43,7 +47,7 @@ std::array<uint16_t, OpaqueBins::kBins> Pass1(
     [&](size_t a, size_t b) { return samples[a].Order < samples[b].Order; });
   apc::walk::RayProgress progress;
   progress.Begin(1, &bins);
-  int64_t stop = std::numeric_limits<int64_t>::max();
+  int64_t stop = bins.End(bound);
   for (size_t s : visit)
   {
     if (samples[s].K >= stop)
@@ -53,7 +57,7 @@ std::array<uint16_t, OpaqueBins::kBins> Pass1(
     taken[s] = true;
     if (progress.Add(0, samples[s].K, bins.Of(samples[s].K), samples[s].Absorbance))
     {
-      stop = progress.StopIndex(0);
+      stop = std::min(stop, progress.StopIndex(0));
     }
   }
   std::array<uint16_t, OpaqueBins::kBins> profile{};
@@ -145,4 +149,109 @@ TEST(OpaqueCut, ProfilesSummedOverProcessesGiveTheCompleteCut)
   EXPECT_GT(cutEarly, 1000);
   EXPECT_GT(stoppedPast, 1000);
   EXPECT_GT(leftOut, 10000);
+}
+
+// Random rays as above, each process also bounded by a random predicted last bin (the same on
+// every process): where the summed profile reaches the threshold by the bound, its cut is the
+// complete one and keeps only samples pass 1 took; elsewhere the pixel is unresolved (and the
+// complete cut indeed lies past the bound), and marching again without the bound gives it.
+TEST(OpaqueCut, APredictedBoundGivesTheCompleteCutOrLeavesItUnresolved)
+{
+  const OpaqueBins bins = OpaqueBins::Make(9.21, 10.0, 50.0, 0.1);
+  std::mt19937 rng(33);
+  int resolved = 0;
+  int unresolved = 0;
+  int wrongWithoutRedo = 0;
+  for (int trial = 0; trial < 4000; ++trial)
+  {
+    const int processes = 2 + trial % 3;
+    const int count = std::uniform_int_distribution<int>(1, 400)(rng);
+    const double mean = std::uniform_real_distribution<double>(0.005, 0.5)(rng);
+    const double noise = std::uniform_real_distribution<double>(0.0, 80.0)(rng);
+    const uint8_t bound =
+      static_cast<uint8_t>(std::uniform_int_distribution<int>(0, OpaqueBins::kBins - 1)(rng));
+    std::exponential_distribution<double> absorbance(1.0 / mean);
+    std::vector<Sample> samples;
+    for (int s = 0; s < count; ++s)
+    {
+      const int64_t k = bins.Base + std::uniform_int_distribution<int64_t>(-5, 420)(rng);
+      const int process = std::uniform_int_distribution<int>(0, processes - 1)(rng);
+      samples.push_back({ k, absorbance(rng), process,
+        static_cast<double>(k) + std::uniform_real_distribution<double>(0.0, noise)(rng) });
+    }
+    std::array<uint16_t, OpaqueBins::kBins> complete{};
+    for (const Sample& s : samples)
+    {
+      complete[bins.Of(s.K)] = OpaqueBins::Add(complete[bins.Of(s.K)], bins.Quanta(s.Absorbance));
+    }
+    const int expected = apc::CutBin(complete.data());
+
+    std::vector<bool> taken(samples.size(), false);
+    std::array<uint16_t, OpaqueBins::kBins> summed{};
+    for (int p = 0; p < processes; ++p)
+    {
+      const auto profile = Pass1(bins, samples, p, taken, bound);
+      apc::AddProfiles(summed.data(), profile.data(), summed.size());
+    }
+    uint8_t open = 0;
+    apc::MarkUnresolved(&bound, summed.data(), 1, &open);
+    if (open)
+    {
+      ++unresolved;
+      ASSERT_GT(expected, bound) << "trial " << trial << ": unresolved, yet opaque by the bound";
+      wrongWithoutRedo += apc::CutBin(summed.data()) != expected ? 1 : 0;
+      std::fill(taken.begin(), taken.end(), false);
+      summed.fill(0);
+      for (int p = 0; p < processes; ++p)
+      {
+        const auto profile = Pass1(bins, samples, p, taken);
+        apc::AddProfiles(summed.data(), profile.data(), summed.size());
+      }
+    }
+    else
+    {
+      ++resolved;
+    }
+    const int cut = apc::CutBin(summed.data());
+    ASSERT_EQ(cut, expected) << "trial " << trial << ", bound " << int(bound);
+    for (size_t s = 0; s < samples.size(); ++s)
+    {
+      if (bins.Of(samples[s].K) <= cut)
+      {
+        ASSERT_TRUE(taken[s]) << "trial " << trial << ": the cut keeps a sample pass 1 left out";
+      }
+    }
+  }
+  // Both outcomes occur, and taking an unresolved pixel's summed profile at its word would
+  // give a wrong cut.
+  EXPECT_GT(resolved, 1000);
+  EXPECT_GT(unresolved, 500);
+  EXPECT_GT(wrongWithoutRedo, 200);
+}
+
+// The bound: the largest previous cut within the radius, plus the margin, at most kBins - 1;
+// kBins - 1 outside the previous rectangle; nothing for another image.
+TEST(OpaqueCut, TheBoundIsTheNeighbourhoodsLargestCutPlusAMargin)
+{
+  constexpr int none = OpaqueBins::kBins - 1;
+  apc::OpaqueCutMemory previous;
+  previous.Begin({ 64, 64 }, 10, 20, 8, 6);
+  std::fill(previous.Cut.begin(), previous.Cut.end(), uint8_t(3));
+  previous.Cut[2 * 8 + 4] = 9;  // image pixel (14, 22)
+  previous.Cut[5 * 8 + 7] = 14; // image pixel (17, 25)
+  std::vector<uint8_t> bound(8 * 6, 0);
+  EXPECT_FALSE(apc::PredictOpaqueBound(previous, { 64, 32 }, 10, 20, 8, 6, 1, 1, bound.data()));
+  ASSERT_TRUE(apc::PredictOpaqueBound(previous, { 64, 64 }, 10, 20, 8, 6, 1, 1, bound.data()));
+  auto at = [&](int i, int j) { return int(bound[(j - 20) * 8 + (i - 10)]); };
+  EXPECT_EQ(at(14, 22), 10);
+  EXPECT_EQ(at(13, 21), 10);   // a diagonal neighbour
+  EXPECT_EQ(at(10, 22), none); // by the rectangle's edge: outside it, nothing was opaque
+  EXPECT_EQ(at(14, 20), none);
+  EXPECT_EQ(at(12, 23), 4);
+  EXPECT_EQ(at(16, 24), none); // 14 + 1, capped
+  // A rectangle moved by two columns reads the same image pixels.
+  std::vector<uint8_t> moved(8 * 6, 0);
+  ASSERT_TRUE(apc::PredictOpaqueBound(previous, { 64, 64 }, 12, 20, 8, 6, 1, 1, moved.data()));
+  EXPECT_EQ(int(moved[2 * 8 + 2]), 10);   // image pixel (14, 22)
+  EXPECT_EQ(int(moved[2 * 8 + 7]), none); // image pixel (19, 22): outside the previous one
 }

@@ -7,6 +7,7 @@
 // (two ranks, interleaved cells) keeps the same bounds.
 #include "apcCellMesh.h"
 #include "apcDepthWarp.h"
+#include "apcOpaquePrediction.h"
 #include "apcRayCamera.h"
 #include "apcResolve.h"
 #include "apcTransferTable.h"
@@ -144,21 +145,53 @@ Frame Render(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers)
 }
 
 // As Render, with the agreed cut: each mesh's pass 1 in its own moments, their profiles
-// summed (the processes' allreduce), each mesh cut, then the moments summed and pass 2.
-Frame RenderCut(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers)
+// summed (the processes' allreduce), each mesh cut, then the moments summed and pass 2. With
+// bound (a predicted last bin per pixel), pass 1 stops there too, and the tiles of the pixels
+// it leaves unresolved are marched again without it and their profiles summed again, as
+// vtkAPCCompositePass does on several processes. cut: the agreed cut; unresolved: how many
+// pixels the bound left unknown.
+Frame RenderPredicted(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers,
+  const std::vector<uint8_t>* bound, std::vector<uint8_t>& cut, size_t& unresolved)
 {
+  constexpr int bins = apc::OpaqueBins::kBins;
   Frame frame;
   std::vector<std::vector<double>> own(marchers.size());
-  std::vector<uint16_t> profile(kPixels * apc::OpaqueBins::kBins, 0);
+  auto sum = [&]
+  {
+    std::vector<uint16_t> profile(kPixels * bins, 0);
+    for (auto* marcher : marchers)
+    {
+      const std::vector<uint16_t>& mine = marcher->GetOpaqueProfile();
+      EXPECT_EQ(mine.size(), profile.size());
+      apc::AddProfiles(profile.data(), mine.data(), std::min(mine.size(), profile.size()));
+    }
+    return profile;
+  };
   for (size_t m = 0; m < marchers.size(); ++m)
   {
     own[m].assign(kPixels * 5, 0.0);
     marchers[m]->SetView(scene.View, nullptr);
+    marchers[m]->SetOpaqueBound(bound ? bound->data() : nullptr);
     marchers[m]->AccumulateMoments<4>(scene.TF, scene.Warp, own[m].data());
+    marchers[m]->SetOpaqueBound(nullptr);
     frame.Pass1Samples += marchers[m]->GetLastSampleCount();
-    const std::vector<uint16_t>& mine = marchers[m]->GetOpaqueProfile();
-    EXPECT_EQ(mine.size(), profile.size());
-    apc::AddProfiles(profile.data(), mine.data(), std::min(mine.size(), profile.size()));
+  }
+  std::vector<uint16_t> profile = sum();
+  std::vector<uint8_t> open(kPixels, 0);
+  unresolved = bound ? apc::MarkUnresolved(bound->data(), profile.data(), kPixels, open.data()) : 0;
+  if (unresolved > 0)
+  {
+    for (size_t m = 0; m < marchers.size(); ++m)
+    {
+      marchers[m]->RedoOpaqueTiles<4>(scene.TF, scene.Warp, open.data(), own[m].data());
+      frame.Pass1Samples += marchers[m]->GetLastRedoSampleCount();
+    }
+    profile = sum();
+  }
+  cut.resize(kPixels);
+  for (size_t p = 0; p < kPixels; ++p)
+  {
+    cut[p] = static_cast<uint8_t>(apc::CutBin(profile.data() + p * bins));
   }
   for (size_t m = 0; m < marchers.size(); ++m)
   {
@@ -175,6 +208,13 @@ Frame RenderCut(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers
     frame.Pass2Samples += marcher->GetLastSampleCount();
   }
   return frame;
+}
+
+Frame RenderCut(const Scene& scene, std::vector<apc::VolumeRayMarcher*> marchers)
+{
+  std::vector<uint8_t> cut;
+  size_t unresolved = 0;
+  return RenderPredicted(scene, marchers, nullptr, cut, unresolved);
 }
 
 std::vector<float> Exact(const Scene& scene, apc::VolumeRayMarcher& marcher)
@@ -462,6 +502,70 @@ TEST(OpaqueStop, TheCutKeepsProcessesEqualToOne)
       {
         ASSERT_NEAR(splitImage[i], image[i], 1e-5)
           << parts << " processes, budget " << budget << ", value " << i;
+      }
+    }
+  }
+}
+
+// Processes bounded by a predicted cut keep the samples they keep without one: with the
+// exact cut as the bound (nothing unresolved, fewer samples), a bound two bins too shallow
+// and none at all (the unresolved pixels' tiles are marched again), with and without the
+// sample cache. The cut is the same bit for bit, the moments up to the cache's float depths.
+TEST(OpaqueStop, APredictedBoundKeepsTheCut)
+{
+  const Scene scene;
+  for (int parts = 2; parts <= 4; ++parts)
+  {
+    for (size_t budget : { size_t(1) << 30, size_t(0) })
+    {
+      std::vector<apc::CellMesh> meshes;
+      std::vector<std::unique_ptr<apc::VolumeRayMarcher>> marchers;
+      std::vector<apc::VolumeRayMarcher*> pointers;
+      for (int p = 0; p < parts; ++p)
+      {
+        meshes.push_back(BlockMesh(p, parts, 5));
+      }
+      for (const apc::CellMesh& mesh : meshes)
+      {
+        marchers.emplace_back(new apc::VolumeRayMarcher);
+        marchers.back()->SetMesh(&mesh);
+        marchers.back()->SetMaxSampleCacheBytes(budget);
+        marchers.back()->SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+        pointers.push_back(marchers.back().get());
+      }
+      std::vector<uint8_t> cut;
+      size_t unresolved = 0;
+      const Frame free = RenderPredicted(scene, pointers, nullptr, cut, unresolved);
+      const std::vector<float> image = free.Image();
+      std::vector<uint8_t> shallow = cut;
+      for (uint8_t& b : shallow)
+      {
+        b = b >= 2 && b < apc::OpaqueBins::kBins - 1 ? b - 2 : b;
+      }
+      const std::vector<uint8_t> zero(kPixels, 0);
+      const std::vector<uint8_t>* bounds[] = { &cut, &shallow, &zero };
+      for (const std::vector<uint8_t>* bound : bounds)
+      {
+        const char* what = bound == &cut ? "exact" : (bound == &shallow ? "shallow" : "zero");
+        std::vector<uint8_t> agreed;
+        const Frame f = RenderPredicted(scene, pointers, bound, agreed, unresolved);
+        EXPECT_EQ(agreed, cut) << parts << " processes, " << what;
+        EXPECT_EQ(unresolved > 0, bound != &cut) << parts << " processes, " << what;
+        EXPECT_EQ(f.Pass2Samples, free.Pass2Samples) << parts << " processes, " << what;
+        if (bound == &cut)
+        {
+          EXPECT_LT(f.Pass1Samples, free.Pass1Samples) << parts << " processes";
+        }
+        for (size_t i = 0; i < f.Moments.size(); ++i)
+        {
+          ASSERT_NEAR(f.Moments[i], free.Moments[i], 1e-6 * (1 + std::abs(free.Moments[i])))
+            << parts << " processes, " << what << ", moment " << i;
+        }
+        const std::vector<float> bounded = f.Image();
+        for (size_t i = 0; i < image.size(); ++i)
+        {
+          ASSERT_NEAR(bounded[i], image[i], 1e-5) << parts << " processes, " << what << ", " << i;
+        }
       }
     }
   }

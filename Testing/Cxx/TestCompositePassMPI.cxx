@@ -649,6 +649,54 @@ int main(int argc, char* argv[])
     }
   }
 
+  // Several processes bound pass 1 by the last frame's cut: the same frame again (nothing
+  // left unresolved, no more samples) and a more transparent one after an opaque one (the
+  // bound too shallow: its pixels are marched again) give a fresh pass's images.
+  if (ranks > 1)
+  {
+    auto piece = PuzzlePiece(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    apctest::Scene opaque = puzzle;
+    opaque.TF = apctest::BlueToRedTF(0.0, 1.0, 0.01);
+    apctest::Scene lighter = puzzle;
+    lighter.TF = apctest::BlueToRedTF(0.0, 1.0, 0.05);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, opaque, piece, bounds, 48, false, pass);
+    const std::vector<float> again =
+      RenderDistributed(controller, opaque, piece, bounds, 48, false, pass);
+    const vtkAPCCompositePass::Timings predicted = pass->GetLastTimings();
+    const std::vector<float> shallow =
+      RenderDistributed(controller, lighter, piece, bounds, 48, false, pass);
+    const vtkAPCCompositePass::Timings fallback = pass->GetLastTimings();
+    vtkNew<vtkAPCCompositePass> fresh;
+    const std::vector<float> opaqueFresh =
+      RenderDistributed(controller, opaque, piece, bounds, 48, false, fresh);
+    const vtkAPCCompositePass::Timings unbounded = fresh->GetLastTimings();
+    vtkNew<vtkAPCCompositePass> freshLighter;
+    const std::vector<float> lighterFresh =
+      RenderDistributed(controller, lighter, piece, bounds, 48, false, freshLighter);
+    Check(predicted.OpaquePredictedUnresolved == 0 && unbounded.OpaquePredictedUnresolved == 0 &&
+        predicted.Pass1Samples <= unbounded.Pass1Samples,
+      rank, "the same frame again: its cut predicted, no more samples");
+    Check(fallback.OpaquePredictedUnresolved > 0 && fallback.OpaquePredictedRedone > 0, rank,
+      "a lighter frame after an opaque one: pixels unresolved and marched again");
+    if (rank == 0)
+    {
+      auto near = [](const std::vector<float>& a, const std::vector<float>& b)
+      {
+        double most = a.size() == b.size() && !a.empty() ? 0.0 : 1.0;
+        for (size_t i = 0; i < a.size() && i < b.size(); ++i)
+        {
+          most = std::max(most, static_cast<double>(std::abs(a[i] - b[i])));
+        }
+        return most <= 1e-5;
+      };
+      Check(near(again, opaqueFresh), rank, "predicted cut: a fresh pass's image");
+      Check(near(shallow, lighterFresh), rank, "too shallow a prediction: a fresh pass's image");
+    }
+  }
+
   // Viewports of different sizes (a misconfigured in-situ code): the image buffers would
   // differ in length, so every process must skip the frame, in both modes.
   if (ranks > 1)

@@ -1,0 +1,209 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// APC mode's Stop Where Opaque between pass 1 and the moments' allreduce: the processes'
+// opaque profiles summed, the cut every process then applies, and on several processes pass
+// 1's bound predicted from the last frame's cut, with the pixels it leaves unresolved marched
+// again (apcOpaquePrediction.h; docs/sampler.md proves the cut is the one complete data gives).
+#include "apcCompositeFrame.h"
+#include "apcFrameEngine.h"
+#include "apcOpaqueBins.h"
+#include "apcOpaquePrediction.h"
+#include "apcWireMessages.h"
+
+#include "vtkCommunicator.h"
+#include "vtkMultiProcessController.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace apc
+{
+using wire::Hold;
+using wire::InMessages;
+
+namespace
+{
+// Pass 1 on several processes stops each ray where the largest cut of the last frame within
+// this many pixels ended, plus this many bins (docs/sampler.md: measured on the wind data).
+constexpr int kPredictionRadius = 2;
+constexpr int kPredictionMargin = 1;
+
+// Saturating sums of opaque profiles (apcOpaqueBins.h): exact and order-independent.
+class SaturatingProfileSum : public vtkCommunicator::Operation
+{
+public:
+  void Function(const void* a, void* b, vtkIdType length, int) override
+  {
+    AddProfiles(static_cast<uint16_t*>(b), static_cast<const uint16_t*>(a), length);
+  }
+  int Commutative() override { return 1; }
+};
+
+// This process's opaque profile of a band (values: pixels * OpaqueBins::kBins): one volume's
+// own (no copy), several summed; null without volumes.
+const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentBuffers& buffers)
+{
+  if (frame.Engines.size() == 1 && frame.Engines.front()->GetOpaqueProfile().size() == values)
+  {
+    return frame.Engines.front()->GetOpaqueProfile().data();
+  }
+  uint16_t* profile = Hold(buffers.ProfileLocal, values);
+  std::fill_n(profile, values, uint16_t(0));
+  for (const FrameEngine* engine : frame.Engines)
+  {
+    const std::vector<uint16_t>& volume = engine->GetOpaqueProfile();
+    AddProfiles(profile, volume.data(), std::min(volume.size(), values));
+  }
+  return profile;
+}
+
+// The profiles of the marked tiles summed over every process into summed (band pixels;
+// the other tiles are left as they are): an allreduce of OpaqueBins::kBins 16-bit values per
+// pixel. Every process makes the same calls: a process without volumes sends zeros.
+void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
+  const std::vector<unsigned char>& mask, const uint16_t* mine, uint16_t* summed,
+  MomentBuffers& buffers, FrameRecord& record)
+{
+  constexpr int bins = OpaqueBins::kBins;
+  const size_t count = tiles.PixelsIn(mask) * bins;
+  if (count == 0)
+  {
+    return;
+  }
+  uint16_t* send = Hold(buffers.ProfileSend, count);
+  uint16_t* received = Hold(buffers.ProfileSum, count);
+  tiles.Pack(mask, mine, bins, send);
+  SaturatingProfileSum sum;
+  group.Collective("profile",
+    [&]
+    {
+      InMessages<uint16_t>(count, static_cast<size_t>(frame.Settings.MaxMessageBytes),
+        [&](size_t offset, vtkIdType length)
+        {
+          group.Controller->AllReduce(send + offset, received + offset, length, &sum);
+          ++record.MessagesSent;
+        });
+    });
+  tiles.Unpack(mask, received, bins, summed);
+  record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
+}
+
+// With a predicted bound: the pixels whose summed profile does not reach the threshold by it
+// have an unknown cut. Every process finds the same ones (the profile is summed), marches
+// their marcher tiles again without the bound and sums those tiles' profiles again, so the
+// cut is the one without a prediction. The tiles join covered (they may hold samples now).
+void ResolvePredictedCut(const ProcessGroup& group, const CompositeFrame& frame,
+  const RowBand& band, const TileGrid& tiles, std::vector<unsigned char>& covered,
+  std::vector<std::vector<double>>& own, double* moments, size_t pixels, uint16_t* summed,
+  MomentBuffers& buffers, FrameRecord& record)
+{
+  uint8_t* unresolved = Hold(buffers.Unresolved, pixels);
+  const size_t open = MarkUnresolved(buffers.Bound.data(), summed, pixels, unresolved);
+  record.OpaquePredictedUnresolved += static_cast<vtkIdType>(open);
+  if (open == 0)
+  {
+    return;
+  }
+  for (size_t e = 0; e < frame.Engines.size(); ++e)
+  {
+    if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+    {
+      frame.Engines[e]->RedoOpaqueTiles(
+        frame.Moments, unresolved, own.empty() ? moments : own[e].data(), band);
+    }
+  }
+  // The marcher's tiles marched again, then the wire's tiles inside them (they divide them).
+  constexpr int size = VolumeRayMarcher::kTileSize;
+  const int width = frame.RectWidth();
+  const size_t across = static_cast<size_t>((width + size - 1) / size);
+  std::vector<uint8_t> redone(across * ((pixels / width + size - 1) / size), 0);
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    if (unresolved[p])
+    {
+      redone[(p / width / size) * across + (p % width) / size] = 1;
+    }
+  }
+  record.OpaquePredictedRedone +=
+    static_cast<vtkIdType>(std::count(redone.begin(), redone.end(), uint8_t(1)));
+  const std::vector<unsigned char> mask = tiles.Mark(
+    [&](size_t pixel) { return redone[(pixel / width / size) * across + (pixel % width) / size]; });
+  SumProfiles(group, frame, tiles, mask, LocalProfile(frame, pixels * OpaqueBins::kBins, buffers),
+    summed, buffers, record);
+  for (size_t t = 0; t < covered.size() && t < mask.size(); ++t)
+  {
+    covered[t] = covered[t] || mask[t];
+  }
+}
+
+} // namespace
+
+// With Stop Where Opaque: every volume's opaque profile summed over the covered tiles of
+// every process, then each volume's own moments (own[e], or moments with one volume) cut
+// where the sum is opaque and summed into moments (pixels * stride values). With a predicted
+// bound (buffers.Bound, several processes), unresolved pixels are resolved first. The agreed
+// cut is remembered for the next frame's prediction.
+void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+  const TileGrid& tiles, std::vector<unsigned char>& covered, std::vector<std::vector<double>>& own,
+  double* moments, size_t pixels, bool bounded, MomentBuffers& buffers, FrameRecord& record)
+{
+  constexpr int bins = OpaqueBins::kBins;
+  const size_t values = pixels * bins;
+  const uint16_t* mine = LocalProfile(frame, values, buffers);
+  uint16_t* summed = nullptr;
+  if (group.Parallel)
+  {
+    summed = Hold(buffers.Profile, values);
+    std::fill_n(summed, values, uint16_t(0)); // the uncovered tiles have no samples anywhere
+    SumProfiles(group, frame, tiles, covered, mine, summed, buffers, record);
+    mine = summed;
+  }
+  record.Clock.Lap("profile");
+  if (bounded && summed)
+  {
+    ResolvePredictedCut(
+      group, frame, band, tiles, covered, own, moments, pixels, summed, buffers, record);
+  }
+  for (size_t e = 0; e < frame.Engines.size(); ++e)
+  {
+    if (!frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+    {
+      continue;
+    }
+    frame.Engines[e]->ApplyOpaqueCut(
+      frame.Moments, mine, own.empty() ? moments : own[e].data(), band);
+  }
+  if (summed && buffers.Cuts.Valid)
+  {
+    const int width = frame.RectWidth();
+    uint8_t* cuts = buffers.Cuts.Cut.data() + static_cast<size_t>(band.J0) * width;
+    for (size_t p = 0; p < pixels; ++p)
+    {
+      cuts[p] = static_cast<uint8_t>(CutBin(summed + p * bins));
+    }
+  }
+  if (!own.empty())
+  {
+    const size_t length = pixels * (frame.Moments.Moments + 1);
+    std::fill_n(moments, length, 0.0);
+    for (const std::vector<double>& volume : own)
+    {
+      std::transform(volume.begin(), volume.begin() + length, moments, moments,
+        [](double a, double b) { return a + b; });
+    }
+  }
+  record.Clock.Lap("cut");
+}
+
+bool PredictOpaqueBand(
+
+  const CompositeFrame& frame, const RowBand& band, size_t pixels, MomentBuffers& buffers)
+{
+  const OpaqueCutMemory& previous = buffers.PreviousCuts;
+  return buffers.Cuts.Valid &&
+    PredictOpaqueBound(previous, buffers.Cuts.Image, frame.Rect.I0, frame.Rect.J0 + band.J0,
+      frame.RectWidth(), band.J1 - band.J0, kPredictionRadius, kPredictionMargin,
+      Hold(buffers.Bound, pixels));
+}
+
+} // namespace apc

@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What the APC mode's collectives share (apcMomentCompositing.cxx, apcOpaqueCompositing.cxx):
+// buffers that only grow, and messages of a bounded size. Internal to APC's rendering module.
+#ifndef apcWireMessages_h
+#define apcWireMessages_h
+
+#include "vtkType.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace apc
+{
+namespace wire
+{
+// v's first n values (v grows if it must and never shrinks: see MomentBuffers).
+template <class T>
+T* Hold(std::vector<T>& v, size_t n)
+{
+  if (v.size() < n)
+  {
+    v.resize(n);
+  }
+  return v.data();
+}
+
+// Calls message(offset, count) over [0, total) values of T, at most maxBytes at a time
+// (Settings.MaxMessageBytes: Open MPI maps a fresh temporary for an allreduce of 32 MB or
+// more on every call, see vtkAPCCompositePass.h). Every process cuts the same total the same
+// way, so the messages pair up.
+template <class T, class Message>
+void InMessages(size_t total, size_t maxBytes, Message message)
+{
+  const size_t step = std::max<size_t>(1, maxBytes / sizeof(T));
+  for (size_t offset = 0; offset < total; offset += step)
+  {
+    message(offset, static_cast<vtkIdType>(std::min(step, total - offset)));
+  }
+}
+
+} // namespace wire
+} // namespace apc
+
+#endif
