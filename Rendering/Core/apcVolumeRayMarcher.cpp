@@ -334,7 +334,8 @@ void VolumeRayMarcher::RedoOpaqueTiles(const TransferTable& table, const LogDept
   }
   const bool caching = cache.Valid && cache.Table == &table && cache.Moments == N;
   cache.Record = caching && cache.Arena.Capacity() > 0;
-  visitors::Moments<N> visitor(moments, width, &warp, caching ? &cache : nullptr);
+  const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
+  visitors::Moments<N> visitor(moments, width, &latticeWarp, caching ? &cache : nullptr);
   visitor.KeepOrder = true;
   const uint8_t* bound = this->Bound;
   this->Bound = nullptr;
