@@ -12,6 +12,7 @@
 #include "apcCompositeFrame.h"
 #include "apcFixedPointMoments.h"
 #include "apcFrameEngine.h"
+#include "apcHugePages.h"
 #include "apcResolve.h"
 
 #include "vtkCommunicator.h"
@@ -38,6 +39,7 @@ T* Hold(std::vector<T>& v, size_t n)
 {
   if (v.size() < n)
   {
+    ReserveInHugePages(v, n);
     v.resize(n);
   }
   return v.data();

@@ -7,6 +7,7 @@
 #define apcHugePages_h
 
 #include <cstddef>
+#include <utility>
 
 namespace apc
 {
@@ -24,6 +25,27 @@ void FreeHugeBlock(void* block, size_t bytes);
 // Asks for huge pages in the whole 2 MiB pages inside [memory, memory + bytes) (a heap
 // block: the allocator keeps owning it, so that its own reuse of freed memory is unchanged).
 void AdviseHugePages(void* memory, size_t bytes);
+
+// Room for n elements in v, its contents kept: a block it must allocate afresh is advised huge
+// pages before anything touches it. For the large buffers a frame fills (moments, colour
+// sums, opaque profiles, its image): a first frame pages them all in, and in 4 KiB pages
+// that costs more than filling them.
+template <class Vector>
+void ReserveInHugePages(Vector& v, size_t n)
+{
+  if (v.capacity() >= n)
+  {
+    return;
+  }
+  Vector fresh;
+  fresh.reserve(n);
+  if (n * sizeof(typename Vector::value_type) >= kMinHugeBlockBytes)
+  {
+    AdviseHugePages(fresh.data(), n * sizeof(typename Vector::value_type));
+  }
+  fresh.assign(v.begin(), v.end());
+  v.swap(fresh);
+}
 
 } // namespace apc
 

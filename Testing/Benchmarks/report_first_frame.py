@@ -3,18 +3,21 @@
     python3 report_first_frame.py A.csv [B.csv ...] > table.md
 
 One column group per CSV (its properties and size in the heading): the first frame's seconds,
-the median later frame's and the difference, per part. frame_cpu is the process CPU time of the
-whole Render() (the robust number on a loaded machine); the other parts are wall seconds of
-rank 0: outside_apc is Render() minus APC's stages (ParaView's own first-render work), agree
-holds the conversion of the VTK grid, pass1 the view's set-up (ray ends, binning) and the
-first touch of pass 1's memory.
+the same view's again (no camera move: the same samples), the median later frame's and the
+first's extra over it, per part. frame_cpu is the process CPU time of the whole Render() (the
+robust number on a loaded machine), frame_sys_cpu its system part (mostly page faults),
+page_faults its minor page faults; the other parts are wall seconds of rank 0: outside_apc is
+Render() minus APC's stages (ParaView's own first-render work), agree holds the conversion of
+the VTK grid, pass1 the view's set-up (ray ends, binning) and the first touch of pass 1's memory.
 """
 
 import csv
 import sys
 
-ORDER = ["frame_cpu", "frame_wall", "outside_apc", "agree", "depth", "pass1", "tiles",
-         "allreduce", "pass2", "reduce", "resolve", "ranks", "blend", "total"]
+ORDER = ["frame_cpu", "frame_sys_cpu", "page_faults", "frame_wall", "outside_apc", "agree",
+         "depth", "pass1", "tiles", "profile", "cut", "allreduce", "pass2", "reduce", "resolve",
+         "ranks", "blend", "total"]
+COLUMNS = ["first_s", "same_s", "later_s", "extra_s"]
 
 
 def main(paths):
@@ -29,7 +32,8 @@ def main(paths):
             first["width"], first["height"], int(first["ranks"]),
             "" if first["ranks"] == "1" else "s",
             ", " + first["properties"] if first["properties"] else "", first["load_average"])
-        heads += ["first (%s)" % what, "later", "extra"]
+        heads += ["first (%s)" % what] + (["same view"] if "same_s" in first else []) + [
+            "later", "extra"]
     print("| " + " | ".join(heads) + " |")
     print("|" + "---|" * len(heads))
     for part in ORDER:
@@ -38,7 +42,8 @@ def main(paths):
         for _, rows in runs:
             row = rows.get(part)
             present = present or row is not None
-            cells += ([row["first_s"], row["later_s"], row["extra_s"]] if row else ["", "", ""])
+            width = sum(1 for c in COLUMNS if c in rows[ORDER[0]])
+            cells += [row[c] for c in COLUMNS if c in row] if row else [""] * width
         if present:
             print("| " + " | ".join(cells) + " |")
 
