@@ -28,8 +28,10 @@ void AdviseHugePages(void* memory, size_t bytes);
 
 // Room for n elements in v, its contents kept: a block it must allocate afresh is advised huge
 // pages before anything touches it. For the large buffers a frame fills (moments, colour
-// sums, opaque profiles, its image): a first frame pages them all in, and in 4 KiB pages
-// that costs more than filling them.
+// sums, opaque profiles, wire buffers, its image): a first frame pages them all in, and in
+// 4 KiB pages that costs more than filling them. A block grows by a quarter more than asked
+// (address space only, untouched until used), so that buffers sized by what a frame covers
+// are not allocated, and paged in, afresh whenever a frame covers a little more.
 template <class Vector>
 void ReserveInHugePages(Vector& v, size_t n)
 {
@@ -37,11 +39,12 @@ void ReserveInHugePages(Vector& v, size_t n)
   {
     return;
   }
+  const size_t room = n + n / 4;
   Vector fresh;
-  fresh.reserve(n);
-  if (n * sizeof(typename Vector::value_type) >= kMinHugeBlockBytes)
+  fresh.reserve(room);
+  if (room * sizeof(typename Vector::value_type) >= kMinHugeBlockBytes)
   {
-    AdviseHugePages(fresh.data(), n * sizeof(typename Vector::value_type));
+    AdviseHugePages(fresh.data(), room * sizeof(typename Vector::value_type));
   }
   fresh.assign(v.begin(), v.end());
   v.swap(fresh);
