@@ -4,6 +4,8 @@
 #ifndef apcWireMessages_h
 #define apcWireMessages_h
 
+#include "apcHugePages.h"
+
 #include "vtkType.h"
 
 #include <algorithm>
@@ -20,6 +22,7 @@ T* Hold(std::vector<T>& v, size_t n)
 {
   if (v.size() < n)
   {
+    ReserveInHugePages(v, n);
     v.resize(n);
   }
   return v.data();

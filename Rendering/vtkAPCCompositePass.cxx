@@ -19,6 +19,7 @@
 #include "apcFrameSettings.h"
 #include "apcFrameStart.h"
 #include "apcFrameTimings.h"
+#include "apcHugePages.h"
 #include "apcImageOutput.h"
 #include "apcNodeThreads.h"
 #include "apcSettingChecks.h"
@@ -38,6 +39,7 @@ struct vtkAPCCompositePass::Internals
   std::vector<apc::VolumeEntry> Volumes;
   apc::FrameRecord Record;
   apc::MomentBuffers Buffers; // APC mode's, kept between frames
+  apc::FrameResult Result;    // emptied every frame, its memory kept (see MomentBuffers)
   int LastMode = -1;
   int LastReduction = 0;
   bool LastInteractive = false;
@@ -294,7 +296,11 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
 
   const int mode = this->ChooseMode(group, frame);
   internal.LastMode = mode;
-  apc::FrameResult result;
+  apc::FrameResult& result = internal.Result;
+  result.RGBA.clear();
+  result.Moments.clear();
+  result.ColourSums.clear();
+  apc::ReserveInHugePages(result.RGBA, 4 * frame.RectPixels());
   const double before = internal.Record.Clock.Get(nullptr);
   switch (mode)
   {

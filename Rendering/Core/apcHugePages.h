@@ -7,6 +7,7 @@
 #define apcHugePages_h
 
 #include <cstddef>
+#include <utility>
 
 namespace apc
 {
@@ -24,6 +25,30 @@ void FreeHugeBlock(void* block, size_t bytes);
 // Asks for huge pages in the whole 2 MiB pages inside [memory, memory + bytes) (a heap
 // block: the allocator keeps owning it, so that its own reuse of freed memory is unchanged).
 void AdviseHugePages(void* memory, size_t bytes);
+
+// Room for n elements in v, its contents kept: a block it must allocate afresh is advised huge
+// pages before anything touches it. For the large buffers a frame fills (moments, colour
+// sums, opaque profiles, wire buffers, its image): a first frame pages them all in, and in
+// 4 KiB pages that costs more than filling them. A block grows by a quarter more than asked
+// (address space only, untouched until used), so that buffers sized by what a frame covers
+// are not allocated, and paged in, afresh whenever a frame covers a little more.
+template <class Vector>
+void ReserveInHugePages(Vector& v, size_t n)
+{
+  if (v.capacity() >= n)
+  {
+    return;
+  }
+  const size_t room = n + n / 4;
+  Vector fresh;
+  fresh.reserve(room);
+  if (room * sizeof(typename Vector::value_type) >= kMinHugeBlockBytes)
+  {
+    AdviseHugePages(fresh.data(), room * sizeof(typename Vector::value_type));
+  }
+  fresh.assign(v.begin(), v.end());
+  v.swap(fresh);
+}
 
 } // namespace apc
 

@@ -56,28 +56,43 @@ struct SampleSpan
   CachedSample& operator[](size_t i) const { return this->Data[i]; }
 };
 
+// A tile's lattice bits (CachedTile::K16) in the cache's arena, after its samples.
+struct OrderSpan
+{
+  uint16_t* Data = nullptr;
+  size_t Size = 0;
+
+  uint16_t* data() const { return this->Data; }
+  size_t size() const { return this->Size; }
+  uint16_t& operator[](size_t i) const { return this->Data[i]; }
+  void resize(size_t n) { this->Size = std::min(n, this->Size); } // only ever shrinks
+};
+
 // A tile's samples grouped by pixel: pixel p's are Samples[Starts[p] .. Starts[p + 1]), in
 // the order pass 1 took them. K16, kept only for a pass 1 that keeps its own moments
 // (Hybrid), holds the low 16 bits of each sample's lattice index, which order the samples of
 // a pixel whose float depths tie, for the Hybrid resolve's exact own transmittance. The
-// samples live in the cache's arena; Starts and K16 keep their memory from frame to frame (K16
-// grows by a quarter more than it needs).
+// samples and K16 live in the cache's arena (huge pages, refilled frame after frame: per-tile
+// vectors of K16 took ~13,000 fresh 4 KiB pages on the first 1024^2 wind frame); Starts keeps
+// its memory from frame to frame.
 struct CachedTile
 {
   UninitializedVector<uint32_t> Starts;
   SampleSpan Samples;
-  UninitializedVector<uint16_t> K16;
+  OrderSpan K16;
 
+  // K16's room in the arena after n samples (whole 8-byte words: the arena's unit).
+  static size_t OrderBytes(size_t n) { return (n * sizeof(uint16_t) + 7) / 8 * 8; }
   size_t Bytes() const
   {
     return this->Starts.capacity() * sizeof(uint32_t) +
-      this->Samples.size() * sizeof(CachedSample) + this->K16.capacity() * sizeof(uint16_t);
+      this->Samples.size() * sizeof(CachedSample) + OrderBytes(this->K16.size());
   }
   void Clear()
   {
     this->Starts.clear();
     this->Samples = SampleSpan();
-    this->K16.clear();
+    this->K16 = OrderSpan();
   }
   void Free() { *this = CachedTile(); }
 };
@@ -102,16 +117,6 @@ struct RecordBuffer
 
 struct SampleCache
 {
-  template <class Vector>
-  static void Reserve(Vector& v, size_t n)
-  {
-    if (v.capacity() < n)
-    {
-      v = Vector();
-      v.reserve(n + n / 4);
-    }
-  }
-
   std::vector<CachedTile> Tiles;
   SampleArena Arena;
   tbb::enumerable_thread_specific<RecordBuffer> Buffers;
@@ -215,13 +220,13 @@ struct SampleCache
       return;
     }
     cached.Clear();
-    Reserve(cached.K16, withOrder ? n : 0);
     cached.Starts.resize(static_cast<size_t>(pixels) + 1);
-    cached.K16.resize(withOrder ? n : 0);
-    const size_t bytes = cached.Bytes() + n * sizeof(CachedSample);
+    const size_t orderBytes = withOrder ? CachedTile::OrderBytes(n) : 0;
+    const size_t arenaBytes = n * sizeof(CachedSample) + orderBytes;
+    const size_t bytes = cached.Bytes() + arenaBytes;
     CachedSample* memory = nullptr;
     if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes ||
-      !(memory = static_cast<CachedSample*>(this->Arena.Take(n * sizeof(CachedSample)))))
+      !(memory = static_cast<CachedSample*>(this->Arena.Take(arenaBytes))))
     {
       this->Bytes.fetch_sub(bytes);
       this->Record = false;
@@ -229,6 +234,10 @@ struct SampleCache
       return;
     }
     cached.Samples = { memory, n };
+    if (withOrder)
+    {
+      cached.K16 = { reinterpret_cast<uint16_t*>(memory + n), n };
+    }
     // A stable counting sort: each pixel's samples stay in the order they were taken.
     uint32_t* starts = cached.Starts.data();
     starts[0] = 0;

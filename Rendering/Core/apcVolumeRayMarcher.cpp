@@ -3,6 +3,7 @@
 #include "apcCellInterpolation.h"
 #include "apcColourVisitors.h"
 #include "apcCompressedRows.h"
+#include "apcHugePages.h"
 #include "apcLatticeJitter.h"
 #include "apcOpaqueCut.h"
 #include "apcParallel.h"
@@ -189,8 +190,11 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   const size_t bandPixels = this->Camera ? static_cast<size_t>(this->Width()) *
       static_cast<size_t>(std::max(0, std::min(rows.J1, this->Camera->GetHeight()) - rows.J0))
                                          : 0;
-  this->Profile.assign(this->Opaque.Active() ? bandPixels * OpaqueBins::kBins : 0, 0);
-  this->LastBin.assign(this->Opaque.Active() ? bandPixels : 0, 0);
+  const size_t profiled = this->Opaque.Active() ? bandPixels : 0;
+  ReserveInHugePages(this->Profile, profiled * OpaqueBins::kBins);
+  this->Profile.assign(profiled * OpaqueBins::kBins, 0);
+  ReserveInHugePages(this->LastBin, profiled);
+  this->LastBin.assign(profiled, 0);
   this->Cut.clear();
   visitor.KeepOrder = this->Opaque.Active(); // the cut reads the cached samples' bins
   if (keepOwn && this->Camera)

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #if defined(__linux__)
 #include <sys/resource.h>
@@ -103,5 +104,30 @@ TEST(HugePages, FillingABlockTakesFewPageFaults)
   const size_t heapBytes = bytes + apc::kHugePageBytes;
   apc::UninitializedVector<unsigned char> heap(heapBytes);
   EXPECT_LT(FaultsToFill(heap.data(), heapBytes), 2048);
+#endif
+}
+
+// A frame's buffers (plain vectors) grown in huge pages: contents kept, and a large buffer
+// filled with few page faults where the system offers huge pages.
+TEST(HugePages, ReservedVectorsKeepTheirValuesAndTakeFewFaults)
+{
+  std::vector<double> values = { 1.0, 2.0, 3.0 };
+  apc::ReserveInHugePages(values, 5);
+  ASSERT_GE(values.capacity(), 5u);
+  EXPECT_EQ(values, (std::vector<double>{ 1.0, 2.0, 3.0 }));
+  const double* memory = values.data();
+  apc::ReserveInHugePages(values, 4); // room enough: nothing moves
+  EXPECT_EQ(values.data(), memory);
+#if defined(__linux__)
+  if (!HugePagesOffered())
+  {
+    GTEST_SKIP() << "the system offers no transparent huge pages";
+  }
+  const size_t bytes = 9 * apc::kHugePageBytes; // 4608 pages of 4 KiB, at least 8 huge ones
+  std::vector<unsigned char> buffer;
+  apc::ReserveInHugePages(buffer, bytes);
+  const long before = MinorFaults();
+  buffer.assign(bytes, 1); // what a frame does with its buffers
+  EXPECT_LT(MinorFaults() - before, 2048);
 #endif
 }

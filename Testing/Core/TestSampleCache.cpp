@@ -1,6 +1,6 @@
 // The sample cache alone: a tile's recorded samples grouped by pixel in the order they were
-// taken, sized exactly, the lattice bits kept only when asked, the budget, and the default
-// budget's rule.
+// taken, sized exactly, the lattice bits kept only when asked (in the arena, after the
+// samples), the budget, and the default budget's rule.
 #include "apcSampleCache.h"
 
 #include <gtest/gtest.h>
@@ -59,13 +59,18 @@ TEST(SampleCache, GroupsByPixelInTakenOrder)
     {
       EXPECT_EQ(tile.K16[i], recorded[taken[i]].K16) << i;
     }
-    // The samples sized exactly (in the arena), the lattice bits with a quarter's slack at
-    // most, and counted as such against the budget.
+    // The samples sized exactly, the lattice bits right after them in the arena (its huge
+    // pages, no memory of the tile's own) in whole 8-byte words, and counted as such against
+    // the budget.
     EXPECT_EQ(tile.Samples.size(), 6u);
+    if (withOrder)
+    {
+      EXPECT_EQ(static_cast<const void*>(tile.K16.data()),
+        static_cast<const void*>(tile.Samples.data() + 6));
+    }
     EXPECT_EQ(cache.Bytes.load(), tile.Bytes());
-    EXPECT_LE(cache.Bytes.load(),
-      (kPixels + 1) * sizeof(uint32_t) + 6 * sizeof(apc::CachedSample) +
-        (withOrder ? 7 * sizeof(uint16_t) : 0));
+    EXPECT_EQ(cache.Bytes.load(),
+      (kPixels + 1) * sizeof(uint32_t) + 6 * sizeof(apc::CachedSample) + (withOrder ? 16 : 0));
   }
 }
 
