@@ -90,7 +90,10 @@ TEST(DepthWarp, LatticeTableIsTheWarpBitForBit)
     const apc::LogDepthWarp warp(c.Near, c.Far);
     const apc::LatticeDepthWarp lattice(warp, c.Spacing);
     EXPECT_EQ(lattice.GetNumberOfEntries() > 0, c.Tabulated) << c.Near;
-    const int64_t first = static_cast<int64_t>(std::floor(warp.Near() / c.Spacing)) - 20;
+    // A warp without a finite near plane has no table: walk the indices from 0 (the cast of a
+    // non-finite quotient would be undefined).
+    const double nearIndex = std::floor(warp.Near() / c.Spacing);
+    const int64_t first = (std::isfinite(nearIndex) ? static_cast<int64_t>(nearIndex) : 0) - 20;
     const int64_t last = static_cast<int64_t>(std::ceil(c.Far / c.Spacing)) + 20;
     const int64_t step = std::max<int64_t>(1, (last - first) / 5000);
     for (int64_t k = first; k <= last; k += step)
