@@ -67,6 +67,35 @@ std::array<uint16_t, OpaqueBins::kBins> Pass1(const OpaqueBins& bins, std::vecto
   }
   return profile;
 }
+
+// A random ray of 1-400 samples spread over processes, with noisy visiting orders.
+std::vector<Sample> RandomRay(const OpaqueBins& bins, int processes, std::mt19937& rng)
+{
+  const int count = std::uniform_int_distribution<int>(1, 400)(rng);
+  const double mean = std::uniform_real_distribution<double>(0.005, 0.5)(rng);
+  const double noise = std::uniform_real_distribution<double>(0.0, 80.0)(rng);
+  std::exponential_distribution<double> absorbance(1.0 / mean);
+  std::vector<Sample> samples;
+  for (int s = 0; s < count; ++s)
+  {
+    const int64_t k = bins.Base + std::uniform_int_distribution<int64_t>(-5, 420)(rng);
+    const int process = std::uniform_int_distribution<int>(0, processes - 1)(rng);
+    samples.push_back({ k, absorbance(rng), process,
+      static_cast<double>(k) + std::uniform_real_distribution<double>(0.0, noise)(rng) });
+  }
+  return samples;
+}
+
+// The cut of every sample's profile: what one process with all of them finds.
+int CompleteCut(const OpaqueBins& bins, const std::vector<Sample>& samples)
+{
+  std::array<uint16_t, OpaqueBins::kBins> complete{};
+  for (const Sample& s : samples)
+  {
+    complete[bins.Of(s.K)] = OpaqueBins::Add(complete[bins.Of(s.K)], bins.Quanta(s.Absorbance));
+  }
+  return apc::CutBin(complete.data());
+}
 }
 
 TEST(OpaqueCut, BinsFollowTheLattice)
@@ -105,24 +134,8 @@ TEST(OpaqueCut, ProfilesSummedOverProcessesGiveTheCompleteCut)
   for (int trial = 0; trial < 4000; ++trial)
   {
     const int processes = 1 + trial % 4;
-    const int count = std::uniform_int_distribution<int>(1, 400)(rng);
-    const double mean = std::uniform_real_distribution<double>(0.005, 0.5)(rng);
-    const double noise = std::uniform_real_distribution<double>(0.0, 80.0)(rng);
-    std::exponential_distribution<double> absorbance(1.0 / mean);
-    std::vector<Sample> samples;
-    for (int s = 0; s < count; ++s)
-    {
-      const int64_t k = bins.Base + std::uniform_int_distribution<int64_t>(-5, 420)(rng);
-      const int process = std::uniform_int_distribution<int>(0, processes - 1)(rng);
-      samples.push_back({ k, absorbance(rng), process,
-        static_cast<double>(k) + std::uniform_real_distribution<double>(0.0, noise)(rng) });
-    }
-    std::array<uint16_t, OpaqueBins::kBins> complete{};
-    for (const Sample& s : samples)
-    {
-      complete[bins.Of(s.K)] = OpaqueBins::Add(complete[bins.Of(s.K)], bins.Quanta(s.Absorbance));
-    }
-    const int expected = apc::CutBin(complete.data());
+    std::vector<Sample> samples = RandomRay(bins, processes, rng);
+    const int expected = CompleteCut(bins, samples);
 
     std::vector<bool> taken(samples.size(), false);
     std::array<uint16_t, OpaqueBins::kBins> summed{};
@@ -165,26 +178,10 @@ TEST(OpaqueCut, APredictedBoundGivesTheCompleteCutOrLeavesItUnresolved)
   for (int trial = 0; trial < 4000; ++trial)
   {
     const int processes = 2 + trial % 3;
-    const int count = std::uniform_int_distribution<int>(1, 400)(rng);
-    const double mean = std::uniform_real_distribution<double>(0.005, 0.5)(rng);
-    const double noise = std::uniform_real_distribution<double>(0.0, 80.0)(rng);
+    std::vector<Sample> samples = RandomRay(bins, processes, rng);
+    const int expected = CompleteCut(bins, samples);
     const uint8_t bound =
       static_cast<uint8_t>(std::uniform_int_distribution<int>(0, OpaqueBins::kBins - 1)(rng));
-    std::exponential_distribution<double> absorbance(1.0 / mean);
-    std::vector<Sample> samples;
-    for (int s = 0; s < count; ++s)
-    {
-      const int64_t k = bins.Base + std::uniform_int_distribution<int64_t>(-5, 420)(rng);
-      const int process = std::uniform_int_distribution<int>(0, processes - 1)(rng);
-      samples.push_back({ k, absorbance(rng), process,
-        static_cast<double>(k) + std::uniform_real_distribution<double>(0.0, noise)(rng) });
-    }
-    std::array<uint16_t, OpaqueBins::kBins> complete{};
-    for (const Sample& s : samples)
-    {
-      complete[bins.Of(s.K)] = OpaqueBins::Add(complete[bins.Of(s.K)], bins.Quanta(s.Absorbance));
-    }
-    const int expected = apc::CutBin(complete.data());
 
     std::vector<bool> taken(samples.size(), false);
     std::array<uint16_t, OpaqueBins::kBins> summed{};
