@@ -1,0 +1,132 @@
+// Run under mpirun -np N. A frame that some process cannot render, or that the processes set
+// up differently (a misconfigured in-situ code: a rank without the scalar array or without any
+// APC volume, viewports of different sizes, different compositing modes or wire precisions)
+// is skipped on every process instead of leaving one waiting in a collective; settings one
+// process alone changes that can be agreed (Stop Where Opaque) still render, and so does a
+// 1x1 window.
+
+#include "apcCompositePassRenders.h"
+#include "apcMPITest.h"
+#include "vtkAPCCompositePass.h"
+#include "vtkAPCVolumeMapper.h"
+
+#include "vtkMPIController.h"
+#include "vtkNew.h"
+#include "vtkPointData.h"
+#include "vtkSmartPointer.h"
+#include "vtkUnstructuredGrid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+using apctest::Check;
+using apctest::GlobalBounds;
+using apctest::PuzzleShare;
+using apctest::RenderDistributed;
+
+int main(int argc, char* argv[])
+{
+  vtkSmartPointer<vtkMPIController> controller = apctest::StartMPI(&argc, &argv);
+  const int rank = controller->GetLocalProcessId();
+  const int ranks = controller->GetNumberOfProcesses();
+  const apctest::Scene puzzle = apctest::PuzzleScene(ranks);
+
+  // A rank without the scalar array: every rank must skip the frame, none may hang.
+  {
+    auto piece = PuzzleShare(rank, ranks, ranks);
+    if (rank == ranks - 1)
+    {
+      piece->GetPointData()->RemoveArray("Spheres");
+    }
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+    Check(pass->GetLastFrameFailed(), rank, "missing scalars: the frame is skipped everywhere");
+  }
+
+  // A process without any APC volume (a misconfigured in-situ code): every process must skip
+  // the frame instead of waiting for it in a collective.
+  if (ranks > 1)
+  {
+    auto piece = PuzzleShare(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass, rank != ranks - 1);
+    Check(pass->GetLastFrameFailed(), rank, "a process without a volume: frame skipped everywhere");
+  }
+
+  // Stop Where Opaque on one process only (a script that sets it on some ranks): the profile's
+  // allreduce is agreed, so every process joins it and the frame ends everywhere.
+  if (ranks > 1)
+  {
+    auto piece = PuzzleShare(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass, true,
+      vtkAPCVolumeMapper::RENORMALISED, nullptr, rank == 0);
+    Check(!pass->GetLastFrameFailed(), rank, "Stop Where Opaque on one process: frame rendered");
+  }
+
+  // Viewports of different sizes (a misconfigured in-situ code): the image buffers would
+  // differ in length, so every process must skip the frame, in both modes.
+  if (ranks > 1)
+  {
+    for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
+    {
+      auto piece = PuzzleShare(rank, ranks, ranks);
+      double bounds[6];
+      GlobalBounds(controller, piece, bounds);
+      vtkNew<vtkAPCCompositePass> pass;
+      pass->SetCompositeMode(mode);
+      RenderDistributed(controller, puzzle, piece, bounds, rank == 0 ? 32 : 40, false, pass);
+      Check(pass->GetLastFrameFailed(), rank, "viewports differ: frame skipped everywhere");
+    }
+  }
+
+  // Processes set to different compositing modes or wire precisions (a misconfigured in-situ
+  // code) would run different collectives: every process must skip the frame.
+  if (ranks > 1)
+  {
+    for (int odd : { 0, 1 })
+    {
+      auto piece = PuzzleShare(rank, ranks, ranks);
+      double bounds[6];
+      GlobalBounds(controller, piece, bounds);
+      vtkNew<vtkAPCCompositePass> pass;
+      if (rank == ranks - 1)
+      {
+        if (odd == 0)
+        {
+          pass->SetCompositeMode(vtkAPCCompositePass::SEGMENTS);
+        }
+        else
+        {
+          pass->SetCompositeInDouble(true);
+        }
+      }
+      RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+      Check(pass->GetLastFrameFailed(), rank,
+        odd == 0 ? "modes differ: frame skipped everywhere"
+                 : "wire precisions differ: frame skipped everywhere");
+    }
+  }
+
+  // A 1x1 window, in both modes.
+  for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
+  {
+    auto piece = PuzzleShare(rank, ranks, ranks);
+    double bounds[6];
+    GlobalBounds(controller, piece, bounds);
+    vtkNew<vtkAPCCompositePass> pass;
+    pass->SetCompositeMode(mode);
+    RenderDistributed(controller, puzzle, piece, bounds, 1, false, pass);
+    Check(!pass->GetLastFrameFailed(), rank, "1x1 window renders");
+  }
+
+  return apctest::FinishMPITest(controller);
+}

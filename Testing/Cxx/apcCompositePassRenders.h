@@ -1,0 +1,61 @@
+// What the composite pass's MPI tests share: a distributed render of each rank's piece through
+// vtkAPCCompositePass and the one-process render of the whole data it is checked against, the
+// global bounds, and the scenes (the gear-teeth puzzle, the wind data's Scotch pieces).
+#ifndef apcCompositePassRenders_h
+#define apcCompositePassRenders_h
+
+#include "apcTestScenes.h"
+#include "vtkAPCPuzzleSource.h"
+#include "vtkAPCVolumeMapper.h"
+
+#include "vtkSmartPointer.h"
+
+#include <vector>
+
+class vtkAPCCompositePass;
+class vtkMPIController;
+class vtkUnstructuredGrid;
+
+namespace apctest
+{
+
+// The display rank's float RGBA of the distributed render of each rank's piece (empty on the
+// other ranks, and where the frame failed). `plane`: opaque geometry through the middle of the
+// data on the display rank; `shown`: the window's RGB bytes, and no float image kept.
+std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& scene,
+  vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
+  vtkAPCCompositePass* pass, bool withVolume = true, int resolve = vtkAPCVolumeMapper::RENORMALISED,
+  std::vector<unsigned char>* shown = nullptr, bool stopWhereOpaque = true);
+
+// The one-process image of the whole grid (the reference), MBOIT or EXACT.
+std::vector<float> RenderWhole(
+  const Scene& scene, int size, bool plane, int mode = vtkAPCVolumeMapper::MBOIT);
+
+// The bounds of all ranks' pieces together (every rank joins).
+void GlobalBounds(vtkMPIController* controller, vtkUnstructuredGrid* piece, double bounds[6]);
+
+// The largest absolute difference of two images; 1 if their sizes differ or both are empty.
+double MaxAbsDifference(const std::vector<float>& a, const std::vector<float>& b);
+
+Scene MakeScene(
+  vtkUnstructuredGrid* grid, const TransferFunction& tf, double spacing, const View& view);
+
+// Piece `piece` of `pieces` (a rank's share) of the puzzle source's gear teeth (SANDWICH) or
+// spheres cut in `puzzlePieces` puzzle pieces.
+vtkSmartPointer<vtkUnstructuredGrid> PuzzleShare(
+  int piece, int pieces, int puzzlePieces, int field = vtkAPCPuzzleSource::SPHERES);
+
+// The spheres puzzle of `puzzlePieces` pieces seen obliquely, the whole data on one process:
+// every piece's bounds overlap every other's.
+Scene PuzzleScene(int puzzlePieces);
+
+// The wind data's 8 Scotch pieces dealt round robin: rank r owns pieces r, r + N, ...
+vtkSmartPointer<vtkUnstructuredGrid> WindPieces(int rank, int ranks);
+
+// The cells of grid whose centres lie in this rank's share of the z extent: blocks of slabs
+// along the gear teeth's slab axis, compact pieces as a spatial partitioner would make them.
+vtkSmartPointer<vtkUnstructuredGrid> DepthBlock(vtkUnstructuredGrid* grid, int rank, int ranks);
+
+} // namespace apctest
+
+#endif
