@@ -32,18 +32,21 @@ int main(int argc, char* argv[])
   const int rank = controller->GetLocalProcessId();
   const int ranks = controller->GetNumberOfProcesses();
   const apctest::Scene puzzle = apctest::PuzzleScene(ranks);
+  // Each rank's share of the puzzle (no render changes it) and the bounds of all of them.
+  const vtkSmartPointer<vtkUnstructuredGrid> piece = PuzzleShare(rank, ranks, ranks);
+  double bounds[6];
+  GlobalBounds(controller, piece, bounds);
 
   // A rank without the scalar array: every rank must skip the frame, none may hang.
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
+    auto stripped =
+      PuzzleShare(rank, ranks, ranks); // a grid of its own: the shared one stays whole
     if (rank == ranks - 1)
     {
-      piece->GetPointData()->RemoveArray("Spheres");
+      stripped->GetPointData()->RemoveArray("Spheres");
     }
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> pass;
-    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+    RenderDistributed(controller, puzzle, stripped, bounds, 32, false, pass);
     Check(pass->GetLastFrameFailed(), rank, "missing scalars: the frame is skipped everywhere");
   }
 
@@ -51,9 +54,6 @@ int main(int argc, char* argv[])
   // the frame instead of waiting for it in a collective.
   if (ranks > 1)
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> pass;
     RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass, rank != ranks - 1);
     Check(pass->GetLastFrameFailed(), rank, "a process without a volume: frame skipped everywhere");
@@ -63,9 +63,6 @@ int main(int argc, char* argv[])
   // allreduce is agreed, so every process joins it and the frame ends everywhere.
   if (ranks > 1)
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> pass;
     RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass, true,
       vtkAPCVolumeMapper::RENORMALISED, nullptr, rank == 0);
@@ -78,9 +75,6 @@ int main(int argc, char* argv[])
   {
     for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
     {
-      auto piece = PuzzleShare(rank, ranks, ranks);
-      double bounds[6];
-      GlobalBounds(controller, piece, bounds);
       vtkNew<vtkAPCCompositePass> pass;
       pass->SetCompositeMode(mode);
       RenderDistributed(controller, puzzle, piece, bounds, rank == 0 ? 32 : 40, false, pass);
@@ -94,9 +88,6 @@ int main(int argc, char* argv[])
   {
     for (int odd : { 0, 1 })
     {
-      auto piece = PuzzleShare(rank, ranks, ranks);
-      double bounds[6];
-      GlobalBounds(controller, piece, bounds);
       vtkNew<vtkAPCCompositePass> pass;
       if (rank == ranks - 1)
       {
@@ -119,9 +110,6 @@ int main(int argc, char* argv[])
   // A 1x1 window, in both modes.
   for (int mode : { vtkAPCCompositePass::APC, vtkAPCCompositePass::SEGMENTS })
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> pass;
     pass->SetCompositeMode(mode);
     RenderDistributed(controller, puzzle, piece, bounds, 1, false, pass);

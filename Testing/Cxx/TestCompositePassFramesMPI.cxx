@@ -30,13 +30,14 @@ int main(int argc, char* argv[])
   const int rank = controller->GetLocalProcessId();
   const int ranks = controller->GetNumberOfProcesses();
   const apctest::Scene puzzle = apctest::PuzzleScene(ranks);
+  // Each rank's share of the puzzle (no render changes it) and the bounds of all of them.
+  const vtkSmartPointer<vtkUnstructuredGrid> piece = PuzzleShare(rank, ranks, ranks);
+  double bounds[6];
+  GlobalBounds(controller, piece, bounds);
 
   // Stop Where Opaque is left out of a frame after one without a pixel near its threshold:
   // the image is the stop's, bit for bit; a frame that turns opaque is marched again with it.
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     apctest::Scene faint = puzzle;
     faint.TF = apctest::BlueToRedTF(0.0, 1.0, 20.0); // absorbance along a ray below 0.2
     apctest::Scene opaque = puzzle;
@@ -77,9 +78,6 @@ int main(int argc, char* argv[])
   // bound too shallow: its pixels are marched again) give a fresh pass's images.
   if (ranks > 1)
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     apctest::Scene opaque = puzzle;
     opaque.TF = apctest::BlueToRedTF(0.0, 1.0, 0.01);
     apctest::Scene lighter = puzzle;
@@ -116,9 +114,6 @@ int main(int argc, char* argv[])
   // Without KeepLastImage the display process resolves into the colour sums' memory (and
   // keeps no float image): the window must show exactly what it shows with the image kept.
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     std::vector<unsigned char> kept;
     std::vector<unsigned char> lean;
     vtkNew<vtkAPCCompositePass> keeping;
@@ -148,9 +143,6 @@ int main(int argc, char* argv[])
   // (measured on 4 ranks), which moves the image by float rounding alone.
   for (int resolve : { vtkAPCVolumeMapper::RENORMALISED, vtkAPCVolumeMapper::HYBRID })
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> whole;
     whole->SetMaxBandPixels(VTK_ID_MAX); // one band, however large the setting
     const std::vector<float> one =
@@ -189,9 +181,6 @@ int main(int argc, char* argv[])
   // off (the profile's messages) and in double (the double wire's).
   for (int variant = 0; variant < 3 && ranks > 1; ++variant)
   {
-    auto piece = PuzzleShare(rank, ranks, ranks);
-    double bounds[6];
-    GlobalBounds(controller, piece, bounds);
     vtkNew<vtkAPCCompositePass> whole;
     vtkNew<vtkAPCCompositePass> split;
     whole->SetCompositeInDouble(variant == 2);
