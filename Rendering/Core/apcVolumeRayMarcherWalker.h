@@ -256,7 +256,7 @@ struct VolumeRayMarcher::Walker
     int64_t samples = 0;
     // Pass 1's own stop: the bin of k, and the first index past it.
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
-    int bin = own ? progress.Bins->Of(k) : 0;
+    int bin = own ? progress.BinOf(k) : 0;
     int64_t binEnd = own ? progress.Bins->End(bin) : 0;
     for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
     {
