@@ -298,7 +298,7 @@ struct RayProgress
   // ray) pair's set-up: the number of bin ends at or before k, found in four steps (the ends
   // grow with the bin; End(b) <= k exactly when (b + 1) Width <= k - Base, so the count is
   // min(floor((k - Base) / Width), kBins - 1), Of's value, and 0 for k before the bins).
-  int BinOf(int64_t k) const
+  [[gnu::always_inline]] int BinOf(int64_t k) const
   {
     static_assert(kBins == 16, "four halving steps find one of 16 bins");
     const OpaqueBins& b = *this->Bins;
