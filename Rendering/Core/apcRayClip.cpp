@@ -73,6 +73,47 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
 namespace
 {
 
+// The lanes of four rays from l on that run inside a plane of the cell and are outside it (see
+// Clip). Rare (rays parallel to a plane), so ClipFour looks for them only where some lane's
+// denominator is zero, with the same products and sums.
+__attribute__((target("avx2"))) __m256d ParallelOut(
+  const CellPlanes& planes, const TileRays& rays, int l)
+{
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d dx = _mm256_loadu_pd(rays.Dx + l);
+  const __m256d dy = _mm256_loadu_pd(rays.Dy + l);
+  const __m256d dz = _mm256_loadu_pd(rays.Dz + l);
+  __m256d out = zero;
+  for (int p = 0; p < planes.Count; ++p)
+  {
+    const __m256d nx = _mm256_set1_pd(planes.Nx[p]);
+    const __m256d ny = _mm256_set1_pd(planes.Ny[p]);
+    const __m256d nz = _mm256_set1_pd(planes.Nz[p]);
+    const __m256d denom = _mm256_add_pd(
+      _mm256_add_pd(_mm256_mul_pd(nx, dx), _mm256_mul_pd(ny, dy)), _mm256_mul_pd(nz, dz));
+    __m256d num;
+    if (planes.SharedOrigin)
+    {
+      num = _mm256_set1_pd(planes.Num[p]);
+    }
+    else
+    {
+      const __m256d dot =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(nx, _mm256_loadu_pd(rays.Ox + l)),
+                        _mm256_mul_pd(ny, _mm256_loadu_pd(rays.Oy + l))),
+          _mm256_mul_pd(nz, _mm256_loadu_pd(rays.Oz + l)));
+      num = _mm256_sub_pd(_mm256_set1_pd(planes.Offset[p]), dot);
+    }
+    __m256d parallelOut = _mm256_cmp_pd(num, zero, _CMP_LT_OQ);
+    if (planes.KeepsParallelRays[p] == 0)
+    {
+      parallelOut = _mm256_or_pd(parallelOut, _mm256_cmp_pd(num, zero, _CMP_EQ_OQ));
+    }
+    out = _mm256_or_pd(out, _mm256_and_pd(_mm256_cmp_pd(denom, zero, _CMP_EQ_OQ), parallelOut));
+  }
+  return out;
+}
+
 // The interval of four rays from l on; lanes past the row's end (valid) read no stop.
 // Only the planes the cell has: the padding planes of CellPlanes clip nothing. No FMA: the
 // products and sums must round as Clip's do.
@@ -88,6 +129,7 @@ __attribute__((target("avx2"))) inline void ClipFour(const CellPlanes& planes, c
   lo = zero;
   hi = _mm256_loadu_pd(rays.End + l);
   __m256d out = zero;
+  __m256d parallel = zero; // lanes running inside some plane (rare: see ParallelOut)
   if (stop)
   {
     // min(tout, stop) as std::min keeps tout on a tie. stop holds no padding.
@@ -120,13 +162,11 @@ __attribute__((target("avx2"))) inline void ClipFour(const CellPlanes& planes, c
     const __m256d leaving = _mm256_cmp_pd(denom, zero, _CMP_GT_OQ);
     lo = _mm256_max_pd(_mm256_blendv_pd(minusInf, q, entering), lo);
     hi = _mm256_min_pd(_mm256_blendv_pd(inf, q, leaving), hi);
-    // A ray running inside the plane: see Clip.
-    __m256d parallelOut = _mm256_cmp_pd(num, zero, _CMP_LT_OQ);
-    if (planes.KeepsParallelRays[p] == 0)
-    {
-      parallelOut = _mm256_or_pd(parallelOut, _mm256_cmp_pd(num, zero, _CMP_EQ_OQ));
-    }
-    out = _mm256_or_pd(out, _mm256_and_pd(_mm256_cmp_pd(denom, zero, _CMP_EQ_OQ), parallelOut));
+    parallel = _mm256_or_pd(parallel, _mm256_cmp_pd(denom, zero, _CMP_EQ_OQ));
+  }
+  if (_mm256_movemask_pd(parallel) != 0)
+  {
+    out = _mm256_or_pd(out, ParallelOut(planes, rays, l));
   }
   hi = _mm256_blendv_pd(hi, minusInf, out);
 }

@@ -224,8 +224,8 @@ struct Moments : NoSegments
       if (this->Cache->Record)
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
-        this->Cache->Keep(tile.Index, this->Buffer->Recorded, this->Buffer->Counts.data(),
-          tile.Pixels(), this->Own != nullptr || this->KeepOrder);
+        this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Recorded.size(),
+          this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder);
       }
       else
       {

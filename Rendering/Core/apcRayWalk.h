@@ -294,6 +294,20 @@ struct RayProgress
       this->Lowered = false;
     }
   }
+  // Bins->Of(k) without its 64-bit division, whose latency exceeded the rest of a (cell,
+  // ray) pair's set-up: the number of bin ends at or before k, found in four steps (the ends
+  // grow with the bin; End(b) <= k exactly when (b + 1) Width <= k - Base, so the count is
+  // min(floor((k - Base) / Width), kBins - 1), Of's value, and 0 for k before the bins).
+  [[gnu::always_inline]] int BinOf(int64_t k) const
+  {
+    static_assert(kBins == 16, "four halving steps find one of 16 bins");
+    const OpaqueBins& b = *this->Bins;
+    int bin = b.End(7) <= k ? 8 : 0;
+    bin += b.End(bin + 3) <= k ? 4 : 0;
+    bin += b.End(bin + 1) <= k ? 2 : 0;
+    bin += b.End(bin) <= k ? 1 : 0;
+    return bin;
+  }
   // Where an opaque pixel p stops: the first lattice index past the bin of its farthest
   // sample (none past the last bin). Stopping at that sample instead would leave the
   // profile's bin incomplete, and the cut then depends on the partition.
@@ -301,7 +315,7 @@ struct RayProgress
   // The last bin holding a sample pixel p summed (0 if none).
   int LastBin(int p) const
   {
-    return this->FarK[p] == std::numeric_limits<int64_t>::min() ? 0 : this->Bins->Of(this->FarK[p]);
+    return this->FarK[p] == std::numeric_limits<int64_t>::min() ? 0 : this->BinOf(this->FarK[p]);
   }
 };
 

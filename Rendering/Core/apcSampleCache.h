@@ -108,10 +108,12 @@ struct RecordedSample
 };
 
 // A thread's samples of the tile it marches, before they are grouped by pixel, with each
-// pixel's count. Owned by the cache so that it keeps its memory from frame to frame.
+// pixel's count. Owned by the cache so that it keeps its memory from frame to frame. The
+// records are not value-initialised: a zeroed record (a store of bytes, which may alias any
+// object) made the marcher reload its visitor's and the depth warp's fields for every sample.
 struct RecordBuffer
 {
-  std::vector<RecordedSample> Recorded;
+  UninitializedVector<RecordedSample> Recorded;
   std::vector<uint32_t> Counts;
 };
 
@@ -182,11 +184,11 @@ struct SampleCache
   // of one pixel: a run's slot is kept in a register, not incremented in starts[] per
   // sample, whose store and reload chained every sample of a run to the one before.
   template <bool WithOrder>
-  static void Scatter(const std::vector<RecordedSample>& recorded, uint32_t* starts,
+  static void Scatter(const RecordedSample* recorded, size_t n, uint32_t* starts,
     CachedSample* samples, uint16_t* order)
   {
-    const RecordedSample* r = recorded.data();
-    const RecordedSample* const end = r + recorded.size();
+    const RecordedSample* r = recorded;
+    const RecordedSample* const end = r + n;
     while (r < end)
     {
       const uint16_t pixel = r->Pixel;
@@ -210,8 +212,13 @@ struct SampleCache
   void Keep(size_t tile, const std::vector<RecordedSample>& recorded, const uint32_t* counts,
     int pixels, bool withOrder)
   {
+    this->Keep(tile, recorded.data(), recorded.size(), counts, pixels, withOrder);
+  }
+  // The same for the records recorded[0, n).
+  void Keep(size_t tile, const RecordedSample* recorded, size_t n, const uint32_t* counts,
+    int pixels, bool withOrder)
+  {
     CachedTile& cached = this->Tiles[tile];
-    const size_t n = recorded.size();
     if (n == 0)
     {
       // Nothing to replay: no memory (a tile of transparent or no cells, on every mesh).
@@ -247,11 +254,11 @@ struct SampleCache
     }
     if (withOrder)
     {
-      Scatter<true>(recorded, starts, cached.Samples.data(), cached.K16.data());
+      Scatter<true>(recorded, n, starts, cached.Samples.data(), cached.K16.data());
     }
     else
     {
-      Scatter<false>(recorded, starts, cached.Samples.data(), nullptr);
+      Scatter<false>(recorded, n, starts, cached.Samples.data(), nullptr);
     }
     // starts[p] now holds pixel p's end: shift back to the starts.
     for (int p = pixels; p > 0; --p)

@@ -166,6 +166,22 @@ struct VolumeRayMarcher::Walker
     const int hits =
       walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
         state.Near, allInside ? nullptr : &this->Grid, c);
+    if (!Visitor::WantsSegments && Visitor::WantsSamples && hits > 0)
+    {
+      this->Prepare(rays[c.Hits[0]], state);
+      if (!state.Interpolate)
+      {
+        return this->CellSamples<Sampling::Constant>(rays, hits, visitor, state, progress);
+      }
+      if (state.Linear)
+      {
+        return this->CellSamples<Sampling::Linear>(rays, hits, visitor, state, progress);
+      }
+      if (state.Interpolator.HasPyramidInverse())
+      {
+        return this->CellSamples<Sampling::Pyramid>(rays, hits, visitor, state, progress);
+      }
+    }
     int64_t samples = 0;
     for (int h = 0; h < hits; ++h)
     {
@@ -192,20 +208,7 @@ struct VolumeRayMarcher::Walker
     {
       k = this->Grid.First(tin, ray.Offset);
     }
-    if (state.Interpolate && !state.HaveCorners)
-    {
-      // Set up lazily: most binned cells miss most of their rectangle's rays.
-      this->Mesh.GetCorners(state.Cell, state.Corners);
-      state.Interpolator.Set(state.Corners);
-      ParametricCenter(state.Corners.Shape, state.Centre);
-      state.Linear = state.Interpolator.IsAffine() ||
-        state.Interpolator.GetLinearScalarError() <= this->LinearTolerance;
-      if (this->SharedOrigin && (state.Linear || state.Interpolator.HasPyramidInverse()))
-      {
-        state.Interpolator.LinearRayOrigin(ray.O, state.LinearOrigin);
-      }
-      state.HaveCorners = true;
-    }
+    this->Prepare(ray, state);
     if (!state.Interpolate)
     {
       return this->Samples<Sampling::Constant>(local, ray, k, tout, visitor, state, progress);
@@ -221,11 +224,56 @@ struct VolumeRayMarcher::Walker
     return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
   }
 
+  // Sets the cell's interpolation up once one of its rays (ray) has a sample: lazily, since
+  // most binned cells miss most of their rectangle's rays.
+  void Prepare(const RaySetup& ray, CellState& state) const
+  {
+    if (!state.Interpolate || state.HaveCorners)
+    {
+      return;
+    }
+    this->Mesh.GetCorners(state.Cell, state.Corners);
+    state.Interpolator.Set(state.Corners);
+    ParametricCenter(state.Corners.Shape, state.Centre);
+    state.Linear = state.Interpolator.IsAffine() ||
+      state.Interpolator.GetLinearScalarError() <= this->LinearTolerance;
+    if (this->SharedOrigin && (state.Linear || state.Interpolator.HasPyramidInverse()))
+    {
+      state.Interpolator.LinearRayOrigin(ray.O, state.LinearOrigin);
+    }
+    state.HaveCorners = true;
+  }
+
+  // The samples of every ray ClipRays kept (hits of them) in a cell whose scalar needs no
+  // Newton search, ray by ray as Ray takes them: one call per cell, not per (cell, ray) pair,
+  // whose call, saved registers and per-cell loads cost about as much as a pair's samples.
+  template <Sampling How, class Visitor>
+  [[gnu::noinline]] int64_t CellSamples(const std::vector<RaySetup>& rays, int hits,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    const walk::ClippedRays& c = state.Clipped;
+    int64_t samples = 0;
+    for (int h = 0; h < hits; ++h)
+    {
+      const int l = c.Hits[h];
+      visitor.Segment(l, c.Tin[l], c.Tout[l]);
+      samples += this->SampleLoop<How>(
+        l, rays[l], static_cast<int64_t>(c.Lattice[l]), c.Tout[l], visitor, state, progress);
+    }
+    return samples;
+  }
+
   // The lattice samples of the ray in [tin, tout), the same points on every rank; one loop
   // per way of finding the scalar.
   template <Sampling How, class Visitor>
   int64_t Samples(int local, const RaySetup& ray, int64_t k, double tout, Visitor& visitor,
     CellState& state, RayProgress& progress) const
+  {
+    return this->SampleLoop<How>(local, ray, k, tout, visitor, state, progress);
+  }
+  template <Sampling How, class Visitor>
+  [[gnu::always_inline]] int64_t SampleLoop(int local, const RaySetup& ray, int64_t k, double tout,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     double p0[3] = { 0, 0, 0 };
     double dp[3] = { 0, 0, 0 };
@@ -256,7 +304,7 @@ struct VolumeRayMarcher::Walker
     int64_t samples = 0;
     // Pass 1's own stop: the bin of k, and the first index past it.
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
-    int bin = own ? progress.Bins->Of(k) : 0;
+    int bin = own ? progress.BinOf(k) : 0;
     int64_t binEnd = own ? progress.Bins->End(bin) : 0;
     for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
     {
