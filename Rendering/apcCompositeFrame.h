@@ -145,6 +145,8 @@ struct FrameRecord
   vtkIdType OpaquePixels = 0;
   int OpaqueStopSkipped = 0;
   int OpaqueStopRedone = 0;
+  // APC on one process with one volume: tiles pass 1 kept as marched without the stop.
+  vtkIdType OpaqueUnstoppedTiles = 0;
   // APC on several processes: pixels whose cut pass 1's predicted bound left unknown, and the
   // marcher tiles marched again for them (docs/sampler.md).
   vtkIdType OpaquePredictedUnresolved = 0;

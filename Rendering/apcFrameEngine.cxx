@@ -325,6 +325,7 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   this->ReplayedSamples = 0;
   this->HiddenSamples = 0;
   this->CutSamples = 0;
+  this->UnstoppedTiles = 0;
   this->Ready = true;
   this->Clock.Lap("setup");
   return true;
@@ -384,6 +385,7 @@ void FrameEngine::RenderMoments(
     { this->Marcher.AccumulateMoments<n()>(*this->Table, *this->Warp, moments, hybrid, band); });
   this->Marcher.SetOpaqueBound(nullptr);
   this->Samples += this->Marcher.GetLastSampleCount(); // summed over the frame's bands
+  this->UnstoppedTiles += this->Marcher.GetLastUnstoppedTileCount();
   this->Clock.Lap("moments");
 }
 

@@ -156,6 +156,10 @@ public:
   /// BeginFrame): the pass leaves it out of a frame where it would cut nothing (an agreed
   /// choice, the same on every process).
   void SetOpaqueStopActive(bool active);
+  /// True where this volume's own opaque profile is the one the cut takes (one process, one
+  /// volume): pass 1 then keeps tiles marched without the stop where no ray came near it
+  /// (VolumeRayMarcher::SetOpaqueStopAlone).
+  void SetOpaqueStopAlone(bool alone) { this->Marcher.SetOpaqueStopAlone(alone); }
   const std::vector<uint16_t>& GetOpaqueProfile() const;
   /// The cut agreed from the profiles of every volume and process (ApplyOpaqueCut): moments
   /// holds this volume's own pass-1 moments of band, which lose the samples past it.
@@ -168,6 +172,8 @@ public:
     double* moments, const RowBand& band);
   /// Samples marched again by the cuts since Prepare (tiles the sample cache did not hold).
   int64_t GetCutSampleCount() const { return this->CutSamples; }
+  /// Marcher tiles pass 1 kept as marched without the stop since Prepare (alone only).
+  int64_t GetUnstoppedTileCount() const { return this->UnstoppedTiles; }
   void RenderExact(float* rgba);
   void CountSegments(int* counts);
   /// This process's sort-last segments of every pixel, replacing segments' content.
@@ -211,6 +217,7 @@ private:
   int64_t ReplayedSamples = 0;
   int64_t HiddenSamples = 0;
   int64_t CutSamples = 0;
+  int64_t UnstoppedTiles = 0;
   StageClock Clock;
 };
 

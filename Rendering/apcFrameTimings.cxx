@@ -108,6 +108,7 @@ vtkAPCCompositePass::Timings TimingsOf(const FrameRecord& record)
   t.Pass2Samples = static_cast<double>(record.Pass2Samples);
   t.OpaqueStopSkipped = record.OpaqueStopSkipped;
   t.OpaqueStopRedone = record.OpaqueStopRedone;
+  t.OpaqueUnstoppedTiles = static_cast<double>(record.OpaqueUnstoppedTiles);
   t.OpaquePredictedUnresolved = static_cast<double>(record.OpaquePredictedUnresolved);
   t.OpaquePredictedRedone = static_cast<double>(record.OpaquePredictedRedone);
   if (record.Pass2Samples > 0)

@@ -333,6 +333,8 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     for (FrameEngine* engine : frame.Engines)
     {
       engine->SetOpaqueStopActive(stops);
+      // One process with one volume: its own absorbance is the global one.
+      engine->SetOpaqueStopAlone(!group.Parallel && frame.Engines.size() == 1);
     }
     PassOne(
       group, frame, band, tiles, stops, pixels, moments, covered, ownCovered, buffers, record);
@@ -430,6 +432,7 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     record.Pass2Samples += engine->GetColourSampleCount();
     record.Pass2Replayed += engine->GetReplayedSampleCount();
     record.Pass2Hidden += engine->GetHiddenSampleCount();
+    record.OpaqueUnstoppedTiles += engine->GetUnstoppedTileCount();
   }
 }
 

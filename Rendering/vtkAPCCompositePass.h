@@ -361,6 +361,9 @@ public:
     // reached the threshold after all).
     double OpaqueStopSkipped = 0;
     double OpaqueStopRedone = 0;
+    // On one process with one volume: marcher tiles pass 1 kept as marched without the stop
+    // (no ray of theirs came near its threshold).
+    double OpaqueUnstoppedTiles = 0;
     // On several processes, pass 1 also stops each ray at a cut predicted from the last
     // frame's: the pixels whose cut that left unknown, and the 16x16 tiles marched again
     // without it for them.
@@ -431,6 +434,7 @@ public:
     f("pass2_samples", timings.Pass2Samples);
     f("opaque_stop_skipped", timings.OpaqueStopSkipped);
     f("opaque_stop_redone", timings.OpaqueStopRedone);
+    f("opaque_unstopped_tiles", timings.OpaqueUnstoppedTiles);
     f("opaque_predicted_unresolved", timings.OpaquePredictedUnresolved);
     f("opaque_predicted_redone", timings.OpaquePredictedRedone);
     f("agree_wait", timings.AgreeWait);
@@ -464,7 +468,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 66;
+  static constexpr int NumberOfTimings = 67;
 
   ///@{
   /**

@@ -286,6 +286,8 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     moments.assign(pixels * (parameters.Moments + 1), 0.0);
     colourSums.assign(pixels * 4, 0.0);
+    // One process, one volume: tiles no ray of which nears the threshold skip the stop.
+    engine.SetOpaqueStopAlone(true);
     engine.RenderMoments(parameters, moments.data());
     if (engine.StopsWhereOpaque(parameters))
     {

@@ -68,7 +68,9 @@ def last_timings(display):
     (this rank's pass-1 samples and the shares of its pass-2 samples replayed from the sample
     cache and skipped as hidden), "pass2_samples", "opaque_stop_skipped" and
     "opaque_stop_redone" (bands rendered without Stop Where Opaque, as it would cut nothing,
-    and bands marched again with it), "opaque_predicted_unresolved" and
+    and bands marched again with it), "opaque_unstopped_tiles" (one rank, one volume: tiles
+    pass 1 kept as marched without the stop, no ray of theirs near its threshold),
+    "opaque_predicted_unresolved" and
     "opaque_predicted_redone" (on several ranks: pixels whose cut the previous frame's
     predicted bound left unknown, and the 16x16 tiles marched again for them); per stage with collectives its wait for the slowest rank and its
     transfer after the last arrival ("tiles_wait", "tiles_transfer", ...), "wait" and

@@ -15,6 +15,7 @@
 #include "apcVolumeRayMarcherWalker.h"
 
 #include <tbb/combinable.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -94,6 +95,25 @@ void VolumeRayMarcher::TilesOf(const RowBand& rows, int64_t& first, int64_t& las
 }
 
 //------------------------------------------------------------------------------
+void VolumeRayMarcher::SetUpRays(const TileRect& tile, std::vector<RaySetup>& rays) const
+{
+  const int width = this->Bins->Grid.Width;
+  rays.resize(tile.Pixels());
+  for (int p = 0; p < tile.Pixels(); ++p)
+  {
+    const Ray ray = this->Camera->PixelRay(tile.I0 + p % tile.Width(), tile.J0 + p / tile.Width());
+    RaySetup& r = rays[p];
+    std::copy(ray.Origin.begin(), ray.Origin.end(), r.O);
+    std::copy(ray.Direction.begin(), ray.Direction.end(), r.D);
+    r.End = this->RayEnds[tile.ImagePixel(p, width)];
+    r.Offset = this->LatticeJitter
+      ? LatticeOffset(this->Camera->GetCropI0() + tile.I0 + p % tile.Width(),
+          this->Camera->GetCropJ0() + tile.J0 + p / tile.Width())
+      : 0.0;
+  }
+}
+
+//------------------------------------------------------------------------------
 template <class Visitor>
 void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   const std::vector<uint8_t>* skipTiles, const RowBand& rows)
@@ -123,12 +143,27 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
     walker.LastBinOut = this->LastBin.data();
     walker.Bound = this->Bound;
   }
-  tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
-  tbb::combinable<int64_t> samples([] { return int64_t(0); });
-  tbb::combinable<std::vector<RaySetup>> rayBuffers;
+  // Alone, pass 1 marches a tile without the stop's bookkeeping first and keeps it if no ray
+  // came near the threshold: the stop would have stopped none, so the samples and moments
+  // are the same, and the cut is none. A tile that came near is marched again with the stop,
+  // and so is every tile after it (an opaque view loses a tile per thread).
+  Walker plain = walker;
+  plain.Opaque = nullptr;
+  plain.ProfileOut = nullptr;
+  plain.LastBinOut = nullptr;
   int64_t first = 0;
   int64_t last = 0;
   this->TilesOf(rows, first, last);
+  // Each thread's first tile near the threshold is marched twice: not on a few tiles a thread.
+  const int threads = ThreadsFor(this->Threads) > 0 ? ThreadsFor(this->Threads)
+                                                    : tbb::this_task_arena::max_concurrency();
+  const bool speculate = this->OpaqueAlone && walker.ProfileOut && !walker.Bound &&
+    last - first >= kTilesPerThreadWithoutStop * threads;
+  std::atomic<bool> opaqueSeen{ false };
+  std::atomic<int64_t> unstopped{ 0 };
+  tbb::combinable<Visitor> visitors([&prototype] { return prototype; });
+  tbb::combinable<int64_t> samples([] { return int64_t(0); });
+  tbb::combinable<std::vector<RaySetup>> rayBuffers;
   ParallelFor(this->Threads, last - first, 1,
     [&](int64_t begin, int64_t end)
     {
@@ -141,24 +176,60 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
           continue;
         }
         const TileRect tile = grid.Tile(t);
-        rays.resize(tile.Pixels());
-        for (int p = 0; p < tile.Pixels(); ++p)
+        this->SetUpRays(tile, rays);
+        if (speculate && !opaqueSeen.load(std::memory_order_relaxed))
         {
-          const Ray ray =
-            this->Camera->PixelRay(tile.I0 + p % tile.Width(), tile.J0 + p / tile.Width());
-          RaySetup& r = rays[p];
-          std::copy(ray.Origin.begin(), ray.Origin.end(), r.O);
-          std::copy(ray.Direction.begin(), ray.Direction.end(), r.D);
-          r.End = this->RayEnds[tile.ImagePixel(p, grid.Width)];
-          r.Offset = this->LatticeJitter
-            ? LatticeOffset(this->Camera->GetCropI0() + tile.I0 + p % tile.Width(),
-                this->Camera->GetCropJ0() + tile.J0 + p / tile.Width())
-            : 0.0;
+          samples.local() += plain.Tile(rays, tile, rows.J0, visitor);
+          if (this->KeepUnstoppedTile(visitor, Walker::Shifted(tile, rows.J0), t))
+          {
+            ++unstopped;
+            continue;
+          }
+          opaqueSeen = true;
         }
         samples.local() += walker.Tile(rays, tile, rows.J0, visitor);
       }
     });
   this->LastSamples = samples.combine(std::plus<int64_t>());
+  this->LastUnstoppedTiles = unstopped.load();
+}
+
+//------------------------------------------------------------------------------
+template <class Visitor>
+bool VolumeRayMarcher::KeepUnstoppedTile(Visitor&, const TileRect&, int64_t)
+{
+  return false; // only pass 1's moments are marched without the stop first
+}
+
+template <int N>
+bool VolumeRayMarcher::KeepUnstoppedTile(
+  visitors::Moments<N>& visitor, const TileRect& inBand, int64_t tile)
+{
+  // The stop's quanta round each sample's absorbance down, so a pixel whose b0 stays below
+  // the threshold (less a margin for b0's rounding) never reached it in quanta either.
+  const double limit = OpaqueBins::kOpaque * (1 - 1e-6) / this->Opaque.QuantaPerAbsorbance;
+  bool near = false;
+  for (int p = 0; p < inBand.Pixels() && !near; ++p)
+  {
+    near = visitor.Sums[p * (N + 1)] >= limit;
+  }
+  if (!near)
+  {
+    return true;
+  }
+  // Undone: the tile's moments (pass 1 starts from zero, this mesh alone) and its samples.
+  for (int p = 0; p < inBand.Pixels(); ++p)
+  {
+    std::fill_n(visitor.Output + (N + 1) * inBand.ImagePixel(p, visitor.Width), N + 1, 0.0);
+  }
+  SampleCache& cache = *this->Cache;
+  if (visitor.Recording && static_cast<size_t>(tile) < cache.Tiles.size() && cache.Kept[tile])
+  {
+    cache.Bytes -= cache.Tiles[tile].Bytes();
+    cache.Tiles[tile].Clear();
+    cache.Kept[tile] = 0;
+  }
+  return false;
 }
 
 //------------------------------------------------------------------------------
@@ -210,7 +281,9 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
     std::vector<double>().swap(this->OwnMoments); // no memory unless Hybrid asks for it
   }
   this->RecordProfile = true;
+  this->OpaqueAlone = this->OpaqueStopAlone && this->Opaque.Active() && !visitor.Own;
   this->March(visitor, table, nullptr, rows);
+  this->OpaqueAlone = false;
   this->RecordProfile = false;
   this->OwnMomentsOrder = visitor.Own ? N : 0;
   cache.Valid = cache.MaxBytes > 0;

@@ -34,6 +34,16 @@ namespace apc
 
 struct SampleCache;
 struct TileBins;
+struct TileRect;
+namespace walk
+{
+struct RaySetup;
+}
+namespace visitors
+{
+template <int N>
+struct Moments;
+}
 
 // Image rows [J0, J1): a band the moment and colour passes can be limited to, so that a large
 // image is rendered and composited band by band with band-sized buffers (the buffers then
@@ -83,6 +93,14 @@ public:
   // pass 1 that keeps its own moments for Hybrid, whose own transmittance is exact.
   void SetOpaqueAbsorbance(double absorbance) { this->OpaqueAbsorbance = absorbance; }
   double GetOpaqueAbsorbance() const { return this->OpaqueAbsorbance; }
+  // True if this mesh's own absorbance is all the cut will sum (one process, one mesh): pass 1
+  // then marches each tile without the stop first and keeps it where no ray came near the
+  // threshold, which is then exactly what the stop gives (on a band of at least
+  // kTilesPerThreadWithoutStop tiles per thread). False by default.
+  void SetOpaqueStopAlone(bool alone) { this->OpaqueStopAlone = alone; }
+  static constexpr int kTilesPerThreadWithoutStop = 64;
+  // Tiles the last pass 1 kept as marched without the stop (alone only).
+  int64_t GetLastUnstoppedTileCount() const { return this->LastUnstoppedTiles; }
   // ln 10^4: what a ray leaves unsampled is hidden behind a transmittance of at most 1e-4,
   // far below one step of an 8-bit colour (1/255).
   static constexpr double kRecommendedOpaqueAbsorbance = 9.210340371976184;
@@ -189,6 +207,14 @@ private:
   template <class Visitor>
   void March(Visitor& prototype, const TransferTable& table,
     const std::vector<uint8_t>* skipTiles = nullptr, const RowBand& rows = {});
+  // The rays of a tile's pixels.
+  void SetUpRays(const TileRect& tile, std::vector<walk::RaySetup>& rays) const;
+  // After a tile of pass 1 marched without the stop (alone): true to keep it, else its
+  // moments and cached samples are undone for a march with the stop.
+  template <class Visitor>
+  bool KeepUnstoppedTile(Visitor& visitor, const TileRect& inBand, int64_t tile);
+  template <int N>
+  bool KeepUnstoppedTile(visitors::Moments<N>& visitor, const TileRect& inBand, int64_t tile);
   // Replays the cached tiles into copies of prototype; returns the samples replayed.
   template <class Visitor>
   int64_t ReplayColour(const TransferTable& table, const Visitor& prototype, const RowBand& rows);
@@ -220,6 +246,9 @@ private:
   std::vector<uint8_t> Cut;
   bool CutSet = false;
   bool RecordProfile = false;
+  bool OpaqueStopAlone = false;
+  bool OpaqueAlone = false; // this pass 1 marches tiles without the stop first
+  int64_t LastUnstoppedTiles = 0;
   const uint8_t* Bound = nullptr;
   int64_t LastCutSamples = 0;
   int64_t LastRedoSamples = 0;

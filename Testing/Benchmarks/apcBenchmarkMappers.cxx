@@ -8,7 +8,7 @@
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
-//     [--linear-tolerance BINS] [--no-stop]
+//     [--linear-tolerance BINS] [--no-stop] [--lower60]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -148,8 +148,9 @@ struct Options
   double SpacingScale = 1.0;
   bool SpacingScaleGiven = false; // --setup paraview: the mean cell size times SpacingScale
   double LinearTolerance = NAN;   // sampler: the linear inverse's tolerance in bins (NaN: default)
-  bool Stop = true; // sampler: time with the recommended opaque stop (off: as ParaView renders)
-  int Moments = 4;  // APC's MBOIT moments
+  bool Lower60 = false; // --setup paraview: the ramp with the lower 60 % of the range clear
+  bool Stop = true;     // sampler: time with the recommended opaque stop (off: as ParaView renders)
+  int Moments = 4;      // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
   bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
@@ -350,6 +351,14 @@ MapperScene MakeScene(const std::string& name, const Options& options, bool tetr
   if (options.Setup == "paraview")
   {
     UseParaViewDefaults(scene);
+    if (options.Lower60)
+    {
+      // As paraview_vs_apc.py --opacity lower60: clear up to 60 % of the range, then 0 to 1.
+      const double lo = scene.TF.Opacities.front()[0];
+      const double hi = scene.TF.Opacities.back()[0];
+      scene.TF.Opacities = { { lo, 0.0 }, { lo + 0.6 * (hi - lo), 0.0 }, { hi, 1.0 } };
+      scene.Note += "; lower 60 % of the range transparent";
+    }
     if (options.SpacingScaleGiven)
     {
       scene.SampleDistance = options.SpacingScale * MeanCellSize(scene.Grid);
@@ -990,7 +999,7 @@ void Usage()
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
-               "  [--linear-tolerance BINS] [--no-stop]\n";
+               "  [--linear-tolerance BINS] [--no-stop] [--lower60]\n";
 }
 
 } // namespace
@@ -1074,6 +1083,10 @@ int main(int argc, char* argv[])
     else if (arg == "--no-stop")
     {
       options.Stop = false;
+    }
+    else if (arg == "--lower60")
+    {
+      options.Lower60 = true;
     }
     else if (arg == "--linear-tolerance")
     {

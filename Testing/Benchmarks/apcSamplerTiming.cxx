@@ -65,6 +65,29 @@ struct CanStop<M, std::void_t<decltype(std::declval<M&>().SetOpaqueAbsorbance(1.
   : std::true_type
 {
 };
+// One process, one mesh: the marcher's own profile is the cut's (where it knows that).
+template <class M, class = void>
+struct CanBeAlone : std::false_type
+{
+};
+template <class M>
+struct CanBeAlone<M, std::void_t<decltype(std::declval<M&>().SetOpaqueStopAlone(true))>>
+  : std::true_type
+{
+};
+template <class M>
+void SetAlone(M& marcher)
+{
+  if constexpr (CanBeAlone<M>::value)
+  {
+    marcher.SetOpaqueStopAlone(true);
+  }
+  else
+  {
+    (void)marcher;
+  }
+}
+
 template <class M>
 bool SetStop(M& marcher, double absorbance)
 {
@@ -314,6 +337,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   marcher.SetNumberOfThreads(threads);
   SetStop(marcher,
     withStop ? RecommendedStop<apc::VolumeRayMarcher>() : std::numeric_limits<double>::infinity());
+  SetAlone(marcher);
   if (!std::isnan(linearTolerance))
   {
     SetLinearTolerance(marcher, linearTolerance);

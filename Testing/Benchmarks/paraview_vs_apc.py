@@ -114,7 +114,7 @@ COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "f
            [c + p + "_s" for c in COLLECTIVES for p in ("_wait", "_transfer")] +
            ["mode_ran", "bytes_display_rank", "messages_display_rank", "pixels_composited",
             "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
-            "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped",
+            "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped", "opaque_unstopped_tiles",
             "opaque_stop_redone", "opaque_predicted_unresolved", "opaque_predicted_redone",
             "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
             "cells_per_rank_after", "note"])
@@ -405,8 +405,10 @@ def main(args):
                 row["pass2_samples"] = "%d" % statistics.median(
                     t.get("pass2_samples", 0) for t in same)
                 # Bands marched without Stop Where Opaque, and again with it, in the later frames.
-                # On several ranks: pixels the predicted cut left unknown, tiles marched again.
-                for s in ("opaque_stop_skipped", "opaque_stop_redone", "opaque_predicted_unresolved",
+                # One rank: tiles pass 1 kept without the stop. On several ranks: pixels the
+                # predicted cut left unknown, tiles marched again.
+                for s in ("opaque_stop_skipped", "opaque_stop_redone", "opaque_unstopped_tiles",
+                          "opaque_predicted_unresolved",
                           "opaque_predicted_redone"):
                     row[s] = "/".join("%d" % t.get(s, 0) for t in same)
             row["messages_display_rank"] = "%d" % timings[-1]["messages_sent"]
