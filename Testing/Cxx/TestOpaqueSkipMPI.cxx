@@ -4,6 +4,7 @@
 // the stop off, bit for bit, with its tiles marched without the stop on one process (none on
 // several, where a process's own absorbance is not the global one); an opaque first frame
 // must still be cut (fewer pass-1 samples than with the stop off).
+#include "apcCompositePassRenders.h"
 #include "apcMPITest.h"
 #include "apcTestCompositePass.h"
 #include "apcTestPuzzles.h"
@@ -71,23 +72,6 @@ Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
   }
   return frame;
 }
-
-void GlobalBounds(vtkMPIController* controller, vtkUnstructuredGrid* piece, double bounds[6])
-{
-  double mine[6];
-  piece->GetBounds(mine);
-  double lows[3] = { mine[0], mine[2], mine[4] };
-  double highs[3] = { -mine[1], -mine[3], -mine[5] };
-  double low[3];
-  double high[3];
-  controller->AllReduce(lows, low, 3, vtkCommunicator::MIN_OP);
-  controller->AllReduce(highs, high, 3, vtkCommunicator::MIN_OP);
-  for (int a = 0; a < 3; ++a)
-  {
-    bounds[2 * a] = low[a];
-    bounds[2 * a + 1] = -high[a];
-  }
-}
 }
 
 int main(int argc, char* argv[])
@@ -103,7 +87,7 @@ int main(int argc, char* argv[])
   vtkSmartPointer<vtkUnstructuredGrid> piece =
     apctest::PuzzlePiece(vtkAPCPuzzleSource::SPHERES, ranks, 4, 12, rank, 2, ranks);
   double bounds[6];
-  GlobalBounds(controller, piece, bounds);
+  apctest::GlobalBounds(controller, piece, bounds);
 
   {
     scene.TF = apctest::BlueToRedTF(0.0, 1.0, 20.0); // absorbance along a ray below 0.2
