@@ -73,6 +73,29 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
 namespace
 {
 
+// Plane p against four rays from l on (directions dx, dy, dz): the denominator n.d and the
+// numerator offset - n.o of Clip's quotient. No FMA: the products and sums must round as
+// Clip's do, and ParallelOut's as ClipFour's.
+__attribute__((target("avx2"), always_inline)) inline void PlaneTerms(const CellPlanes& planes,
+  const TileRays& rays, int l, int p, __m256d dx, __m256d dy, __m256d dz, __m256d& denom,
+  __m256d& num)
+{
+  const __m256d nx = _mm256_set1_pd(planes.Nx[p]);
+  const __m256d ny = _mm256_set1_pd(planes.Ny[p]);
+  const __m256d nz = _mm256_set1_pd(planes.Nz[p]);
+  denom = _mm256_add_pd(
+    _mm256_add_pd(_mm256_mul_pd(nx, dx), _mm256_mul_pd(ny, dy)), _mm256_mul_pd(nz, dz));
+  if (planes.SharedOrigin)
+  {
+    num = _mm256_set1_pd(planes.Num[p]);
+    return;
+  }
+  const __m256d dot = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(nx, _mm256_loadu_pd(rays.Ox + l)),
+                                      _mm256_mul_pd(ny, _mm256_loadu_pd(rays.Oy + l))),
+    _mm256_mul_pd(nz, _mm256_loadu_pd(rays.Oz + l)));
+  num = _mm256_sub_pd(_mm256_set1_pd(planes.Offset[p]), dot);
+}
+
 // The lanes of four rays from l on that run inside a plane of the cell and are outside it (see
 // Clip). Rare (rays parallel to a plane), so ClipFour looks for them only where some lane's
 // denominator is zero, with the same products and sums.
@@ -86,24 +109,9 @@ __attribute__((target("avx2"))) __m256d ParallelOut(
   __m256d out = zero;
   for (int p = 0; p < planes.Count; ++p)
   {
-    const __m256d nx = _mm256_set1_pd(planes.Nx[p]);
-    const __m256d ny = _mm256_set1_pd(planes.Ny[p]);
-    const __m256d nz = _mm256_set1_pd(planes.Nz[p]);
-    const __m256d denom = _mm256_add_pd(
-      _mm256_add_pd(_mm256_mul_pd(nx, dx), _mm256_mul_pd(ny, dy)), _mm256_mul_pd(nz, dz));
+    __m256d denom;
     __m256d num;
-    if (planes.SharedOrigin)
-    {
-      num = _mm256_set1_pd(planes.Num[p]);
-    }
-    else
-    {
-      const __m256d dot =
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(nx, _mm256_loadu_pd(rays.Ox + l)),
-                        _mm256_mul_pd(ny, _mm256_loadu_pd(rays.Oy + l))),
-          _mm256_mul_pd(nz, _mm256_loadu_pd(rays.Oz + l)));
-      num = _mm256_sub_pd(_mm256_set1_pd(planes.Offset[p]), dot);
-    }
+    PlaneTerms(planes, rays, l, p, dx, dy, dz, denom, num);
     __m256d parallelOut = _mm256_cmp_pd(num, zero, _CMP_LT_OQ);
     if (planes.KeepsParallelRays[p] == 0)
     {
@@ -139,24 +147,9 @@ __attribute__((target("avx2"))) inline void ClipFour(const CellPlanes& planes, c
   }
   for (int p = 0; p < planes.Count; ++p)
   {
-    const __m256d nx = _mm256_set1_pd(planes.Nx[p]);
-    const __m256d ny = _mm256_set1_pd(planes.Ny[p]);
-    const __m256d nz = _mm256_set1_pd(planes.Nz[p]);
-    const __m256d denom = _mm256_add_pd(
-      _mm256_add_pd(_mm256_mul_pd(nx, dx), _mm256_mul_pd(ny, dy)), _mm256_mul_pd(nz, dz));
+    __m256d denom;
     __m256d num;
-    if (planes.SharedOrigin)
-    {
-      num = _mm256_set1_pd(planes.Num[p]);
-    }
-    else
-    {
-      const __m256d dot =
-        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(nx, _mm256_loadu_pd(rays.Ox + l)),
-                        _mm256_mul_pd(ny, _mm256_loadu_pd(rays.Oy + l))),
-          _mm256_mul_pd(nz, _mm256_loadu_pd(rays.Oz + l)));
-      num = _mm256_sub_pd(_mm256_set1_pd(planes.Offset[p]), dot);
-    }
+    PlaneTerms(planes, rays, l, p, dx, dy, dz, denom, num);
     const __m256d q = _mm256_div_pd(num, denom);
     const __m256d entering = _mm256_cmp_pd(denom, zero, _CMP_LT_OQ);
     const __m256d leaving = _mm256_cmp_pd(denom, zero, _CMP_GT_OQ);
