@@ -8,6 +8,10 @@ Scotch pieces, field U_mag) at 1024x1024 with the same camera and transfer funct
   apc          the APC Volume representation, sample distance --sample-distance;
   apc-default  the same at its default sample distance (0: the mean cell size, at least
                192 samples along the bounding-box diagonal);
+  apc-again    apc-default again, as a later case of the process: the first frame a new APC
+               view of the data costs once the process holds memory (its cells are converted
+               again, as after a data change); run it after apc-default to tell the process's
+               first-touched memory from the per-data set-up;
   auto         the APC Volume representation in its "Auto" mode, default sample distance;
   segments     the APC Volume representation in its "Exact (segments)" mode (sort-last
                compositing of ray segments, the exact distributed baseline), default spacing;
@@ -41,6 +45,7 @@ import csv
 import glob
 import json
 import os
+import resource
 import statistics
 import sys
 import time
@@ -59,7 +64,7 @@ parser.add_argument("--frames", type=int, default=3, help="later frames to time 
 parser.add_argument("--sample-distance", type=float, default=1.0,
                     help="APC sample distance in metres (the cells are ~1-10 m)")
 parser.add_argument("--cases", default="apc,apc-default,pt,bunyk",
-                    help="comma-separated: apc, apc-default, apc-stop (defaults with Stop Where Opaque "
+                    help="comma-separated: apc, apc-default, apc-again, apc-stop (defaults with Stop Where Opaque "
                     "on), apc-nostop (defaults with it off), segments, auto, pt, bunyk")
 parser.add_argument("--distances", default="1",
                     help="comma-separated camera distance factors (1 = the default view)")
@@ -108,7 +113,8 @@ STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", 
 COLLECTIVES = ["tiles", "profile", "allreduce", "reduce"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
-            "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s", "setup", "opacity",
+            "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s",
+            "first_frame_sys_s", "frame_sys_s", "first_frame_faults", "setup", "opacity",
             "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s", "profile_s", "cut_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            [c + p + "_s" for c in COLLECTIVES for p in ("_wait", "_transfer")] +
@@ -267,6 +273,7 @@ def main(args):
     cases = {
         "apc": ("APC Volume", "APC", args.sample_distance),
         "apc-default": ("APC Volume", "APC", 0.0),
+        "apc-again": ("APC Volume", "APC", 0.0),
         # APC's defaults with Stop Where Opaque set on or off whatever its default.
         "apc-stop": ("APC Volume", "APC", 0.0),
         "apc-nostop": ("APC Volume", "APC", 0.0),
@@ -331,6 +338,10 @@ def main(args):
         timings = []
 
         cpu = []
+        # The kernel's share of cpu and the minor page faults: memory first touched shows here
+        # (on a virtual machine whose host backs fresh memory lazily, at a high price).
+        system = []
+        faults = []
 
         def frame(move=False):
             if move:
@@ -338,9 +349,13 @@ def main(args):
                 view.GetActiveCamera().Azimuth(0.5)
             start = time.perf_counter()
             start_cpu = time.process_time()
+            start_sys = os.times().system
+            start_faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
             Render(view)
             seconds = time.perf_counter() - start
             cpu.append(time.process_time() - start_cpu)
+            system.append(os.times().system - start_sys)
+            faults.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - start_faults)
             if apc:
                 timings.append(apcparaview.last_timings(display))
             return seconds
@@ -356,6 +371,9 @@ def main(args):
                    opacity=args.opacity or ("ramp" if default_setup else "comparison"),
                    first_frame_cpu_s="%.3f" % cpu[0],
                    frame_cpu_s="%.3f" % statistics.median(cpu[1:]),
+                   first_frame_sys_s="%.3f" % system[0],
+                   frame_sys_s="%.3f" % statistics.median(system[1:]),
+                   first_frame_faults="%d" % faults[0],
                    camera=distance if default_setup else "", width=args.size[0],
                    height=args.size[1], load_average=open("/proc/loadavg").read().split()[0])
         if apc and not args.no_float_images:
@@ -424,6 +442,10 @@ def main(args):
                             "least diagonal / 192)"
                             if not spacing else "", statistics.median(t["total"] for t in timings[1:]),
                             timings[0]["total"]))
+            # Where the first frame's time went, beside the later frames' medians above.
+            notes.append("first frame's stages (s): " + " ".join(
+                "%s %.3f" % (s, timings[0].get(s, 0))
+                for s in STAGES + ["tiles", "profile", "cut"]))
             notes.append("cells unchanged by rendering" if after == before
                          else "CELLS MOVED by rendering")
         else:

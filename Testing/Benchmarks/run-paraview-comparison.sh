@@ -15,8 +15,8 @@
 #   run-paraview-comparison.sh --default-setup [--ranks "1 2 4"] [--sizes "1024x1024 1920x1080"]
 #   run-paraview-comparison.sh --default-setup --opacity lower60 [...]
 # runs paraview_vs_apc.py --setup paraview (ParaView's colour map and linear opacity ramp,
-# every APC property at its default) for cases apc-default, apc-nostop (Stop Where Opaque off), auto
-# and pt, cameras fill and
+# every APC property at its default) for cases apc-default, apc-nostop (Stop Where Opaque off), auto,
+# pt and apc-again (APC's first frame again, once the process holds memory), cameras fill and
 # overview, first frame and later frames after small camera moves, once per rank count and
 # image size, into $APC_COMPARE_OUT (default out/benchmark/paraview-default), one CSV per part
 # (np<N>_<W>x<H>.csv; np<N>_<W>x<H>_lower60.csv with --opacity lower60, ParaView's ramp with the
@@ -64,7 +64,7 @@ for size in ${sizes:-default}; do
   if [ -n "$default_setup" ]; then
     part="$out/np${n}_$size${opacity:+_$opacity}.csv"
     log="$out/np${n}_$size${opacity:+_$opacity}.log"
-    extra=(--setup paraview ${opacity:+--opacity "$opacity"} --size "${size%x*}" "${size#*x}" --cases apc-default,apc-nostop,auto,pt
+    extra=(--setup paraview ${opacity:+--opacity "$opacity"} --size "${size%x*}" "${size#*x}" --cases apc-default,apc-nostop,auto,pt,apc-again
       --frames 3 --no-float-images --only-rendered-array)
   fi
   rm -f "$part"
