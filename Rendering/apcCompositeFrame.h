@@ -151,6 +151,7 @@ struct FrameRecord
   // marcher tiles marched again for them (docs/sampler.md).
   vtkIdType OpaquePredictedUnresolved = 0;
   vtkIdType OpaquePredictedRedone = 0;
+  int Bands = 0; // APC mode: bands of rows rendered
   SegmentStatistics Segments;
   bool Failed = false;
 };

@@ -18,6 +18,7 @@
 #include "apcCellMeshFromVTK.h"
 #include "apcDepthWarp.h"
 #include "apcFrameInputsFromVTK.h"
+#include "apcParallel.h"
 #include "apcRayCamera.h"
 #include "apcTransferTable.h"
 
@@ -236,6 +237,12 @@ bool FrameEngine::GetLocalBounds(double bounds[6]) const
   const auto& b = this->Mesh.GetBounds();
   std::copy(b.begin(), b.end(), bounds);
   return true;
+}
+
+//------------------------------------------------------------------------------
+int FrameEngine::GetThreads() const
+{
+  return ConcurrencyFor(this->Settings.NumberOfThreads);
 }
 
 //------------------------------------------------------------------------------

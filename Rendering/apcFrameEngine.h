@@ -98,6 +98,8 @@ public:
   /// Bounds of the renderable cells as of the last UpdateInput; false if there are none.
   bool GetLocalBounds(double bounds[6]) const;
   int64_t GetNumberOfCells() const { return this->Mesh.GetNumberOfCells(); }
+  /// The threads this volume's passes run on (its setting, or this process's default).
+  int GetThreads() const;
 
   /**
    * After UpdateInput (once per frame), samples property's transfer functions and sets up the rays

@@ -111,6 +111,7 @@ vtkAPCCompositePass::Timings TimingsOf(const FrameRecord& record)
   t.OpaqueUnstoppedTiles = static_cast<double>(record.OpaqueUnstoppedTiles);
   t.OpaquePredictedUnresolved = static_cast<double>(record.OpaquePredictedUnresolved);
   t.OpaquePredictedRedone = static_cast<double>(record.OpaquePredictedRedone);
+  t.Bands = record.Bands;
   if (record.Pass2Samples > 0)
   {
     const double pass2 = static_cast<double>(record.Pass2Samples);

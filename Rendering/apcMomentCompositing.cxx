@@ -9,6 +9,7 @@
 // A large frame runs all of this band by band (rows of the screen rectangle), so that the
 // moment and colour buffers (72 bytes per pixel at 4 moments) are one band's size: at 8192^2
 // the whole rectangle's would be ~4.8 GB per process.
+#include "apcAloneBands.h"
 #include "apcCompositeFrame.h"
 #include "apcFixedPointMoments.h"
 #include "apcFrameEngine.h"
@@ -421,10 +422,23 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
       frame.Rect.I0, frame.Rect.J0, frame.RectWidth(), frame.RectHeight());
   }
   // The same bands on every process: they follow from the agreed rectangle and band size.
-  const size_t bandPixels = static_cast<size_t>(frame.Settings.MaxBandPixels);
+  // One process has no collective to pay per band: its bands are small (apcAloneBands.h).
+  size_t bandPixels = static_cast<size_t>(frame.Settings.MaxBandPixels);
+  if (!group.Parallel)
+  {
+    int threads = 1;
+    for (const FrameEngine* engine : frame.Engines)
+    {
+      threads = std::max(threads, engine->GetThreads());
+    }
+    bandPixels = AloneBandPixels(bandPixels, threads, VolumeRayMarcher::kTileSize);
+  }
+  static_assert(kAloneBandTilesPerThread >= VolumeRayMarcher::kTilesPerThreadWithoutStop,
+    "one process's bands must keep its pass 1's tiles without the stop");
   for (const RowBand& band : MomentBands(frame.RectWidth(), frame.RectHeight(), bandPixels))
   {
     CompositeBand(group, frame, band, buffers, record, result);
+    ++record.Bands;
   }
   for (const FrameEngine* engine : frame.Engines)
   {

@@ -369,6 +369,8 @@ public:
     // without it for them.
     double OpaquePredictedUnresolved = 0;
     double OpaquePredictedRedone = 0;
+    // APC mode: the bands of rows the frame was rendered in (one process takes small ones).
+    double Bands = 0;
     // Each stage's wait for the last process and transfer after it (see above).
     double AgreeWait = 0, AgreeTransfer = 0;
     double DepthWait = 0, DepthTransfer = 0;
@@ -437,6 +439,7 @@ public:
     f("opaque_unstopped_tiles", timings.OpaqueUnstoppedTiles);
     f("opaque_predicted_unresolved", timings.OpaquePredictedUnresolved);
     f("opaque_predicted_redone", timings.OpaquePredictedRedone);
+    f("bands", timings.Bands);
     f("agree_wait", timings.AgreeWait);
     f("agree_transfer", timings.AgreeTransfer);
     f("depth_wait", timings.DepthWait);
@@ -468,7 +471,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 67;
+  static constexpr int NumberOfTimings = 68;
 
   ///@{
   /**

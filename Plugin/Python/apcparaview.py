@@ -72,7 +72,8 @@ def last_timings(display):
     pass 1 kept as marched without the stop, no ray of theirs near its threshold),
     "opaque_predicted_unresolved" and
     "opaque_predicted_redone" (on several ranks: pixels whose cut the previous frame's
-    predicted bound left unknown, and the 16x16 tiles marched again for them); per stage with collectives its wait for the slowest rank and its
+    predicted bound left unknown, and the 16x16 tiles marched again for them), "bands" (APC
+    mode: the bands of rows the frame was rendered in); per stage with collectives its wait for the slowest rank and its
     transfer after the last arrival ("tiles_wait", "tiles_transfer", ...), "wait" and
     "transfer" (their sums), "render" (the display rank's), "render_mean", "render_max",
     "render_imbalance" (max / mean), "slowest_rank" and "wait_max" (every rank's render seconds:

@@ -35,6 +35,13 @@ inline int ThreadsFor(int requested)
   return threads > 0 ? threads : tbb::task_arena::automatic;
 }
 
+// The threads an arena for this request runs: ThreadsFor's, or TBB's own number.
+inline int ConcurrencyFor(int requested)
+{
+  const int threads = ThreadsFor(requested);
+  return threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+}
+
 // The rule for the default (pure, so it is tested alone): a process bound to fewer cores than
 // the node has (affinityCores < nodeCores) keeps its mask, i.e. TBB's choice (0); an unbound
 // one takes its share of the node, nodeCores / processesOnNode, at least one.
