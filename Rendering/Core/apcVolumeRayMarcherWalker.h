@@ -429,9 +429,11 @@ struct VolumeRayMarcher::Walker
   }
 
   // A tile's cells come in depth order, scattered over the mesh's arrays, and a cell's
-  // set-up waited on memory for its depth, rectangle, scalar range and face planes: these are
-  // requested a few cells ahead (the planes later, once the plane offsets have arrived).
-  void Prefetch(int64_t b, int64_t end) const
+  // set-up waited on memory for its depth, rectangle, scalar range, face planes and corners:
+  // these are requested a few cells ahead (the planes and corner ids later, once their offsets
+  // have arrived, and the corners' points later still). Forced inline: called as a function
+  // of its own, which only reads memory, GCC 12 dropped the call and left no prefetch at all.
+  [[gnu::always_inline]] void Prefetch(int64_t b, int64_t end) const
   {
     constexpr int64_t kAhead = 16;
     if (b + kAhead < end)
@@ -440,6 +442,7 @@ struct VolumeRayMarcher::Walker
       __builtin_prefetch(&this->Bins.Near[cell]);
       __builtin_prefetch(&this->Bins.Rects[cell]);
       __builtin_prefetch(&this->Mesh.GetScalarRange(cell));
+      this->Mesh.PrefetchIds(cell);
     }
     if (b + kAhead / 2 < end)
     {
@@ -452,6 +455,11 @@ struct VolumeRayMarcher::Walker
         __builtin_prefetch(planes + at);
       }
       __builtin_prefetch(planes + bytes - 1);
+      __builtin_prefetch(this->Mesh.GetCellPoints(this->Bins.Cells[b + kAhead / 2]));
+    }
+    if (b + kAhead / 4 < end)
+    {
+      this->Mesh.PrefetchCorners(this->Bins.Cells[b + kAhead / 4]);
     }
   }
 
