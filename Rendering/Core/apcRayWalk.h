@@ -218,6 +218,9 @@ struct RayProgress
   static constexpr int kPixels = kTilePixels;
   static constexpr int kBins = OpaqueBins::kBins;
   const OpaqueBins* Bins = nullptr; // pass 1's own stop, or null
+  // With Bins: Bins->End(b) for every bin, read per (cell, ray) pair and per bin crossing
+  // instead of a multiplication each time.
+  int64_t Ends[kBins];
   uint32_t Profile[kPixels][kBins];
   uint32_t Total[kPixels];
   int64_t FarK[kPixels]; // the largest lattice index summed
@@ -241,6 +244,10 @@ struct RayProgress
     std::fill(this->Stop, this->Stop + pixels, std::numeric_limits<double>::infinity());
     if (own)
     {
+      for (int b = 0; b < kBins; ++b)
+      {
+        this->Ends[b] = own->End(b);
+      }
       std::fill(&this->Profile[0][0], &this->Profile[0][0] + pixels * kBins, 0u);
       std::fill(this->Total, this->Total + pixels, 0u);
       std::fill(this->FarK, this->FarK + pixels, std::numeric_limits<int64_t>::min());
@@ -301,17 +308,17 @@ struct RayProgress
   [[gnu::always_inline]] int BinOf(int64_t k) const
   {
     static_assert(kBins == 16, "four halving steps find one of 16 bins");
-    const OpaqueBins& b = *this->Bins;
-    int bin = b.End(7) <= k ? 8 : 0;
-    bin += b.End(bin + 3) <= k ? 4 : 0;
-    bin += b.End(bin + 1) <= k ? 2 : 0;
-    bin += b.End(bin) <= k ? 1 : 0;
+    const int64_t* end = this->Ends;
+    int bin = end[7] <= k ? 8 : 0;
+    bin += end[bin + 3] <= k ? 4 : 0;
+    bin += end[bin + 1] <= k ? 2 : 0;
+    bin += end[bin] <= k ? 1 : 0;
     return bin;
   }
   // Where an opaque pixel p stops: the first lattice index past the bin of its farthest
   // sample (none past the last bin). Stopping at that sample instead would leave the
   // profile's bin incomplete, and the cut then depends on the partition.
-  int64_t StopIndex(int p) const { return this->Bins->End(this->LastBin(p)); }
+  int64_t StopIndex(int p) const { return this->Ends[this->LastBin(p)]; }
   // The last bin holding a sample pixel p summed (0 if none).
   int LastBin(int p) const
   {

@@ -55,15 +55,22 @@ struct VolumeRayMarcher::Walker
   const uint8_t* Bound = nullptr;
   int BandWidth = 0;
 
-  // A cell's scalars: its own (or none needed), linear along the ray, a twisted pyramid's
-  // closed-form inverse, or by Newton.
+  // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
+  // in its own coordinates, LinearPyramid), a twisted pyramid's closed-form inverse, or by
+  // Newton. The pyramid's linear form is its own loop: a test of the cell's shape per sample
+  // had the loop reload the scalar's coefficients for every sample.
   enum class Sampling
   {
     Constant,
     Linear,
+    LinearPyramid,
     Pyramid,
     Follow
   };
+  static constexpr bool IsLinear(Sampling how)
+  {
+    return how == Sampling::Linear || how == Sampling::LinearPyramid || how == Sampling::Pyramid;
+  }
 
   // What a cell needs while its rays are marched; reused from cell to cell.
   struct CellState
@@ -173,6 +180,10 @@ struct VolumeRayMarcher::Walker
       {
         return this->CellSamples<Sampling::Constant>(rays, hits, visitor, state, progress);
       }
+      if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
+      {
+        return this->CellSamples<Sampling::LinearPyramid>(rays, hits, visitor, state, progress);
+      }
       if (state.Linear)
       {
         return this->CellSamples<Sampling::Linear>(rays, hits, visitor, state, progress);
@@ -213,6 +224,10 @@ struct VolumeRayMarcher::Walker
     {
       return this->Samples<Sampling::Constant>(local, ray, k, tout, visitor, state, progress);
     }
+    if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
+    {
+      return this->Samples<Sampling::LinearPyramid>(local, ray, k, tout, visitor, state, progress);
+    }
     if (state.Linear)
     {
       return this->Samples<Sampling::Linear>(local, ray, k, tout, visitor, state, progress);
@@ -252,13 +267,16 @@ struct VolumeRayMarcher::Walker
     Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     const walk::ClippedRays& c = state.Clipped;
+    // Once per cell: taken per pair, the loop's stores made the compiler reload the table's
+    // fields through the table for every pair.
+    const TransferTable::Layout table = this->Table.GetLayout();
     int64_t samples = 0;
     for (int h = 0; h < hits; ++h)
     {
       const int l = c.Hits[h];
       visitor.Segment(l, c.Tin[l], c.Tout[l]);
       samples += this->SampleLoop<How>(
-        l, rays[l], static_cast<int64_t>(c.Lattice[l]), c.Tout[l], visitor, state, progress);
+        l, rays[l], static_cast<int64_t>(c.Lattice[l]), c.Tout[l], table, visitor, state, progress);
     }
     return samples;
   }
@@ -269,16 +287,18 @@ struct VolumeRayMarcher::Walker
   int64_t Samples(int local, const RaySetup& ray, int64_t k, double tout, Visitor& visitor,
     CellState& state, RayProgress& progress) const
   {
-    return this->SampleLoop<How>(local, ray, k, tout, visitor, state, progress);
+    return this->SampleLoop<How>(
+      local, ray, k, tout, this->Table.GetLayout(), visitor, state, progress);
   }
   template <Sampling How, class Visitor>
   [[gnu::always_inline]] int64_t SampleLoop(int local, const RaySetup& ray, int64_t k, double tout,
-    Visitor& visitor, CellState& state, RayProgress& progress) const
+    const TransferTable::Layout& table, Visitor& visitor, CellState& state,
+    RayProgress& progress) const
   {
     double p0[3] = { 0, 0, 0 };
     double dp[3] = { 0, 0, 0 };
     NewtonMemory memory;
-    if (How == Sampling::Linear || How == Sampling::Pyramid)
+    if (IsLinear(How))
     {
       if (this->SharedOrigin)
       {
@@ -299,18 +319,17 @@ struct VolumeRayMarcher::Walker
       memory = state.FirstMemory;
     }
     double pcoords[3] = { state.Centre[0], state.Centre[1], state.Centre[2] };
-    const TransferTable::Layout table = this->Table.GetLayout();
     bool first = How == Sampling::Follow;
     int64_t samples = 0;
     // Pass 1's own stop: the bin of k, and the first index past it.
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
     int bin = own ? progress.BinOf(k) : 0;
-    int64_t binEnd = own ? progress.Bins->End(bin) : 0;
+    int64_t binEnd = own ? progress.Ends[bin] : 0;
     for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
     {
       TransferSample s = state.CellSample;
       double scalar = state.CellScalar;
-      if (How == Sampling::Linear || How == Sampling::Pyramid)
+      if (IsLinear(How))
       {
         for (int d = 0; d < 3; ++d)
         {
@@ -333,7 +352,8 @@ struct VolumeRayMarcher::Walker
         // Clamped to the cell's range: a point inside the planes but outside the
         // interpolating map's cell (non-planar faces) must not extrapolate past the corners,
         // and it is what makes skipping by range exact.
-        const double interpolated = How == Sampling::Linear
+        // LinearScalarAt of a cell other than a pyramid is ScalarAt.
+        const double interpolated = How == Sampling::LinearPyramid
           ? state.Interpolator.LinearScalarAt(pcoords)
           : (How == Sampling::Pyramid ? state.Interpolator.PyramidScalarAt(pcoords)
                                       : state.Interpolator.ScalarAt(pcoords));
@@ -346,7 +366,7 @@ struct VolumeRayMarcher::Walker
         visitor.Sample(local, k, t, scalar, s);
         if (own)
         {
-          for (; k >= binEnd; binEnd = progress.Bins->End(++bin))
+          for (; k >= binEnd; binEnd = progress.Ends[++bin])
           {
           }
           if (progress.Add(local, k, bin, s.Absorbance))
@@ -409,9 +429,11 @@ struct VolumeRayMarcher::Walker
   }
 
   // A tile's cells come in depth order, scattered over the mesh's arrays, and a cell's
-  // set-up waited on memory for its depth, rectangle, scalar range and face planes: these are
-  // requested a few cells ahead (the planes later, once the plane offsets have arrived).
-  void Prefetch(int64_t b, int64_t end) const
+  // set-up waited on memory for its depth, rectangle, scalar range, face planes and corners:
+  // these are requested a few cells ahead (the planes and corner ids later, once their offsets
+  // have arrived, and the corners' points later still). Forced inline: called as a function
+  // of its own, which only reads memory, GCC 12 dropped the call and left no prefetch at all.
+  [[gnu::always_inline]] void Prefetch(int64_t b, int64_t end) const
   {
     constexpr int64_t kAhead = 16;
     if (b + kAhead < end)
@@ -420,6 +442,7 @@ struct VolumeRayMarcher::Walker
       __builtin_prefetch(&this->Bins.Near[cell]);
       __builtin_prefetch(&this->Bins.Rects[cell]);
       __builtin_prefetch(&this->Mesh.GetScalarRange(cell));
+      this->Mesh.PrefetchIds(cell);
     }
     if (b + kAhead / 2 < end)
     {
@@ -432,6 +455,11 @@ struct VolumeRayMarcher::Walker
         __builtin_prefetch(planes + at);
       }
       __builtin_prefetch(planes + bytes - 1);
+      __builtin_prefetch(this->Mesh.GetCellPoints(this->Bins.Cells[b + kAhead / 2]));
+    }
+    if (b + kAhead / 4 < end)
+    {
+      this->Mesh.PrefetchCorners(this->Bins.Cells[b + kAhead / 4]);
     }
   }
 

@@ -18,6 +18,10 @@ void ExpectBinOfIsOf(const apc::OpaqueBins& bins, std::mt19937_64& random)
 {
   auto progress = std::make_unique<apc::walk::RayProgress>();
   progress->Begin(1, &bins);
+  for (int b = 0; b < apc::OpaqueBins::kBins; ++b)
+  {
+    ASSERT_EQ(progress->Ends[b], bins.End(b)) << "bin " << b; // StopIndex and the walker's
+  }
   const int64_t span = apc::OpaqueBins::kBins * bins.Width;
   for (int64_t k = bins.Base - 2 * bins.Width - 3; k <= bins.Base + span + 2 * bins.Width + 3; ++k)
   {
