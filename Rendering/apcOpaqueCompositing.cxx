@@ -59,20 +59,30 @@ const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentB
 
 // The profiles of the marked tiles summed over every process into summed (band pixels;
 // the other tiles are left as they are): an allreduce of OpaqueBins::kBins 16-bit values per
-// pixel. Every process makes the same calls: a process without volumes sends zeros.
+// pixel, or with bound (the predicted last bins pass 1 took, band pixels, the same on every
+// process) only each pixel's bins up to its bound, past which every process's profile is
+// zero. Every process makes the same calls: a process without volumes sends zeros.
 void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
-  const std::vector<unsigned char>& mask, const uint16_t* mine, uint16_t* summed,
-  MomentBuffers& buffers, FrameRecord& record)
+  const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
+  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
 {
   constexpr int bins = OpaqueBins::kBins;
-  const size_t count = tiles.PixelsIn(mask) * bins;
-  if (count == 0)
+  const size_t pixels = tiles.PixelsIn(mask);
+  if (pixels == 0)
   {
     return;
   }
-  uint16_t* send = Hold(buffers.ProfileSend, count);
-  uint16_t* received = Hold(buffers.ProfileSum, count);
+  uint16_t* send = Hold(buffers.ProfileSend, pixels * bins);
+  uint16_t* received = Hold(buffers.ProfileSum, pixels * bins);
   tiles.Pack(mask, mine, bins, send);
+  uint8_t* packedBound = nullptr;
+  size_t count = pixels * bins;
+  if (bound)
+  {
+    packedBound = Hold(buffers.BoundSend, pixels);
+    tiles.Pack(mask, bound, 1, packedBound);
+    count = CompactProfiles(send, packedBound, pixels);
+  }
   SaturatingProfileSum sum;
   group.Collective("profile",
     [&]
@@ -84,6 +94,10 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
           ++record.MessagesSent;
         });
     });
+  if (packedBound)
+  {
+    ExpandProfiles(received, packedBound, pixels);
+  }
   tiles.Unpack(mask, received, bins, summed);
   record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
 }
@@ -128,8 +142,9 @@ void ResolvePredictedCut(const ProcessGroup& group, const CompositeFrame& frame,
     static_cast<vtkIdType>(std::count(redone.begin(), redone.end(), uint8_t(1)));
   const std::vector<unsigned char> mask = tiles.Mark(
     [&](size_t pixel) { return redone[(pixel / width / size) * across + (pixel % width) / size]; });
+  // Marched again without the bound: every bin.
   SumProfiles(group, frame, tiles, mask, LocalProfile(frame, pixels * OpaqueBins::kBins, buffers),
-    summed, buffers, record);
+    nullptr, summed, buffers, record);
   for (size_t t = 0; t < covered.size() && t < mask.size(); ++t)
   {
     covered[t] = covered[t] || mask[t];
@@ -155,7 +170,8 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
   {
     summed = Hold(buffers.Profile, values);
     std::fill_n(summed, values, uint16_t(0)); // the uncovered tiles have no samples anywhere
-    SumProfiles(group, frame, tiles, covered, mine, summed, buffers, record);
+    SumProfiles(group, frame, tiles, covered, mine, bounded ? buffers.Bound.data() : nullptr,
+      summed, buffers, record);
     mine = summed;
   }
   record.Clock.Lap("profile");

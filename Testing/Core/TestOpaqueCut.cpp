@@ -252,3 +252,58 @@ TEST(OpaqueCut, TheBoundIsTheNeighbourhoodsLargestCutPlusAMargin)
   EXPECT_EQ(int(moved[2 * 8 + 2]), 10);   // image pixel (14, 22)
   EXPECT_EQ(int(moved[2 * 8 + 7]), none); // image pixel (19, 22): outside the previous one
 }
+
+// The profiles' allreduce with a bound carries each pixel's bins up to its bound alone: those
+// of several processes (zero past the bound, as a bounded pass 1 leaves them), compacted,
+// summed value by value and expanded, are the sums of the whole profiles; with no bound
+// (kBins - 1) every bin goes.
+TEST(OpaqueCut, ProfilesSummedUpToTheirBoundsAreTheWholeSums)
+{
+  constexpr int bins = OpaqueBins::kBins;
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 200; ++trial)
+  {
+    const size_t pixels = 1 + trial % 37;
+    const int processes = 2 + trial % 3;
+    std::vector<uint8_t> bound(pixels);
+    size_t kept = 0;
+    for (uint8_t& b : bound)
+    {
+      b = static_cast<uint8_t>(std::uniform_int_distribution<int>(0, bins - 1)(rng));
+      kept += b + 1u;
+    }
+    std::vector<uint16_t> whole(pixels * bins, 0);
+    std::vector<uint16_t> compactSum;
+    for (int p = 0; p < processes; ++p)
+    {
+      std::vector<uint16_t> profile(pixels * bins, 0);
+      for (size_t x = 0; x < pixels; ++x)
+      {
+        for (int b = 0; b <= bound[x]; ++b)
+        {
+          profile[x * bins + b] =
+            static_cast<uint16_t>(std::uniform_int_distribution<int>(0, 40000)(rng));
+        }
+      }
+      apc::AddProfiles(whole.data(), profile.data(), whole.size());
+      ASSERT_EQ(apc::CompactProfiles(profile.data(), bound.data(), pixels), kept);
+      compactSum.resize(kept, 0);
+      apc::AddProfiles(compactSum.data(), profile.data(), kept);
+    }
+    compactSum.resize(pixels * bins, 0xffff); // what lies past the compacted values is stale
+    apc::ExpandProfiles(compactSum.data(), bound.data(), pixels);
+    ASSERT_EQ(compactSum, whole) << "trial " << trial;
+  }
+  // Nothing bounded: all of every profile, unchanged.
+  std::vector<uint16_t> profile(3 * bins);
+  for (size_t v = 0; v < profile.size(); ++v)
+  {
+    profile[v] = static_cast<uint16_t>(v + 1);
+  }
+  const std::vector<uint16_t> original = profile;
+  const std::vector<uint8_t> none(3, uint8_t(bins - 1));
+  EXPECT_EQ(apc::CompactProfiles(profile.data(), none.data(), 3), profile.size());
+  EXPECT_EQ(profile, original);
+  apc::ExpandProfiles(profile.data(), none.data(), 3);
+  EXPECT_EQ(profile, original);
+}

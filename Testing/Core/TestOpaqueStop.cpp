@@ -177,6 +177,22 @@ Frame RenderPredicted(const Scene& scene, std::vector<apc::VolumeRayMarcher*> ma
     frame.Pass1Samples += marchers[m]->GetLastSampleCount();
   }
   std::vector<uint16_t> profile = sum();
+  if (bound)
+  {
+    // As vtkAPCCompositePass sums them: only each pixel's bins up to its bound, past which a
+    // bounded pass 1 leaves every mesh's profile zero.
+    std::vector<uint16_t> compact(kPixels * bins, 0);
+    size_t kept = 0;
+    for (auto* marcher : marchers)
+    {
+      std::vector<uint16_t> mine = marcher->GetOpaqueProfile();
+      kept = apc::CompactProfiles(mine.data(), bound->data(), kPixels);
+      apc::AddProfiles(compact.data(), mine.data(), kept);
+    }
+    apc::ExpandProfiles(compact.data(), bound->data(), kPixels);
+    EXPECT_EQ(compact, profile) << "a bounded pass 1 left a sample past its bound";
+    profile = compact;
+  }
   std::vector<uint8_t> open(kPixels, 0);
   unresolved = bound ? apc::MarkUnresolved(bound->data(), profile.data(), kPixels, open.data()) : 0;
   if (unresolved > 0)
