@@ -139,8 +139,8 @@ void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
   image.Crop = frame.Rect;
   for (size_t v = 0; v < volumes.size(); ++v)
   {
-    frame.Engines[v]->Prepare(
-      frame.Renderer, volumes[v]->GetProperty(), frame.Bounds, frame.Cells, depth.data(), image);
+    frame.Engines[v]->Prepare(frame.Renderer, volumes[v]->GetProperty(), frame.Bounds, frame.Cells,
+      frame.CellVolume, depth.data(), image);
     // The same on every process (global bounds): said once, by the display process.
     const std::string note = frame.Engines[v]->TakeSpacingNote();
     if (!note.empty() && group.IsDisplay())

@@ -86,6 +86,7 @@ struct CompositeFrame
   FrameSettings Settings;                  // as agreed (apcFrameAgreement.h)
   double Bounds[6] = { 0, 0, 0, 0, 0, 0 }; // all processes' cells
   double Cells = 0;                        // their number
+  double CellVolume = 0; // their total volume (summed exactly: the same on every process)
   // The pixels whose rays can meet Bounds: the only ones rendered. Every per-pixel buffer of
   // the frame (depth, moments, colour sums, the result) holds Rect's pixels alone, row by
   // row (RectWidth() long), so memory follows the data's footprint, not the view.

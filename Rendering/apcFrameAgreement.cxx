@@ -11,6 +11,7 @@
 #include "vtkObject.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -154,15 +155,30 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   values.Reduce(group);
 
   FrameAgreement agreed;
-  // The cells' total, a sum (the MAX above cannot give it): cell counts are integers, whose
-  // sum in double is exact below 2^53 in any order, so every process gets the same value.
+  // The cells' total and their volume, sums (the MAX above cannot give them), both exact in
+  // integers: the count, and the volume's fixed-point digits (apcExactSum.h), so every process
+  // gets the same values whatever the partition and the order of the sum.
   agreed.Cells = local.Cells;
+  ExactSum volume = local.Volume;
   if (group.Parallel)
   {
+    std::array<unsigned long long, ExactSum::kLanes + 1> mine{};
+    std::array<unsigned long long, ExactSum::kLanes + 1> all{};
+    const auto lanes = volume.Lanes();
+    std::copy(lanes.begin(), lanes.end(), mine.begin());
+    mine.back() = static_cast<unsigned long long>(local.Cells);
     group.Collective("agree",
       [&]
-      { group.Controller->AllReduce(&local.Cells, &agreed.Cells, 1, vtkCommunicator::SUM_OP); });
+      {
+        group.Controller->AllReduce(
+          mine.data(), all.data(), static_cast<vtkIdType>(mine.size()), vtkCommunicator::SUM_OP);
+      });
+    std::array<uint64_t, ExactSum::kLanes> summed;
+    std::copy(all.begin(), all.end() - 1, summed.begin());
+    volume = ExactSum::FromLanes(summed);
+    agreed.Cells = static_cast<double>(all.back());
   }
+  agreed.Volume = volume.Value();
   for (int d = 0; d < 3; ++d)
   {
     const auto extent = values.Take();

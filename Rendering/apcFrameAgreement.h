@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What every process must agree on before a frame's collectives, settled in one small
 // allreduce: the union of the data bounds (depth warp, sample spacing, screen rectangle),
-// the number of cells (with the bounds, the default sample spacing; summed in a second one),
+// the number of cells and their volume (with the bounds, the default sample spacing; summed
+// exactly in a second, integer one),
 // failures, the number of visible APC volumes and of moments, the viewport size, whether the
 // frame is interactive, and the pass's settings (apcFrameSettings.h). A process that cannot
 // render, has no volume while others have, or disagrees on a size or a setting makes every
@@ -9,6 +10,7 @@
 #ifndef apcFrameAgreement_h
 #define apcFrameAgreement_h
 
+#include "apcExactSum.h"
 #include "apcFrameSettings.h"
 
 #include <string>
@@ -35,6 +37,7 @@ struct LocalFrame
 {
   double Bounds[6]; // of this process's renderable cells; empty (min > max) if none
   double Cells = 0; // their number (the default sample distance is the mean cell size)
+  ExactSum Volume;  // their total volume
   bool Failed = false;
   int Volumes = 0;    // visible APC volumes
   int MinMoments = 0; // over those volumes (0 and 0 if none)
@@ -57,8 +60,9 @@ struct LocalFrame
 // The agreed frame, the same on every process.
 struct FrameAgreement
 {
-  double Bounds[6]; // union over all processes; empty if no cells anywhere
-  double Cells = 0; // sum over all processes
+  double Bounds[6];  // union over all processes; empty if no cells anywhere
+  double Cells = 0;  // sum over all processes
+  double Volume = 0; // the cells' volume, summed exactly over all processes, rounded once
   bool AnyFailed = false;
   // A volume of some process stops where opaque: every process then joins the profile's
   // allreduce, with volumes or without.

@@ -256,7 +256,7 @@ void FrameEngine::BeginFrame(const VolumeSettings& settings)
 
 //------------------------------------------------------------------------------
 bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const double* globalBounds,
-  double globalCells, const float* depthBuffer, const ImageSetup& image)
+  double globalCells, double globalVolume, const float* depthBuffer, const ImageSetup& image)
 {
   this->Ready = false;
   this->Crop = image.Crop.value_or(ScreenRect{ 0, 0, image.Width, image.Height });
@@ -269,14 +269,17 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
     return false;
   }
 
-  // Everything that must agree between processes comes from the global bounds and cell
-  // count: the sample spacing (the lattice) and the depth range of the warp (the moments' axis).
+  // Everything that must agree between processes comes from the global bounds, cell count
+  // and cell volume: the sample spacing (the lattice) and the depth range of the warp (the moments'
+  // axis).
   std::array<double, 6> bounds = this->Mesh.GetBounds();
   double cells = static_cast<double>(this->Mesh.GetNumberOfCells());
+  double volume = this->Mesh.GetCellVolume().Value();
   if (globalBounds)
   {
     std::copy(globalBounds, globalBounds + 6, bounds.begin());
     cells = globalCells;
+    volume = globalVolume;
   }
   if (!(bounds[0] <= bounds[1] && bounds[2] <= bounds[3] && bounds[4] <= bounds[5]))
   {
@@ -284,8 +287,8 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   const double diagonal = BoundsDiagonal(bounds.data());
   const double distance = this->Settings.SampleDistance;
-  this->Spacing =
-    image.SampleFactor * (distance > 0 ? distance : DefaultSampleDistance(bounds.data(), cells));
+  this->Spacing = image.SampleFactor *
+    (distance > 0 ? distance : DefaultSampleDistance(bounds.data(), cells, volume));
   if (!(this->Spacing > 0))
   {
     return false; // a mesh with no extent
@@ -363,7 +366,8 @@ void FrameEngine::CapSpacing(double distance, double diagonal)
          << " samples along a ray through the data (its bounding-box diagonal is " << diagonal
          << "); the limit is " << static_cast<long long>(kMaxSamplesPerRay) << ", so " << finest
          << " is used. " << (distance > 0 ? "Raise" : "Set") << " Sample Distance to at least "
-         << finest << " (0 picks the mean cell size, at least diagonal / 192).";
+         << finest << " (0 picks the mean cell size, at least diagonal / "
+         << static_cast<long long>(kMinDefaultSamples) << ").";
     this->SpacingNote = note.str();
     this->CappedDistance = distance;
     this->CappedDiagonal = diagonal;

@@ -100,18 +100,21 @@ public:
   int64_t GetNumberOfCells() const { return this->Mesh.GetNumberOfCells(); }
   /// The threads this volume's passes run on (its setting, or this process's default).
   int GetThreads() const;
+  /// The renderable cells' total volume, summed exactly (the default sample distance's input).
+  const ExactSum& GetCellVolume() const { return this->Mesh.GetCellVolume(); }
 
   /**
    * After UpdateInput (once per frame), samples property's transfer functions and sets up the rays
-   * of ren's viewport. globalBounds (xmin..zmax of all processes' cells) and globalCells (their
-   * number, summed over the processes) fix the depth warp and the default sample spacing
-   * (apcDefaultSpacing.h) so that every process uses the same ones; null and 0 use this
+   * of ren's viewport. globalBounds (xmin..zmax of all processes' cells), globalCells (their
+   * number, summed over the processes) and globalVolume (their volume, GetCellVolume summed
+   * exactly over the processes) fix the depth warp and the default sample spacing
+   * (apcDefaultSpacing.h) so that every process uses the same ones; null (and 0, 0) use this
    * process's cells. depthBuffer (W*H OpenGL depth values, e.g. the composited opaque scene) stops
    * the rays; null reads ren's window. image is what to render (ImageSetup::FullQuality(ren) by the
    * mapper; the pass's agreed image). False if there is nothing this process can render.
    */
   bool Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const double* globalBounds,
-    double globalCells, const float* depthBuffer, const ImageSetup& image);
+    double globalCells, double globalVolume, const float* depthBuffer, const ImageSetup& image);
 
   int GetWidth() const { return this->Crop.Pixels() > 0 ? this->Crop.Width() : 0; }
   int GetHeight() const { return this->Crop.Pixels() > 0 ? this->Crop.Height() : 0; }

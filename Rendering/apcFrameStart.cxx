@@ -55,6 +55,7 @@ void CollectVolumes(const std::vector<VolumeEntry>& volumes, LocalFrame& local,
     local.AddVolume(volumeSettings.Moments.Moments,
       engine->GetLocalBounds(bounds) ? bounds : nullptr, entry.Volume->GetProperty());
     local.Cells += static_cast<double>(engine->GetNumberOfCells());
+    local.Volume.Add(engine->GetCellVolume());
     local.StopsWhereOpaque = local.StopsWhereOpaque || volumeSettings.StopWhereOpaque;
     if (mappers.empty())
     {
@@ -137,6 +138,7 @@ bool AgreeOnFrame(vtkObject* self, const ProcessGroup& group,
   frame.TryWithoutOpaqueStop = !agreed.AnyOpaque && !agreed.Settings.CompositeInDouble;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);
   frame.Cells = agreed.Cells;
+  frame.CellVolume = agreed.Volume;
   return true;
 }
 

@@ -257,7 +257,7 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     image.Crop = apc::ScreenRectOf(ren, bounds, image.Width, image.Height);
   }
-  if (!usable || !engine.Prepare(ren, vol->GetProperty(), nullptr, 0, nullptr, image) ||
+  if (!usable || !engine.Prepare(ren, vol->GetProperty(), nullptr, 0, 0, nullptr, image) ||
     engine.GetNumberOfCells() == 0)
   {
     this->Internal->Image->Initialize();

@@ -107,9 +107,11 @@ struct CellMesh::Summary
   int64_t NonFiniteCorners = 0;
   int64_t Flat = 0;
   int64_t NonFiniteScalars = 0;
+  ExactSum Volume; // of the rendered cells
 
   void Add(const Summary& other)
   {
+    this->Volume.Add(other.Volume);
     for (int d = 0; d < 3; ++d)
     {
       this->Bounds[2 * d] = std::min(this->Bounds[2 * d], other.Bounds[2 * d]);
@@ -189,6 +191,7 @@ bool CellMesh::Finalize(std::string* error)
   this->NonFiniteCornerCells = total.NonFiniteCorners;
   this->FlatCells = total.Flat;
   this->NonFiniteScalarCells = total.NonFiniteScalars;
+  this->CellVolume = total.Volume;
   if (!(this->MeshBounds[0] <= this->MeshBounds[1]))
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
@@ -225,7 +228,8 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
     ++summary.NonFiniteCorners;
     return CellFate::NonFiniteCorners;
   }
-  if (IsFlat(this->Shapes[cell], x))
+  const CellMeasure measure = MeasureCell(this->Shapes[cell], x);
+  if (!(measure.RelativeThickness > kMinRelativeThickness)) // IsFlat
   {
     ++summary.Flat;
     return CellFate::Flat;
@@ -260,6 +264,7 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
     return CellFate::Flat;
   }
   this->PlaneCounts[cell] = static_cast<uint8_t>(count);
+  summary.Volume.Add(measure.Volume);
   summary.NonFiniteScalars += std::isnan(this->ScalarRanges[cell][0]) ? 1 : 0;
   for (int d = 0; d < 3; ++d)
   {

@@ -15,6 +15,7 @@
 #define apcCellMesh_h
 
 #include "apcCellInterpolation.h"
+#include "apcExactSum.h"
 #include "apcUninitialized.h"
 
 #include <array>
@@ -122,6 +123,10 @@ public:
   // Rendered cells with a non-finite scalar (NaN or +-inf): transparent, see GetScalarRange.
   int64_t GetNumberOfNonFiniteScalarCells() const { return this->NonFiniteScalarCells; }
 
+  // The rendered cells' total volume, summed exactly by Finalize (the same sum whatever the
+  // order of the cells or their split over processes): the default sample distance's input.
+  const ExactSum& GetCellVolume() const { return this->CellVolume; }
+
   // Corners and scalars of one cell, ready for interpolation.
   void GetCorners(int64_t cell, CellCorners& corners) const;
 
@@ -155,6 +160,7 @@ private:
   int64_t NonFiniteCornerCells = 0;
   int64_t FlatCells = 0;
   int64_t NonFiniteScalarCells = 0;
+  ExactSum CellVolume;
 };
 
 } // namespace apc

@@ -42,7 +42,7 @@ const CellFaces& FacesOf(CellShape shape)
 }
 
 //------------------------------------------------------------------------------
-double RelativeThickness(CellShape shape, const std::array<std::array<double, 3>, 8>& corners)
+CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>, 8>& corners)
 {
   const int n = NumberOfCorners(shape);
   // Everything relative to the centroid: far from the origin, absolute coordinates would
@@ -88,16 +88,23 @@ double RelativeThickness(CellShape shape, const std::array<std::array<double, 3>
     }
     maxArea2 = std::max(maxArea2, std::sqrt(Dot(area2, area2)));
   }
+  CellMeasure measure;
+  measure.Volume = std::abs(volume6) / 6.0;
   if (std::isnan(volume6) || std::isnan(maxArea2) || std::isnan(diagonal))
   {
-    return volume6 + maxArea2 + diagonal; // NaN
+    measure.RelativeThickness = volume6 + maxArea2 + diagonal; // NaN
+    return measure;
   }
   const double denominator = 0.5 * maxArea2 * diagonal;
-  if (!(denominator > 0) || !std::isfinite(denominator))
-  {
-    return 0;
-  }
-  return std::abs(volume6) / 6.0 / denominator;
+  measure.RelativeThickness =
+    denominator > 0 && std::isfinite(denominator) ? measure.Volume / denominator : 0;
+  return measure;
+}
+
+//------------------------------------------------------------------------------
+double RelativeThickness(CellShape shape, const std::array<std::array<double, 3>, 8>& corners)
+{
+  return MeasureCell(shape, corners).RelativeThickness;
 }
 
 } // namespace apc

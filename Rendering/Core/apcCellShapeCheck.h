@@ -41,6 +41,15 @@ constexpr double kMinRelativeThickness = 1e-6;
 using CellFaces = CellFacets;
 const CellFaces& FacesOf(CellShape shape);
 
+// A cell's volume |V| (as above: the divergence theorem over its triangulated faces) and its
+// RelativeThickness, from one pass over its faces (CellMesh::Finalize needs both).
+struct CellMeasure
+{
+  double Volume = 0;
+  double RelativeThickness = 0;
+};
+CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>, 8>& corners);
+
 // |V| / (A_max * D) as above for the corners of a cell (VTK's corner order for its shape); 0
 // for a cell with no face area or no extent; NaN or 0 if a corner is not finite.
 double RelativeThickness(CellShape shape, const std::array<std::array<double, 3>, 8>& corners);

@@ -35,20 +35,42 @@ inline double BoundsDiagonal(const double bounds[6])
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
-// What a sample distance of 0 stands for: one mean cell size, but at least kMinDefaultSamples
-// samples along the bounding-box diagonal. The floor is for meshes whose cells are large next
-// to the features they draw: the flange (5,712 cells, thin walls, a quarter of its box filled)
-// shows lattice bands at one sample per mean cell size (33 dB against the exact picture) and
-// needs about 160 samples along its diagonal for 40 dB; the wind data (331,699 cells) keeps
-// 40.7 dB at one per cell. The mean cell size governs meshes of more than ~10^6 cells, which
-// it samples more finely than the floor. docs/evaluation.md, section 4.2, has the measurement.
-constexpr double kDefaultSpacingPerCell = 1.0;
-constexpr double kMinDefaultSamples = 192.0;
+// The edge of a cube of the cells' own mean volume: cbrt(volume / cells), volume the cells'
+// total (CellMesh::GetCellVolume, summed exactly over the processes). Rounded down to
+// kSpacingBits significant bits: the lattice does not move when one cell changes a little
+// (a deforming mesh keeps its lattice from step to step), and the result is never coarser
+// than the exact value. 0 without cells or volume.
+constexpr int kSpacingBits = 5;
 
-inline double DefaultSampleDistance(const double bounds[6], double cells)
+inline double MeanCellVolumeSize(double volume, double cells)
+{
+  if (!(cells >= 1) || !(volume > 0) || !std::isfinite(volume))
+  {
+    return 0.0;
+  }
+  int exponent = 0;
+  const double m = std::frexp(std::cbrt(volume / cells), &exponent);
+  return std::ldexp(std::floor(std::ldexp(m, kSpacingBits)), exponent - kSpacingBits);
+}
+
+// What a sample distance of 0 stands for: one mean cell size (from the cells' own volume,
+// MeanCellVolumeSize), but at least kMinDefaultSamples samples along the bounding-box
+// diagonal. The floor is for meshes whose cells are large next to the features they draw:
+// the flange (5,712 cells, thin walls; its cells fill a quarter of its box) keeps 40 dB
+// against the exact picture down to about 96 samples along its diagonal, not at one sample
+// per cell, so 128 leaves a margin; the wind data (331,699 cells) takes its mean cell size,
+// about 139 samples along its diagonal (41.3 dB). The cells' volume, not the box's, keeps a
+// mesh that fills its box sparsely from being sampled coarser than its cells.
+// docs/evaluation.md, section 4.2, has the measurement. Without a volume (flat cells only)
+// the box's mean cell size stands in.
+constexpr double kDefaultSpacingPerCell = 1.0;
+constexpr double kMinDefaultSamples = 128.0;
+
+inline double DefaultSampleDistance(const double bounds[6], double cells, double volume)
 {
   const double coarsest = BoundsDiagonal(bounds) / kMinDefaultSamples;
-  const double cell = MeanCellSize(bounds, cells);
+  double cell = MeanCellVolumeSize(volume, cells);
+  cell = cell > 0 ? cell : MeanCellSize(bounds, cells);
   return cell > 0 ? std::min(kDefaultSpacingPerCell * cell, coarsest) : coarsest;
 }
 

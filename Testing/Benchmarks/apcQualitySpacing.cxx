@@ -13,6 +13,8 @@
 // of the process (all threads) for one frame after a first one (mesh conversion excluded).
 #include "apcQualitySpacing.h"
 
+#include "apcCellMesh.h"
+#include "apcCellMeshFromVTK.h"
 #include "apcDefaultSpacing.h"
 #include "apcImageMetrics.h"
 #include "apcTestImages.h"
@@ -31,6 +33,7 @@
 #include "vtkRenderer.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
+#include "vtkUnstructuredGridBase.h"
 #include "vtkVolume.h"
 #include "vtkXMLPUnstructuredGridReader.h"
 #include "vtkXMLUnstructuredGridReader.h"
@@ -40,6 +43,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <string>
 #include <vector>
 
 namespace apcbench
@@ -276,6 +280,14 @@ std::vector<Case> Cases(double diagonal, double cell)
   {
     const std::string m = mode == vtkAPCVolumeMapper::EXACT ? "exact" : "mboit";
     cases.push_back({ m + "-diag256", mode, old, false });
+    // Fixed numbers of samples along the diagonal: where a sparse mesh needs its floor.
+    for (int n : { 96, 128, 160, 192 })
+    {
+      if (mode == vtkAPCVolumeMapper::MBOIT)
+      {
+        cases.push_back({ m + "-diag" + std::to_string(n), mode, diagonal / n, false });
+      }
+    }
     for (double f : { 0.5, 0.75, 1.0, 1.5, 2.0 })
     {
       std::ostringstream name;
@@ -312,10 +324,20 @@ int SpacingStudy(
     double b[6];
     scene.Grid->GetBounds(b);
     const double diagonal = apc::BoundsDiagonal(b);
-    const double cell = apc::MeanCellSize(b, static_cast<double>(scene.Grid->GetNumberOfCells()));
+    // The mean cell size as the mapper takes it: from the cells' own volume.
+    apc::CellMesh mesh;
+    std::string error;
+    auto* grid = vtkUnstructuredGridBase::SafeDownCast(scene.Grid);
+    if (!grid ||
+      !apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, error))
+    {
+      std::cerr << "error: " << scene.Name << ": " << error << "\n";
+      return 1;
+    }
+    const double cells = static_cast<double>(mesh.GetNumberOfCells());
+    const double cell = apc::MeanCellVolumeSize(mesh.GetCellVolume().Value(), cells);
     const std::vector<Case> cases = Cases(diagonal, cell);
-    double finest =
-      apc::DefaultSampleDistance(b, static_cast<double>(scene.Grid->GetNumberOfCells()));
+    double finest = apc::DefaultSampleDistance(b, cells, mesh.GetCellVolume().Value());
     for (const Case& c : cases)
     {
       finest = c.Spacing > 0 ? std::min(finest, c.Spacing) : finest;

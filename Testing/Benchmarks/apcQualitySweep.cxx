@@ -312,9 +312,7 @@ SplitFrame RenderSplit(const apctest::Scene& scene,
     volume->SetProperty(property);
     auto engine = std::make_unique<apc::FrameEngine>();
     engine->BeginFrame(mapper->GetVolumeSettings());
-    if (!engine->UpdateInput(mapper->GetInput(), mapper) ||
-      !engine->Prepare(renderer, property, bounds,
-        static_cast<double>(scene.Grid->GetNumberOfCells()), farDepth.data(), image))
+    if (!engine->UpdateInput(mapper->GetInput(), mapper))
     {
       std::cerr << "error: a piece of " << scene.Name << " cannot be rendered\n";
       std::exit(3);
@@ -322,6 +320,22 @@ SplitFrame RenderSplit(const apctest::Scene& scene,
     mappers.push_back(mapper);
     volumes.push_back(volume);
     engines.push_back(std::move(engine));
+  }
+  // All pieces' cells and volume, as the pass agrees them (the default sample distance).
+  apc::ExactSum volumeSum;
+  for (const auto& engine : engines)
+  {
+    volumeSum.Add(engine->GetCellVolume());
+  }
+  for (const auto& engine : engines)
+  {
+    if (!engine->Prepare(renderer, property, bounds,
+          static_cast<double>(scene.Grid->GetNumberOfCells()), volumeSum.Value(), farDepth.data(),
+          image))
+    {
+      std::cerr << "error: a piece of " << scene.Name << " cannot be rendered\n";
+      std::exit(3);
+    }
   }
   const apc::MomentParameters parameters = mappers.front()->GetVolumeSettings().Moments;
   const size_t pixels = static_cast<size_t>(kSize) * kSize;

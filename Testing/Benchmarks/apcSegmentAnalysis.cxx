@@ -139,14 +139,26 @@ public:
     {
       cells += static_cast<double>(piece->GetNumberOfCells());
     }
+    // Every piece's engine takes its input first: the default sample distance needs all
+    // pieces' volume, as the pass agrees it.
+    std::vector<apc::FrameEngine> engines(pieces.size());
+    std::vector<bool> usable(pieces.size());
+    apc::ExactSum volumeSum;
     for (size_t r = 0; r < pieces.size(); ++r)
     {
       mapper->SetInputData(pieces[r]);
-      apc::FrameEngine engine;
-      engine.BeginFrame(mapper->GetVolumeSettings());
-      if (engine.UpdateInput(mapper->GetInput(), mapper) &&
-        engine.Prepare(this->Renderer, volume->GetProperty(), bounds, cells, depth.data(),
-          apc::ImageSetup::FullQuality(this->Renderer)))
+      engines[r].BeginFrame(mapper->GetVolumeSettings());
+      usable[r] = engines[r].UpdateInput(mapper->GetInput(), mapper);
+      volumeSum.Add(engines[r].GetCellVolume());
+    }
+    const double cellVolume = volumeSum.Value();
+    for (size_t r = 0; r < pieces.size(); ++r)
+    {
+      mapper->SetInputData(pieces[r]);
+      apc::FrameEngine& engine = engines[r];
+      if (usable[r] &&
+        engine.Prepare(this->Renderer, volume->GetProperty(), bounds, cells, cellVolume,
+          depth.data(), apc::ImageSetup::FullQuality(this->Renderer)))
       {
         engine.RenderSegments(images[r]);
       }
