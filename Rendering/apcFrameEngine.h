@@ -127,7 +127,7 @@ public:
   double GetSampleDistance() const { return this->Spacing; }
   /**
    * The most samples a ray takes through the data (along its bounding-box diagonal; the
-   * default sample distance takes 192, more on meshes of over ~10^6 cells): a finer sample
+   * default sample distance takes 128, more on meshes of over ~10^6 cells): a finer sample
    * distance, set or default, is raised to diagonal / this,
    * so that a mistyped setting cannot freeze a render for minutes. Prepare then leaves a note
    * saying what to change, once per setting and data extent: TakeSpacingNote hands it over

@@ -137,8 +137,8 @@ public:
   ///@{
   /**
    * World distance between samples along a ray. 0 (default) picks the data's mean cell size
-   * (the cube root of its bounding-box volume per cell, over all processes' cells under
-   * vtkAPCCompositePass), but at least 192 samples along the bounding-box diagonal.
+   * (the cube root of its cells' own volume per cell, over all processes' cells under
+   * vtkAPCCompositePass), but at least 128 samples along the bounding-box diagonal.
    */
   void SetSampleDistance(double distance);
   double GetSampleDistance() const;

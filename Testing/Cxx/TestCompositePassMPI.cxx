@@ -276,8 +276,9 @@ int main(int argc, char* argv[])
   windDefault.SampleDistance = 0;
   CompareWithWhole(
     controller, "wind default spacing", windDefault, WindPieces(rank, ranks), 96, false);
-  // On the wind the floor of 192 samples along the diagonal decides; where the cells do, each
-  // process needs the cell count of all: the agreement sums it, the same on every process.
+  // The mean cell size decides on the wind (the floor, 128 samples along the diagonal, on the
+  // flange); each process needs the cell count of all: the agreement sums it, the same on every
+  // process.
   {
     apc::LocalFrame local;
     local.Cells = rank + 1;
