@@ -61,15 +61,7 @@ Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
   window->Render();
   Frame frame;
   frame.Timings = pass->GetLastTimings();
-  vtkDataArray* array = pass->GetLastImage()->GetPointData()->GetArray("RGBA");
-  if (array)
-  {
-    frame.RGBA.resize(array->GetNumberOfTuples() * 4);
-    for (vtkIdType v = 0; v < array->GetNumberOfTuples() * 4; ++v)
-    {
-      frame.RGBA[v] = static_cast<float>(array->GetComponent(v / 4, v % 4));
-    }
-  }
+  frame.RGBA = apctest::ImageRGBA(pass->GetLastImage());
   return frame;
 }
 }

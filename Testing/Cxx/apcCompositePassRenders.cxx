@@ -92,17 +92,7 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& 
     window->GetPixelData(0, 0, size - 1, size - 1, 0, pixels);
     shown->assign(pixels->GetPointer(0), pixels->GetPointer(0) + 3 * size * size);
   }
-  std::vector<float> rgba;
-  vtkDataArray* array = pass->GetLastImage()->GetPointData()->GetArray("RGBA");
-  if (array)
-  {
-    rgba.resize(array->GetNumberOfTuples() * 4);
-    for (vtkIdType v = 0; v < array->GetNumberOfTuples() * 4; ++v)
-    {
-      rgba[v] = static_cast<float>(array->GetComponent(v / 4, v % 4));
-    }
-  }
-  return rgba;
+  return ImageRGBA(pass->GetLastImage());
 }
 
 std::vector<float> RenderWhole(const Scene& scene, int size, bool plane, int mode)
@@ -134,11 +124,20 @@ std::vector<float> RenderWhole(const Scene& scene, int size, bool plane, int mod
   }
   SetCamera(renderer, scene, b);
   window->Render();
-  vtkDataArray* array = mapper->GetLastImage()->GetPointData()->GetArray("RGBA");
-  std::vector<float> rgba(array->GetNumberOfTuples() * 4);
-  for (vtkIdType v = 0; v < array->GetNumberOfTuples() * 4; ++v)
+  return ImageRGBA(mapper->GetLastImage());
+}
+
+std::vector<float> ImageRGBA(vtkImageData* image)
+{
+  std::vector<float> rgba;
+  vtkDataArray* array = image ? image->GetPointData()->GetArray("RGBA") : nullptr;
+  if (array)
   {
-    rgba[v] = static_cast<float>(array->GetComponent(v / 4, v % 4));
+    rgba.resize(array->GetNumberOfTuples() * 4);
+    for (vtkIdType v = 0; v < array->GetNumberOfTuples() * 4; ++v)
+    {
+      rgba[v] = static_cast<float>(array->GetComponent(v / 4, v % 4));
+    }
   }
   return rgba;
 }

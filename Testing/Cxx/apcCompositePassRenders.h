@@ -13,6 +13,7 @@
 #include <vector>
 
 class vtkAPCCompositePass;
+class vtkImageData;
 class vtkMPIController;
 class vtkUnstructuredGrid;
 
@@ -34,6 +35,8 @@ std::vector<float> RenderWhole(
 // The bounds of all ranks' pieces together (every rank joins).
 void GlobalBounds(vtkMPIController* controller, vtkUnstructuredGrid* piece, double bounds[6]);
 
+// An APC image's float RGBA (GetLastImage() of the pass or the mapper); empty without one.
+std::vector<float> ImageRGBA(vtkImageData* image);
 // The largest absolute difference of two images; 1 if their sizes differ or both are empty.
 double MaxAbsDifference(const std::vector<float>& a, const std::vector<float>& b);
 
