@@ -8,7 +8,7 @@
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
-//     [--linear-tolerance BINS] [--no-stop] [--lower60]
+//     [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -148,9 +148,10 @@ struct Options
   double SpacingScale = 1.0;
   bool SpacingScaleGiven = false; // --setup paraview: the mean cell size times SpacingScale
   double LinearTolerance = NAN;   // sampler: the linear inverse's tolerance in bins (NaN: default)
-  bool Lower60 = false; // --setup paraview: the ramp with the lower 60 % of the range clear
-  bool Stop = true;     // sampler: time with the recommended opaque stop (off: as ParaView renders)
-  int Moments = 4;      // APC's MBOIT moments
+  bool Lower60 = false;        // --setup paraview: the ramp with the lower 60 % of the range clear
+  std::string WindField = "p"; // --field: the wind's point array (paraview_vs_apc.py: U_mag)
+  bool Stop = true; // sampler: time with the recommended opaque stop (off: as ParaView renders)
+  int Moments = 4;  // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
   bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
@@ -303,7 +304,7 @@ MapperScene MakeScene(const std::string& name, const Options& options, bool tetr
   {
     // Kinematic pressure around the buildings: stagnation on the windward walls (red) and
     // suction at the roof edges and in the wakes (blue); the near-zero free stream is clear.
-    scene.Field = "p";
+    scene.Field = options.WindField;
     vtkSmartPointer<vtkUnstructuredGrid> raw =
       ReadGrid(options.Data + "/windAroundBuildings/wind.pvtu");
     // The 8 Scotch pieces each carry their interface points; merging the coincident ones
@@ -999,7 +1000,7 @@ void Usage()
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
-               "  [--linear-tolerance BINS] [--no-stop] [--lower60]\n";
+               "  [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME]\n";
 }
 
 } // namespace
@@ -1087,6 +1088,10 @@ int main(int argc, char* argv[])
     else if (arg == "--lower60")
     {
       options.Lower60 = true;
+    }
+    else if (arg == "--field")
+    {
+      options.WindField = value();
     }
     else if (arg == "--linear-tolerance")
     {
