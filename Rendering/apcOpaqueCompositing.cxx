@@ -7,6 +7,7 @@
 #include "apcFrameEngine.h"
 #include "apcOpaqueBins.h"
 #include "apcOpaquePrediction.h"
+#include "apcOpaqueSummary.h"
 #include "apcWireMessages.h"
 
 #include "vtkCommunicator.h"
@@ -39,6 +40,17 @@ public:
   int Commutative() override { return 1; }
 };
 
+// Combined opaque summaries (apcOpaqueSummary.h): the earliest own cut, the totals summed.
+class OpaqueSummaryCombine : public vtkCommunicator::Operation
+{
+public:
+  void Function(const void* a, void* b, vtkIdType length, int) override
+  {
+    CombineOpaqueSummaries(static_cast<uint16_t*>(b), static_cast<const uint16_t*>(a), length);
+  }
+  int Commutative() override { return 1; }
+};
+
 // This process's opaque profile of a band (values: pixels * OpaqueBins::kBins): one volume's
 // own (no copy), several summed; null without volumes.
 const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentBuffers& buffers)
@@ -57,49 +69,116 @@ const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentB
   return profile;
 }
 
-// The profiles of the marked tiles summed over every process into summed (band pixels;
-// the other tiles are left as they are): an allreduce of OpaqueBins::kBins 16-bit values per
-// pixel, or with bound (the predicted last bins pass 1 took, band pixels, the same on every
-// process) only each pixel's bins up to its bound, past which every process's profile is
-// zero. Every process makes the same calls: a process without volumes sends zeros.
-void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
-  const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
-  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
+// An allreduce of count 16-bit values of send into received with operation,
+// in messages of at most the settings' size.
+void AllReduceInMessages(const ProcessGroup& group, const CompositeFrame& frame, const char* stage,
+  const uint16_t* send, uint16_t* received, size_t count, vtkCommunicator::Operation* operation,
+  FrameRecord& record)
 {
-  constexpr int bins = OpaqueBins::kBins;
-  const size_t pixels = tiles.PixelsIn(mask);
-  if (pixels == 0)
-  {
-    return;
-  }
-  uint16_t* send = Hold(buffers.ProfileSend, pixels * bins);
-  uint16_t* received = Hold(buffers.ProfileSum, pixels * bins);
-  tiles.Pack(mask, mine, bins, send);
-  uint8_t* packedBound = nullptr;
-  size_t count = pixels * bins;
-  if (bound)
-  {
-    packedBound = Hold(buffers.BoundSend, pixels);
-    tiles.Pack(mask, bound, 1, packedBound);
-    count = CompactProfiles(send, packedBound, pixels);
-  }
-  SaturatingProfileSum sum;
-  group.Collective("profile",
+  group.Collective(stage,
     [&]
     {
       InMessages<uint16_t>(count, static_cast<size_t>(frame.Settings.MaxMessageBytes),
         [&](size_t offset, vtkIdType length)
         {
-          group.Controller->AllReduce(send + offset, received + offset, length, &sum);
+          group.Controller->AllReduce(send + offset, received + offset, length, operation);
           ++record.MessagesSent;
         });
     });
-  if (packedBound)
-  {
-    ExpandProfiles(received, packedBound, pixels);
-  }
-  tiles.Unpack(mask, received, bins, summed);
   record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
+}
+
+// The profiles of the marked tiles summed with a predicted bound (bound: band pixels, the
+// same on every process): each pixel's bins up to its bound alone, past which every
+// process's profile is zero.
+void SumBoundedProfiles(const ProcessGroup& group, const CompositeFrame& frame,
+  const TileGrid& tiles, const std::vector<unsigned char>& mask, const uint16_t* mine,
+  const uint8_t* bound, uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
+{
+  constexpr int bins = OpaqueBins::kBins;
+  const size_t pixels = tiles.PixelsIn(mask);
+  uint16_t* send = Hold(buffers.ProfileSend, pixels * bins);
+  uint16_t* received = Hold(buffers.ProfileSum, pixels * bins);
+  tiles.Pack(mask, mine, bins, send);
+  uint8_t* packedBound = Hold(buffers.BoundSend, pixels);
+  tiles.Pack(mask, bound, 1, packedBound);
+  const size_t count = CompactProfiles(send, packedBound, pixels);
+  SaturatingProfileSum sum;
+  AllReduceInMessages(group, frame, "profile", send, received, count, &sum, record);
+  ExpandProfiles(received, packedBound, pixels);
+  tiles.Unpack(mask, received, bins, summed);
+}
+
+// The profiles of the marked tiles summed without a bound: every process's summary of each
+// pixel combined first (2 bytes a pixel), then each pixel's bins up to the earliest own cut
+// alone, and none where the totals stay below the threshold (apcOpaqueSummary.h). The
+// marked tiles of summed get their sums, zero past the bins sent.
+void SumSummarisedProfiles(const ProcessGroup& group, const CompositeFrame& frame,
+  const TileGrid& tiles, const std::vector<unsigned char>& mask, const uint16_t* mine,
+  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
+{
+  constexpr int bins = OpaqueBins::kBins;
+  const size_t pixels = tiles.PixelsIn(mask);
+  uint16_t* summaries = Hold(buffers.SummarySend, pixels);
+  uint16_t* combined = Hold(buffers.SummarySum, pixels);
+  size_t i = 0;
+  tiles.ForEachPacked(mask, [&](size_t p) { summaries[i++] = OpaqueSummary::Of(mine + p * bins); });
+  OpaqueSummaryCombine combine;
+  AllReduceInMessages(group, frame, "profile", summaries, combined, pixels, &combine, record);
+  size_t count = 0;
+  for (size_t q = 0; q < pixels; ++q)
+  {
+    count += static_cast<size_t>(OpaqueSummary::Bins(combined[q]));
+  }
+  if (count == 0)
+  {
+    tiles.ForEachPacked(mask, [&](size_t p) { std::fill_n(summed + p * bins, bins, uint16_t(0)); });
+    return;
+  }
+  uint16_t* send = Hold(buffers.ProfileSend, count);
+  uint16_t* received = Hold(buffers.ProfileSum, count);
+  i = 0;
+  size_t at = 0;
+  tiles.ForEachPacked(mask,
+    [&](size_t p)
+    {
+      const int keep = OpaqueSummary::Bins(combined[i++]);
+      std::copy_n(mine + p * bins, keep, send + at);
+      at += static_cast<size_t>(keep);
+    });
+  SaturatingProfileSum sum;
+  AllReduceInMessages(group, frame, "profile", send, received, count, &sum, record);
+  i = 0;
+  at = 0;
+  tiles.ForEachPacked(mask,
+    [&](size_t p)
+    {
+      const int keep = OpaqueSummary::Bins(combined[i++]);
+      std::copy_n(received + at, keep, summed + p * bins);
+      std::fill(summed + p * bins + keep, summed + (p + 1) * bins, uint16_t(0));
+      at += static_cast<size_t>(keep);
+    });
+}
+
+// The profiles of the marked tiles summed over every process into summed (band pixels;
+// the other tiles are left as they are), with a predicted bound (band pixels) or without
+// (null). Every process makes the same calls: a process without volumes sends zeros.
+void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
+  const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
+  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
+{
+  if (tiles.PixelsIn(mask) == 0)
+  {
+    return;
+  }
+  if (bound)
+  {
+    SumBoundedProfiles(group, frame, tiles, mask, mine, bound, summed, buffers, record);
+  }
+  else
+  {
+    SumSummarisedProfiles(group, frame, tiles, mask, mine, summed, buffers, record);
+  }
 }
 
 // With a predicted bound: the pixels whose summed profile does not reach the threshold by it
