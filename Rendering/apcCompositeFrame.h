@@ -194,7 +194,6 @@ struct MomentBuffers
   OpaqueCutMemory PreviousCuts;
   OpaqueCutMemory Cuts;
   std::vector<uint8_t> Bound;
-  std::vector<uint8_t> BoundSend; // the bound of the profiles' tiles, packed
   std::vector<uint8_t> Unresolved;
   std::vector<float> ColourSend; // the colour sums' wire (CompositeInDouble: the double pair)
   std::vector<float> ColourReceived;

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // APC mode's Stop Where Opaque between pass 1 and the moments' allreduce: the processes'
-// opaque profiles summed, the cut every process then applies, and on several processes pass
-// 1's bound predicted from the last frame's cut, with the pixels it leaves unresolved marched
-// again (apcOpaquePrediction.h; docs/sampler.md proves the cut is the one complete data gives).
+// opaque profiles summed (each pixel's bins only as far as the cut can lie, agreed from a
+// summary first: apcOpaqueSummary.h), the cut every process then applies, and on several
+// processes pass 1's bound predicted from the last frame's cut, with the pixels it leaves
+// unresolved marched again (apcOpaquePrediction.h; docs/sampler.md proves the cut is the one
+// complete data gives).
 #include "apcCompositeFrame.h"
 #include "apcFrameEngine.h"
 #include "apcOpaqueBins.h"
@@ -88,43 +90,39 @@ void AllReduceInMessages(const ProcessGroup& group, const CompositeFrame& frame,
   record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
 }
 
-// The profiles of the marked tiles summed with a predicted bound (bound: band pixels, the
-// same on every process): each pixel's bins up to its bound alone, past which every
-// process's profile is zero.
-void SumBoundedProfiles(const ProcessGroup& group, const CompositeFrame& frame,
-  const TileGrid& tiles, const std::vector<unsigned char>& mask, const uint16_t* mine,
-  const uint8_t* bound, uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
-{
-  constexpr int bins = OpaqueBins::kBins;
-  const size_t pixels = tiles.PixelsIn(mask);
-  uint16_t* send = Hold(buffers.ProfileSend, pixels * bins);
-  uint16_t* received = Hold(buffers.ProfileSum, pixels * bins);
-  tiles.Pack(mask, mine, bins, send);
-  uint8_t* packedBound = Hold(buffers.BoundSend, pixels);
-  tiles.Pack(mask, bound, 1, packedBound);
-  const size_t count = CompactProfiles(send, packedBound, pixels);
-  SaturatingProfileSum sum;
-  AllReduceInMessages(group, frame, "profile", send, received, count, &sum, record);
-  ExpandProfiles(received, packedBound, pixels);
-  tiles.Unpack(mask, received, bins, summed);
-}
-
-// The profiles of the marked tiles summed without a bound: every process's summary of each
-// pixel combined first (2 bytes a pixel), then each pixel's bins up to the earliest own cut
-// alone, and none where the totals stay below the threshold (apcOpaqueSummary.h). The
-// marked tiles of summed get their sums, zero past the bins sent.
-void SumSummarisedProfiles(const ProcessGroup& group, const CompositeFrame& frame,
-  const TileGrid& tiles, const std::vector<unsigned char>& mask, const uint16_t* mine,
+// The profiles of the marked tiles summed over every process into summed (band pixels; the
+// other tiles are left as they are): every process's summary of each pixel combined first (2
+// bytes a pixel), then each pixel's bins up to the earliest own cut alone, none where the
+// totals stay below the threshold (apcOpaqueSummary.h), and with a predicted bound (bound:
+// band pixels, the same on every process) none past it, where every process's profile is
+// zero. The marked tiles of summed get their sums, zero past the bins sent. Every process
+// makes the same calls: a process without volumes sends zeros.
+void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
+  const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
   uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
 {
   constexpr int bins = OpaqueBins::kBins;
   const size_t pixels = tiles.PixelsIn(mask);
+  if (pixels == 0)
+  {
+    return;
+  }
   uint16_t* summaries = Hold(buffers.SummarySend, pixels);
   uint16_t* combined = Hold(buffers.SummarySum, pixels);
   size_t i = 0;
   tiles.ForEachPacked(mask, [&](size_t p) { summaries[i++] = OpaqueSummary::Of(mine + p * bins); });
   OpaqueSummaryCombine combine;
   AllReduceInMessages(group, frame, "profile", summaries, combined, pixels, &combine, record);
+  if (bound)
+  {
+    i = 0;
+    tiles.ForEachPacked(mask,
+      [&](size_t p)
+      {
+        combined[i] = OpaqueSummary::Bounded(combined[i], bound[p]);
+        ++i;
+      });
+  }
   size_t count = 0;
   for (size_t q = 0; q < pixels; ++q)
   {
@@ -158,27 +156,6 @@ void SumSummarisedProfiles(const ProcessGroup& group, const CompositeFrame& fram
       std::fill(summed + p * bins + keep, summed + (p + 1) * bins, uint16_t(0));
       at += static_cast<size_t>(keep);
     });
-}
-
-// The profiles of the marked tiles summed over every process into summed (band pixels;
-// the other tiles are left as they are), with a predicted bound (band pixels) or without
-// (null). Every process makes the same calls: a process without volumes sends zeros.
-void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
-  const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
-  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
-{
-  if (tiles.PixelsIn(mask) == 0)
-  {
-    return;
-  }
-  if (bound)
-  {
-    SumBoundedProfiles(group, frame, tiles, mask, mine, bound, summed, buffers, record);
-  }
-  else
-  {
-    SumSummarisedProfiles(group, frame, tiles, mask, mine, summed, buffers, record);
-  }
 }
 
 // With a predicted bound: the pixels whose summed profile does not reach the threshold by it

@@ -39,14 +39,21 @@ struct OpaqueSummary
   // A pixel's summary from its profile (kBins values).
   static uint16_t Of(const uint16_t* profile)
   {
+    // One pass for both: the cut is CutBin's (the first bin whose cumulative reaches the
+    // threshold, kBins - 1 if none before it).
     uint32_t total = 0;
+    uint32_t cut = OpaqueBins::kBins - 1;
     for (int b = 0; b < OpaqueBins::kBins; ++b)
     {
       total += profile[b];
+      if (total >= OpaqueBins::kOpaque && static_cast<uint32_t>(b) < cut)
+      {
+        cut = static_cast<uint32_t>(b);
+      }
     }
     const uint32_t units =
       std::min(kTotalMask, (total + kQuantaPerUnit - 1) / kQuantaPerUnit); // rounded up
-    return static_cast<uint16_t>((static_cast<uint32_t>(CutBin(profile)) << kTotalBits) | units);
+    return static_cast<uint16_t>((cut << kTotalBits) | units);
   }
 
   // Two processes' summaries combined: the earlier cut, the totals summed (saturating).
@@ -68,6 +75,16 @@ struct OpaqueSummary
       return 0;
     }
     return static_cast<int>(combined >> kTotalBits) + 1;
+  }
+
+  // A combined summary with a predicted last bin (apcOpaquePrediction.h) as well: every
+  // profile is complete up to min(bound, S) and zero past the bound, so Bins then sends bins
+  // 0..min(bound, S). A pixel whose totals stay below the threshold still sends none: its
+  // zero sum leaves it unresolved if the bound bounds anything, as its whole sum would.
+  static uint16_t Bounded(uint16_t combined, uint8_t bound)
+  {
+    const uint32_t cut = std::min<uint32_t>(combined >> kTotalBits, bound);
+    return static_cast<uint16_t>((cut << kTotalBits) | (combined & kTotalMask));
   }
 };
 

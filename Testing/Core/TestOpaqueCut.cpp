@@ -259,6 +259,7 @@ TEST(OpaqueCut, ProfilesSummedAsFarAsTheSummarySaysGiveTheCompleteCut)
     {
       profiles.push_back(Pass1(bins, samples, p, taken));
       const uint16_t own = apc::OpaqueSummary::Of(profiles.back().data());
+      ASSERT_EQ(own >> apc::OpaqueSummary::kTotalBits, apc::CutBin(profiles.back().data()));
       combined = p == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
     }
     const int keep = apc::OpaqueSummary::Bins(combined);
@@ -276,6 +277,59 @@ TEST(OpaqueCut, ProfilesSummedAsFarAsTheSummarySaysGiveTheCompleteCut)
   EXPECT_GT(noneSent, 1000);
   EXPECT_GT(partial, 1000);
   EXPECT_LT(binsSent, size_t(trials) * OpaqueBins::kBins / 2);
+}
+
+// A later frame: each process bounded by a predicted last bin, the summary's cut folded with
+// the bound (bins 0..min(bound, S) sent). The partial sums must flag the same pixels
+// unresolved as the whole bounded sums and, where resolved, give the complete cut.
+TEST(OpaqueCut, TheSummaryWithAPredictedBoundResolvesAsTheWholeSums)
+{
+  const OpaqueBins bins = OpaqueBins::Make(9.21, 10.0, 50.0, 0.1);
+  std::mt19937 rng(52);
+  size_t binsSent = 0;
+  size_t boundBins = 0;
+  int unresolved = 0;
+  constexpr int trials = 4000;
+  for (int trial = 0; trial < trials; ++trial)
+  {
+    const int processes = 2 + trial % 3;
+    std::vector<Sample> samples = RandomRay(bins, processes, rng);
+    const int expected = CompleteCut(bins, samples);
+    const uint8_t bound =
+      static_cast<uint8_t>(std::uniform_int_distribution<int>(0, OpaqueBins::kBins - 1)(rng));
+    std::vector<bool> taken(samples.size(), false);
+    std::array<uint16_t, OpaqueBins::kBins> whole{};
+    std::vector<std::array<uint16_t, OpaqueBins::kBins>> profiles;
+    uint16_t combined = 0;
+    for (int p = 0; p < processes; ++p)
+    {
+      profiles.push_back(Pass1(bins, samples, p, taken, bound));
+      apc::AddProfiles(whole.data(), profiles.back().data(), whole.size());
+      const uint16_t own = apc::OpaqueSummary::Of(profiles.back().data());
+      combined = p == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
+    }
+    const int keep = apc::OpaqueSummary::Bins(apc::OpaqueSummary::Bounded(combined, bound));
+    ASSERT_LE(keep, apc::BoundedProfileBins(bound));
+    std::array<uint16_t, OpaqueBins::kBins> summed{};
+    for (const auto& profile : profiles)
+    {
+      apc::AddProfiles(summed.data(), profile.data(), static_cast<size_t>(keep));
+    }
+    uint8_t openWhole = 0;
+    uint8_t open = 0;
+    apc::MarkUnresolved(&bound, whole.data(), 1, &openWhole);
+    apc::MarkUnresolved(&bound, summed.data(), 1, &open);
+    ASSERT_EQ(open, openWhole) << "trial " << trial << ", keep " << keep;
+    if (!open)
+    {
+      ASSERT_EQ(apc::CutBin(summed.data()), expected) << "trial " << trial << ", keep " << keep;
+    }
+    unresolved += open;
+    binsSent += static_cast<size_t>(keep);
+    boundBins += static_cast<size_t>(apc::BoundedProfileBins(bound));
+  }
+  EXPECT_GT(unresolved, 500);
+  EXPECT_LT(binsSent, boundBins * 3 / 4); // fewer than the bound alone sends
 }
 
 // The summary's total rounds up and saturates: a total below its saturation is below the
