@@ -185,6 +185,8 @@ struct MomentBuffers
   std::vector<uint16_t> Profile; // the opaque profiles, over the band
   std::vector<uint16_t> ProfileSend;
   std::vector<uint16_t> ProfileSum;
+  std::vector<uint16_t> SummarySend; // without a bound: each covered pixel's OpaqueSummary
+  std::vector<uint16_t> SummarySum;
   std::vector<uint16_t> ProfileLocal; // several volumes' profiles summed
   // The opaque cut agreed over the last frame's rectangle and the one this frame agrees
   // (several processes only), pass 1's bound predicted from it, and the pixels it leaves
@@ -192,7 +194,6 @@ struct MomentBuffers
   OpaqueCutMemory PreviousCuts;
   OpaqueCutMemory Cuts;
   std::vector<uint8_t> Bound;
-  std::vector<uint8_t> BoundSend; // the bound of the profiles' tiles, packed
   std::vector<uint8_t> Unresolved;
   std::vector<float> ColourSend; // the colour sums' wire (CompositeInDouble: the double pair)
   std::vector<float> ColourReceived;

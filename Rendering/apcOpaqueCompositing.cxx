@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // APC mode's Stop Where Opaque between pass 1 and the moments' allreduce: the processes'
-// opaque profiles summed, the cut every process then applies, and on several processes pass
-// 1's bound predicted from the last frame's cut, with the pixels it leaves unresolved marched
-// again (apcOpaquePrediction.h; docs/sampler.md proves the cut is the one complete data gives).
+// opaque profiles summed (each pixel's bins only as far as the cut can lie, agreed from a
+// summary first: apcOpaqueSummary.h), the cut every process then applies, and on several
+// processes pass 1's bound predicted from the last frame's cut, with the pixels it leaves
+// unresolved marched again (apcOpaquePrediction.h; docs/sampler.md proves the cut is the one
+// complete data gives).
 #include "apcCompositeFrame.h"
 #include "apcFrameEngine.h"
 #include "apcOpaqueBins.h"
 #include "apcOpaquePrediction.h"
+#include "apcOpaqueSummary.h"
 #include "apcWireMessages.h"
 
 #include "vtkCommunicator.h"
@@ -39,6 +42,17 @@ public:
   int Commutative() override { return 1; }
 };
 
+// Combined opaque summaries (apcOpaqueSummary.h): the earliest own cut, the totals summed.
+class OpaqueSummaryCombine : public vtkCommunicator::Operation
+{
+public:
+  void Function(const void* a, void* b, vtkIdType length, int) override
+  {
+    CombineOpaqueSummaries(static_cast<uint16_t*>(b), static_cast<const uint16_t*>(a), length);
+  }
+  int Commutative() override { return 1; }
+};
+
 // This process's opaque profile of a band (values: pixels * OpaqueBins::kBins): one volume's
 // own (no copy), several summed; null without volumes.
 const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentBuffers& buffers)
@@ -57,11 +71,32 @@ const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentB
   return profile;
 }
 
-// The profiles of the marked tiles summed over every process into summed (band pixels;
-// the other tiles are left as they are): an allreduce of OpaqueBins::kBins 16-bit values per
-// pixel, or with bound (the predicted last bins pass 1 took, band pixels, the same on every
-// process) only each pixel's bins up to its bound, past which every process's profile is
-// zero. Every process makes the same calls: a process without volumes sends zeros.
+// An allreduce of count 16-bit values of send into received with operation,
+// in messages of at most the settings' size.
+void AllReduceInMessages(const ProcessGroup& group, const CompositeFrame& frame, const char* stage,
+  const uint16_t* send, uint16_t* received, size_t count, vtkCommunicator::Operation* operation,
+  FrameRecord& record)
+{
+  group.Collective(stage,
+    [&]
+    {
+      InMessages<uint16_t>(count, static_cast<size_t>(frame.Settings.MaxMessageBytes),
+        [&](size_t offset, vtkIdType length)
+        {
+          group.Controller->AllReduce(send + offset, received + offset, length, operation);
+          ++record.MessagesSent;
+        });
+    });
+  record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
+}
+
+// The profiles of the marked tiles summed over every process into summed (band pixels; the
+// other tiles are left as they are): every process's summary of each pixel combined first (2
+// bytes a pixel), then each pixel's bins up to the earliest own cut alone, none where the
+// totals stay below the threshold (apcOpaqueSummary.h), and with a predicted bound (bound:
+// band pixels, the same on every process) none past it, where every process's profile is
+// zero. The marked tiles of summed get their sums, zero past the bins sent. Every process
+// makes the same calls: a process without volumes sends zeros.
 void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
   const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
   uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
@@ -72,34 +107,55 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
   {
     return;
   }
-  uint16_t* send = Hold(buffers.ProfileSend, pixels * bins);
-  uint16_t* received = Hold(buffers.ProfileSum, pixels * bins);
-  tiles.Pack(mask, mine, bins, send);
-  uint8_t* packedBound = nullptr;
-  size_t count = pixels * bins;
+  uint16_t* summaries = Hold(buffers.SummarySend, pixels);
+  uint16_t* combined = Hold(buffers.SummarySum, pixels);
+  size_t i = 0;
+  tiles.ForEachPacked(mask, [&](size_t p) { summaries[i++] = OpaqueSummary::Of(mine + p * bins); });
+  OpaqueSummaryCombine combine;
+  AllReduceInMessages(group, frame, "profile", summaries, combined, pixels, &combine, record);
   if (bound)
   {
-    packedBound = Hold(buffers.BoundSend, pixels);
-    tiles.Pack(mask, bound, 1, packedBound);
-    count = CompactProfiles(send, packedBound, pixels);
+    i = 0;
+    tiles.ForEachPacked(mask,
+      [&](size_t p)
+      {
+        combined[i] = OpaqueSummary::Bounded(combined[i], bound[p]);
+        ++i;
+      });
   }
-  SaturatingProfileSum sum;
-  group.Collective("profile",
-    [&]
-    {
-      InMessages<uint16_t>(count, static_cast<size_t>(frame.Settings.MaxMessageBytes),
-        [&](size_t offset, vtkIdType length)
-        {
-          group.Controller->AllReduce(send + offset, received + offset, length, &sum);
-          ++record.MessagesSent;
-        });
-    });
-  if (packedBound)
+  size_t count = 0;
+  for (size_t q = 0; q < pixels; ++q)
   {
-    ExpandProfiles(received, packedBound, pixels);
+    count += static_cast<size_t>(OpaqueSummary::Bins(combined[q]));
   }
-  tiles.Unpack(mask, received, bins, summed);
-  record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
+  if (count == 0)
+  {
+    tiles.ForEachPacked(mask, [&](size_t p) { std::fill_n(summed + p * bins, bins, uint16_t(0)); });
+    return;
+  }
+  uint16_t* send = Hold(buffers.ProfileSend, count);
+  uint16_t* received = Hold(buffers.ProfileSum, count);
+  i = 0;
+  size_t at = 0;
+  tiles.ForEachPacked(mask,
+    [&](size_t p)
+    {
+      const int keep = OpaqueSummary::Bins(combined[i++]);
+      std::copy_n(mine + p * bins, keep, send + at);
+      at += static_cast<size_t>(keep);
+    });
+  SaturatingProfileSum sum;
+  AllReduceInMessages(group, frame, "profile", send, received, count, &sum, record);
+  i = 0;
+  at = 0;
+  tiles.ForEachPacked(mask,
+    [&](size_t p)
+    {
+      const int keep = OpaqueSummary::Bins(combined[i++]);
+      std::copy_n(received + at, keep, summed + p * bins);
+      std::fill(summed + p * bins + keep, summed + (p + 1) * bins, uint16_t(0));
+      at += static_cast<size_t>(keep);
+    });
 }
 
 // With a predicted bound: the pixels whose summed profile does not reach the threshold by it

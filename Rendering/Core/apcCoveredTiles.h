@@ -43,6 +43,11 @@ public:
   void Unpack(const std::vector<unsigned char>& mask, const Packed* packed, int components,
     Full* full, size_t first = 0, size_t last = static_cast<size_t>(-1)) const;
 
+  // Calls visit(pixel index in the image) for each pixel of the marked tiles, in the order
+  // Pack packs them: for packed buffers whose pixels hold different numbers of values.
+  template <class Visit>
+  void ForEachPacked(const std::vector<unsigned char>& mask, Visit visit) const;
+
   // The tiles cut into consecutive ranges [bounds[c], bounds[c + 1]) whose marked tiles hold
   // at most maxPixels pixels (at least one marked tile each): the chunks a large image is
   // packed and summed in, so that the packed copies stay a bounded size whatever the view.
@@ -91,6 +96,25 @@ std::vector<unsigned char> TileGrid::Mark(Predicate pixelIsCovered) const
       });
   }
   return mask;
+}
+
+template <class Visit>
+void TileGrid::ForEachPacked(const std::vector<unsigned char>& mask, Visit visit) const
+{
+  for (size_t t = 0; t < mask.size(); ++t)
+  {
+    if (mask[t])
+    {
+      this->ForEachRow(t,
+        [&](size_t first, size_t count)
+        {
+          for (size_t p = first; p < first + count; ++p)
+          {
+            visit(p);
+          }
+        });
+    }
+  }
 }
 
 template <class Packed, class Full>

@@ -7,6 +7,7 @@
 // by the bound, and flags the pixel unresolved otherwise.
 #include "apcOpaqueBins.h"
 #include "apcOpaquePrediction.h"
+#include "apcOpaqueSummary.h"
 #include "apcRayWalk.h"
 
 #include <gtest/gtest.h>
@@ -224,6 +225,143 @@ TEST(OpaqueCut, APredictedBoundGivesTheCompleteCutOrLeavesItUnresolved)
   EXPECT_GT(resolved, 1000);
   EXPECT_GT(unresolved, 500);
   EXPECT_GT(wrongWithoutRedo, 200);
+}
+
+// Without a predicted bound (a first frame), the processes combine a summary of each pixel's
+// profile first and sum only the bins it says the cut needs: the earliest own cut's, or none
+// where the totals stay below the threshold. The partial sums must give the complete cut,
+// and leave out most bins of these rays.
+TEST(OpaqueCut, ProfilesSummedAsFarAsTheSummarySaysGiveTheCompleteCut)
+{
+  const OpaqueBins bins = OpaqueBins::Make(9.21, 10.0, 50.0, 0.1);
+  std::mt19937 rng(41);
+  size_t binsSent = 0;
+  int noneSent = 0;
+  int partial = 0;
+  constexpr int trials = 4000;
+  for (int trial = 0; trial < trials; ++trial)
+  {
+    const int processes = 1 + trial % 4;
+    std::vector<Sample> samples = RandomRay(bins, processes, rng);
+    // Fainter rays too, whose totals add up to less than the threshold.
+    if (trial % 3 == 0)
+    {
+      for (Sample& s : samples)
+      {
+        s.Absorbance *= 0.02;
+      }
+    }
+    const int expected = CompleteCut(bins, samples);
+    std::vector<bool> taken(samples.size(), false);
+    std::vector<std::array<uint16_t, OpaqueBins::kBins>> profiles;
+    uint16_t combined = 0;
+    for (int p = 0; p < processes; ++p)
+    {
+      profiles.push_back(Pass1(bins, samples, p, taken));
+      const uint16_t own = apc::OpaqueSummary::Of(profiles.back().data());
+      ASSERT_EQ(own >> apc::OpaqueSummary::kTotalBits, apc::CutBin(profiles.back().data()));
+      combined = p == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
+    }
+    const int keep = apc::OpaqueSummary::Bins(combined);
+    ASSERT_LE(keep, OpaqueBins::kBins);
+    std::array<uint16_t, OpaqueBins::kBins> summed{};
+    for (const auto& profile : profiles)
+    {
+      apc::AddProfiles(summed.data(), profile.data(), static_cast<size_t>(keep));
+    }
+    ASSERT_EQ(apc::CutBin(summed.data()), expected) << "trial " << trial << ", keep " << keep;
+    binsSent += static_cast<size_t>(keep);
+    noneSent += keep == 0 ? 1 : 0;
+    partial += keep > 0 && keep < OpaqueBins::kBins ? 1 : 0;
+  }
+  EXPECT_GT(noneSent, 1000);
+  EXPECT_GT(partial, 1000);
+  EXPECT_LT(binsSent, size_t(trials) * OpaqueBins::kBins / 2);
+}
+
+// A later frame: each process bounded by a predicted last bin, the summary's cut folded with
+// the bound (bins 0..min(bound, S) sent). The partial sums must flag the same pixels
+// unresolved as the whole bounded sums and, where resolved, give the complete cut.
+TEST(OpaqueCut, TheSummaryWithAPredictedBoundResolvesAsTheWholeSums)
+{
+  const OpaqueBins bins = OpaqueBins::Make(9.21, 10.0, 50.0, 0.1);
+  std::mt19937 rng(52);
+  size_t binsSent = 0;
+  size_t boundBins = 0;
+  int unresolved = 0;
+  constexpr int trials = 4000;
+  for (int trial = 0; trial < trials; ++trial)
+  {
+    const int processes = 2 + trial % 3;
+    std::vector<Sample> samples = RandomRay(bins, processes, rng);
+    const int expected = CompleteCut(bins, samples);
+    const uint8_t bound =
+      static_cast<uint8_t>(std::uniform_int_distribution<int>(0, OpaqueBins::kBins - 1)(rng));
+    std::vector<bool> taken(samples.size(), false);
+    std::array<uint16_t, OpaqueBins::kBins> whole{};
+    std::vector<std::array<uint16_t, OpaqueBins::kBins>> profiles;
+    uint16_t combined = 0;
+    for (int p = 0; p < processes; ++p)
+    {
+      profiles.push_back(Pass1(bins, samples, p, taken, bound));
+      apc::AddProfiles(whole.data(), profiles.back().data(), whole.size());
+      const uint16_t own = apc::OpaqueSummary::Of(profiles.back().data());
+      combined = p == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
+    }
+    const int keep = apc::OpaqueSummary::Bins(apc::OpaqueSummary::Bounded(combined, bound));
+    ASSERT_LE(keep, apc::BoundedProfileBins(bound));
+    std::array<uint16_t, OpaqueBins::kBins> summed{};
+    for (const auto& profile : profiles)
+    {
+      apc::AddProfiles(summed.data(), profile.data(), static_cast<size_t>(keep));
+    }
+    uint8_t openWhole = 0;
+    uint8_t open = 0;
+    apc::MarkUnresolved(&bound, whole.data(), 1, &openWhole);
+    apc::MarkUnresolved(&bound, summed.data(), 1, &open);
+    ASSERT_EQ(open, openWhole) << "trial " << trial << ", keep " << keep;
+    if (!open)
+    {
+      ASSERT_EQ(apc::CutBin(summed.data()), expected) << "trial " << trial << ", keep " << keep;
+    }
+    unresolved += open;
+    binsSent += static_cast<size_t>(keep);
+    boundBins += static_cast<size_t>(apc::BoundedProfileBins(bound));
+  }
+  EXPECT_GT(unresolved, 500);
+  EXPECT_LT(binsSent, boundBins * 3 / 4); // fewer than the bound alone sends
+}
+
+// The summary's total rounds up and saturates: a total below its saturation is below the
+// threshold, and a total at the threshold saturates it.
+TEST(OpaqueCut, TheSummarysTotalNeverUnderstatesTheThreshold)
+{
+  std::array<uint16_t, OpaqueBins::kBins> profile{};
+  profile[3] = OpaqueBins::kOpaque - 1; // just below the threshold: not opaque alone
+  const uint16_t below = apc::OpaqueSummary::Of(profile.data());
+  EXPECT_EQ(below >> 12, OpaqueBins::kBins - 1);
+  EXPECT_EQ(apc::OpaqueSummary::Bins(below), OpaqueBins::kBins); // may reach it with others
+  std::array<uint16_t, OpaqueBins::kBins> one{};
+  one[9] = 1;
+  const uint16_t two = apc::OpaqueSummary::Combine(below, apc::OpaqueSummary::Of(one.data()));
+  EXPECT_EQ(apc::OpaqueSummary::Bins(two), OpaqueBins::kBins); // reaches it: every bin
+  profile[3] = static_cast<uint16_t>(
+    (apc::OpaqueSummary::kTotalMask - 1) * apc::OpaqueSummary::kQuantaPerUnit);
+  EXPECT_EQ(apc::OpaqueSummary::Bins(apc::OpaqueSummary::Of(profile.data())), 0);
+  profile[3] = OpaqueBins::kOpaque;
+  const uint16_t opaque = apc::OpaqueSummary::Of(profile.data());
+  EXPECT_EQ(apc::OpaqueSummary::Bins(opaque), 4); // its own cut, bin 3
+  EXPECT_EQ(apc::OpaqueSummary::Bins(apc::OpaqueSummary::Combine(opaque, two)), 4);
+  // 17 processes of 3855 quanta each reach the threshold (65535) together: rounded down,
+  // their totals would add up to 4080 of 4095 units and the pixel would send nothing.
+  std::array<uint16_t, OpaqueBins::kBins> part{};
+  part[5] = 3855;
+  uint16_t all = apc::OpaqueSummary::Of(part.data());
+  for (int p = 1; p < 17; ++p)
+  {
+    all = apc::OpaqueSummary::Combine(all, apc::OpaqueSummary::Of(part.data()));
+  }
+  EXPECT_EQ(apc::OpaqueSummary::Bins(all), OpaqueBins::kBins);
 }
 
 // The bound: the largest previous cut within the radius, plus the margin, at most kBins - 1;
