@@ -47,6 +47,9 @@ struct NoSegments
   // The MBOIT passes leave out what lies behind an opaque ray (VolumeRayMarcher::
   // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
   static constexpr bool StopsWhenOpaque = false;
+  // True for a visitor that reads only the absorbance of a sample's TransferSample (pass 1):
+  // the walker may then leave the colour out.
+  static constexpr bool AbsorbanceOnly = false;
   void Segment(int, double, double) {}
 };
 
@@ -168,6 +171,7 @@ template <int N>
 struct Moments : NoSegments
 {
   static constexpr bool StopsWhenOpaque = true;
+  static constexpr bool AbsorbanceOnly = true; // Sample reads s.Absorbance alone
   double* Output;
   double* Own = nullptr;
   int Width;
@@ -252,6 +256,7 @@ struct SegmentCounts
   static constexpr bool WantsSegments = true;
   static constexpr bool WantsSamples = false;
   static constexpr bool WantsTransparentSamples = false;
+  static constexpr bool AbsorbanceOnly = false;
   int32_t* Output;
   int Width;
   double Tolerance;
