@@ -9,6 +9,7 @@
 #ifndef apcLinearSamples_h
 #define apcLinearSamples_h
 
+#include "apcDepthWarp.h"
 #include "apcRayWalk.h"
 #include "apcTransferTable.h"
 
@@ -34,13 +35,26 @@ struct LinearScalarForm
   double Hi;
 };
 
+// What pass 1 does with a sample past its look-up, the same for every sample of a frame:
+// the lattice depth warp's table and the opaque stop's quanta per unit of absorbance.
+struct SampleBookkeeping
+{
+  LatticeDepthWarp::Layout Warp;
+  double QuantaPerAbsorbance;
+};
+
 // Four consecutive samples k .. k + 3 of one ray: T (Lattice::At), Scalar (clamped to
-// [Lo, Hi]) and Absorbance (TransferTable::Lookup's, 0 for a non-finite scalar).
+// [Lo, Hi]) and Absorbance (TransferTable::Lookup's, 0 for a non-finite scalar); Z, the
+// warped depth LatticeDepthWarp's table holds for t, where bit i of Tabled is set (else the
+// lane's depth is warped directly); Quanta, OpaqueBins::Quanta(Absorbance).
 struct SampleQuad
 {
   alignas(32) double T[4];
   alignas(32) double Scalar[4];
+  alignas(32) double Z[4];
   alignas(16) float Absorbance[4];
+  alignas(16) uint32_t Quanta[4];
+  int Tabled;
 };
 
 #ifdef APC_HAVE_AVX2_SAMPLES
@@ -56,7 +70,7 @@ APC_SAMPLES_AVX2_INLINE __m256d Times(__m256d x, double c)
 template <bool Pyramid>
 APC_SAMPLES_AVX2_INLINE void LinearSamples4(const Lattice& grid, int64_t k, double offset,
   const double p0[3], const double dp[3], const LinearScalarForm& form,
-  const TransferTable::Layout& table, SampleQuad& out)
+  const TransferTable::Layout& table, const SampleBookkeeping& after, SampleQuad& out)
 {
   // (k + i) as a double is exact (|k| < 2^53), so this is (double(k + i) + offset) * spacing.
   const __m256d kd =
@@ -126,7 +140,24 @@ APC_SAMPLES_AVX2_INLINE void LinearSamples4(const Lattice& grid, int64_t k, doub
   // The mask's low halves, one per lane.
   const __m128 finite4 = _mm256_castps256_ps128(
     _mm256_permutevar8x32_ps(_mm256_castpd_ps(finite), _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6)));
-  _mm_store_ps(out.Absorbance, _mm_and_ps(finite4, absorbance));
+  const __m128 visible = _mm_and_ps(finite4, absorbance);
+  _mm_store_ps(out.Absorbance, visible);
+  // OpaqueBins::Quanta: q >= kOpaque ? kOpaque : (q > 0 ? q rounded down : 0), NaN to 0.
+  const __m256d q =
+    _mm256_mul_pd(_mm256_cvtps_pd(visible), _mm256_set1_pd(after.QuantaPerAbsorbance));
+  const __m256d qc = _mm256_min_pd(_mm256_max_pd(q, _mm256_setzero_pd()),
+    _mm256_set1_pd(static_cast<double>(OpaqueBins::kOpaque)));
+  _mm_store_si128(reinterpret_cast<__m128i*>(out.Quanta), _mm256_cvttpd_epi32(qc));
+  // LatticeDepthWarp: Z[k - Base] where the index is in the table and t is k * Spacing.
+  const LatticeDepthWarp::Layout& warp = after.Warp;
+  const __m256i index =
+    _mm256_add_epi64(_mm256_set1_epi64x(k - warp.Base), _mm256_setr_epi64x(0, 1, 2, 3));
+  const __m256i inTable = _mm256_andnot_si256(_mm256_cmpgt_epi64(_mm256_setzero_si256(), index),
+    _mm256_cmpgt_epi64(_mm256_set1_epi64x(warp.Size), index));
+  const __m256d tabled = _mm256_and_pd(_mm256_castsi256_pd(inTable),
+    _mm256_cmp_pd(t, _mm256_mul_pd(kd, _mm256_set1_pd(warp.Spacing)), _CMP_EQ_OQ));
+  _mm256_store_pd(out.Z, _mm256_mask_i64gather_pd(_mm256_setzero_pd(), warp.Z, index, tabled, 8));
+  out.Tabled = _mm256_movemask_pd(tabled);
 }
 #endif
 

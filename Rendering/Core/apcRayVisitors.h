@@ -48,7 +48,9 @@ struct NoSegments
   // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
   static constexpr bool StopsWhenOpaque = false;
   // True for a visitor that reads only the absorbance of a sample's TransferSample (pass 1):
-  // the walker may then leave the colour out.
+  // the walker may then leave the colour out, warp the depth itself from the visitor's Warp
+  // (a LatticeDepthWarp) and hand each sample to SampleAtDepth(pixel, k, z, scalar,
+  // absorbance) instead of Sample.
   static constexpr bool AbsorbanceOnly = false;
   void Segment(int, double, double) {}
 };
@@ -207,8 +209,13 @@ struct Moments : NoSegments
   }
   void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
-    const double z = (*this->Warp)(k, t);
-    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
+    this->SampleAtDepth(pixel, k, (*this->Warp)(k, t), scalar, s.Absorbance);
+  }
+  // Sample with its depth t already warped: z = (*Warp)(k, t).
+  [[gnu::always_inline]] void SampleAtDepth(
+    int pixel, int64_t k, double z, double scalar, float absorbance)
+  {
+    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, absorbance);
     if (this->Recording)
     {
       // Written field by field in place: a record built on the stack and copied was read

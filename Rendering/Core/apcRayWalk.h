@@ -262,7 +262,11 @@ struct RayProgress
     {
       return false;
     }
-    const uint32_t q = this->Bins->Quanta(absorbance);
+    return this->AddQuanta(p, k, bin, this->Bins->Quanta(absorbance));
+  }
+  // Add with the sample's absorbance already in quanta (OpaqueBins::Quanta), Bins set.
+  [[gnu::always_inline]] bool AddQuanta(int p, int64_t k, int bin, uint32_t q)
+  {
     this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q);
     this->FarK[p] = std::max(this->FarK[p], k);
     if (this->Opaque[p])

@@ -306,6 +306,8 @@ struct VolumeRayMarcher::Walker
       form.SC);
     form.Lo = state.Lo;
     form.Hi = state.Hi;
+    const walk::SampleBookkeeping after{ visitor.Warp->GetLayout(),
+      progress.Bins ? progress.Bins->QuantaPerAbsorbance : 0.0 };
     walk::SampleQuad quad;
     int64_t samples = 0;
     for (int h = 0; h < hits; ++h)
@@ -313,7 +315,7 @@ struct VolumeRayMarcher::Walker
       const int l = c.Hits[h];
       visitor.Segment(l, c.Tin[l], c.Tout[l]);
       samples += this->SampleLoopAvx2<How>(l, rays[l], static_cast<int64_t>(c.Lattice[l]),
-        c.Tout[l], table, form, quad, visitor, state, progress);
+        c.Tout[l], table, form, after, quad, visitor, state, progress);
     }
     return samples;
   }
@@ -322,7 +324,8 @@ struct VolumeRayMarcher::Walker
   template <Sampling How, class Visitor>
   [[gnu::always_inline]] APC_SAMPLES_AVX2 int64_t SampleLoopAvx2(int local, const RaySetup& ray,
     int64_t k, double tout, const TransferTable::Layout& table, const walk::LinearScalarForm& form,
-    walk::SampleQuad& quad, Visitor& visitor, CellState& state, RayProgress& progress) const
+    const walk::SampleBookkeeping& after, walk::SampleQuad& quad, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
   {
     double p0[3];
     double dp[3];
@@ -344,7 +347,7 @@ struct VolumeRayMarcher::Walker
     for (;;)
     {
       walk::LinearSamples4<How == Sampling::LinearPyramid>(
-        this->Grid, k, ray.Offset, p0, dp, form, table, quad);
+        this->Grid, k, ray.Offset, p0, dp, form, table, after, quad);
       for (int lane = 0; lane < 4; ++lane, ++k)
       {
         const double t = quad.T[lane];
@@ -355,14 +358,14 @@ struct VolumeRayMarcher::Walker
         ++samples;
         if (quad.Absorbance[lane] > 0)
         {
-          const TransferSample s{ { 0.f, 0.f, 0.f }, quad.Absorbance[lane] };
-          visitor.Sample(local, k, t, quad.Scalar[lane], s);
+          const double z = (quad.Tabled >> lane & 1) ? quad.Z[lane] : (*visitor.Warp)(k, t);
+          visitor.SampleAtDepth(local, k, z, quad.Scalar[lane], quad.Absorbance[lane]);
           if (own)
           {
             for (; k >= binEnd; binEnd = progress.Ends[++bin])
             {
             }
-            if (progress.Add(local, k, bin, s.Absorbance))
+            if (progress.AddQuanta(local, k, bin, quad.Quanta[lane]))
             {
               tout = std::min(tout, this->OpaqueStop(local, ray, progress));
             }

@@ -1,11 +1,14 @@
 // Pass 1's four-at-a-time samples of nearly affine cells (apcLinearSamples.h) against the
 // per-sample path they replace: the lattice depth, the linear coordinates p0 + t dp, ScalarAt
-// (LinearScalarAt for pyramids), the clamp to the cell's range and TransferTable::Lookup's
-// absorbance, bit for bit, on random distorted hexahedra, wedges and pyramids, random rays and
-// lattice offsets, with scalars beyond the table on both sides, cell ranges that clip the
-// interpolant, and non-finite coefficients.
+// (LinearScalarAt for pyramids), the clamp to the cell's range, TransferTable::Lookup's
+// absorbance, the lattice depth warp's table and the opaque stop's quanta, bit for bit, on
+// random distorted hexahedra, wedges and pyramids, random rays and lattice offsets (whose
+// depths the warp's table does not hold), depths before, in and past the table, scalars
+// beyond the table on both sides, cell ranges that clip the interpolant, and non-finite
+// coefficients.
 #include "apcCellInterpolation.h"
 #include "apcLinearSamples.h"
+#include "apcOpaqueBins.h"
 #include "apcRayClip.h"
 
 #include <gtest/gtest.h>
@@ -74,16 +77,37 @@ uint32_t Bits(float v)
 template <bool Pyramid>
 APC_SAMPLES_AVX2 void Quad(const apc::walk::Lattice& grid, int64_t k, double offset,
   const double p0[3], const double dp[3], const apc::walk::LinearScalarForm& form,
-  const apc::TransferTable::Layout& table, apc::walk::SampleQuad& out)
+  const apc::TransferTable::Layout& table, const apc::walk::SampleBookkeeping& after,
+  apc::walk::SampleQuad& out)
 {
-  apc::walk::LinearSamples4<Pyramid>(grid, k, offset, p0, dp, form, table, out);
+  apc::walk::LinearSamples4<Pyramid>(grid, k, offset, p0, dp, form, table, after, out);
 }
 #endif
 
 // Compares 4 samples from k on with the walker's scalar path; returns the lanes compared.
+struct Counts
+{
+  int Visible = 0;
+  int Tabled = 0;
+  int Opaque = 0; // samples whose quanta saturate
+};
+
+// The frame's depth warp (a table from depth 10 to 30) and opaque stop (ln 10^4 of
+// absorbance).
+struct Frame
+{
+  apc::LatticeDepthWarp Warp;
+  apc::OpaqueBins Bins;
+  Frame(double spacing)
+    : Warp(apc::LogDepthWarp(10.0, 30.0), spacing)
+    , Bins(apc::OpaqueBins::Make(std::log(1e4), 10.0, 30.0, spacing))
+  {
+  }
+};
+
 int CompareQuad(const CellInterpolator& cell, const apc::walk::Lattice& grid, int64_t k,
   double offset, const double p0[3], const double dp[3], double lo, double hi,
-  const apc::TransferTable& table, int* visible)
+  const apc::TransferTable& table, const Frame& frame, Counts& counts)
 {
 #ifdef APC_HAVE_AVX2_SAMPLES
   apc::walk::LinearScalarForm form;
@@ -91,14 +115,16 @@ int CompareQuad(const CellInterpolator& cell, const apc::walk::Lattice& grid, in
   form.Lo = lo;
   form.Hi = hi;
   apc::walk::SampleQuad quad;
+  const apc::walk::SampleBookkeeping after{ frame.Warp.GetLayout(),
+    frame.Bins.QuantaPerAbsorbance };
   const bool pyramid = cell.Shape() == CellShape::Pyramid;
   if (pyramid)
   {
-    Quad<true>(grid, k, offset, p0, dp, form, table.GetLayout(), quad);
+    Quad<true>(grid, k, offset, p0, dp, form, table.GetLayout(), after, quad);
   }
   else
   {
-    Quad<false>(grid, k, offset, p0, dp, form, table.GetLayout(), quad);
+    Quad<false>(grid, k, offset, p0, dp, form, table.GetLayout(), after, quad);
   }
   for (int lane = 0; lane < 4; ++lane)
   {
@@ -115,12 +141,27 @@ int CompareQuad(const CellInterpolator& cell, const apc::walk::Lattice& grid, in
     EXPECT_EQ(Bits(quad.Scalar[lane]), Bits(scalar)) << "k " << k + lane << " scalar " << scalar;
     EXPECT_EQ(Bits(quad.Absorbance[lane]), Bits(s.Absorbance))
       << "k " << k + lane << " scalar " << scalar;
-    *visible += s.Absorbance > 0 ? 1 : 0;
+    // Where Tabled says so, the table's depth is the warp's; elsewhere it is left to the
+    // walker, which then warps directly. Lanes on the lattice inside the table are tabled.
+    const double z = frame.Warp(k + lane, t);
+    const bool onLattice = t == static_cast<double>(k + lane) * grid.Spacing;
+    const int64_t i = k + lane - frame.Warp.GetLayout().Base;
+    const bool inTable = i >= 0 && i < frame.Warp.GetNumberOfEntries();
+    const bool tabled = (quad.Tabled >> lane & 1) != 0;
+    EXPECT_EQ(tabled, onLattice && inTable) << "k " << k + lane;
+    if (tabled)
+    {
+      EXPECT_EQ(Bits(quad.Z[lane]), Bits(z)) << "k " << k + lane;
+    }
+    EXPECT_EQ(quad.Quanta[lane], frame.Bins.Quanta(s.Absorbance)) << "k " << k + lane;
+    counts.Visible += s.Absorbance > 0 ? 1 : 0;
+    counts.Tabled += tabled ? 1 : 0;
+    counts.Opaque += quad.Quanta[lane] == apc::OpaqueBins::kOpaque ? 1 : 0;
   }
   return 4;
 #else
   (void)cell, (void)grid, (void)k, (void)offset, (void)p0, (void)dp, (void)lo, (void)hi,
-    (void)table, (void)visible;
+    (void)table, (void)frame, (void)counts;
   return 0;
 #endif
 }
@@ -136,7 +177,7 @@ TEST(LinearSamples, FourAtATimeAreTheScalarPathBitForBit)
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   int compared = 0;
-  int visible = 0;
+  Counts counts;
   for (CellShape shape : { CellShape::Hexahedron, CellShape::Wedge, CellShape::Pyramid })
   {
     for (int c = 0; c < 200; ++c)
@@ -147,6 +188,7 @@ TEST(LinearSamples, FourAtATimeAreTheScalarPathBitForBit)
       const double lo = c % 3 == 0 ? -1.0 : -4.0; // a range that clips, or not
       const double hi = c % 3 == 0 ? 2.0 : 5.0;
       const apc::walk::Lattice grid(0.05 + 0.1 * unit(rng));
+      const Frame frame(grid.Spacing);
       for (int r = 0; r < 20; ++r)
       {
         const double o[3] = { 20 + 30 * u(rng), 20 + 30 * u(rng), 20 + 30 * u(rng) };
@@ -164,14 +206,20 @@ TEST(LinearSamples, FourAtATimeAreTheScalarPathBitForBit)
         const int64_t k0 = static_cast<int64_t>(std::floor((length - 3.0) / grid.Spacing));
         for (int64_t k = k0; k < k0 + static_cast<int64_t>(6.0 / grid.Spacing); k += 3)
         {
-          compared += CompareQuad(cell, grid, k, offset, p0, dp, lo, hi, table, &visible);
+          compared += CompareQuad(cell, grid, k, offset, p0, dp, lo, hi, table, frame, counts);
         }
       }
     }
   }
   EXPECT_GT(compared, 100000);
-  EXPECT_GT(visible, compared / 4); // the look-ups were not all of transparent samples
-  EXPECT_LT(visible, compared);
+  // The look-ups were not all of transparent samples, nor all of opaque ones; the depths
+  // not all in the table, nor all out of it.
+  EXPECT_GT(counts.Visible, compared / 4);
+  EXPECT_LT(counts.Visible, compared);
+  EXPECT_GT(counts.Opaque, 0);
+  EXPECT_LT(counts.Opaque, counts.Visible / 2);
+  EXPECT_GT(counts.Tabled, compared / 8);
+  EXPECT_LT(counts.Tabled, compared * 3 / 4);
 }
 
 TEST(LinearSamples, NonFiniteScalarsAreTransparent)
@@ -195,13 +243,14 @@ TEST(LinearSamples, NonFiniteScalarsAreTransparent)
     const double d[3] = { 0.6, 0.6, 0.52915026221291805 };
     double p0[3], dp[3];
     cell.LinearRay(o, d, p0, dp);
-    int visible = 0;
+    const Frame frame(grid.Spacing);
+    Counts counts;
     for (int64_t k = 300; k < 500; k += 4)
     {
       // The range may be infinite too (a non-finite corner): no clamp then.
-      CompareQuad(cell, grid, k, 0.0, p0, dp, -inf, inf, table, &visible);
+      CompareQuad(cell, grid, k, 0.0, p0, dp, -inf, inf, table, frame, counts);
     }
-    EXPECT_EQ(visible, 0) << bad;
+    EXPECT_EQ(counts.Visible, 0) << bad;
   }
 }
 
