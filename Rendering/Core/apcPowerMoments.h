@@ -20,6 +20,21 @@ namespace apc
 // - a = +inf: treated as kAbsorbanceMax, an opaque sample, rather than poisoning the sums.
 // - z is clamped to [-1,1] (the warp's range, so |b_k| <= b0 always holds); NaN z skips
 //   the sample because there is no depth at which to place it.
+// AccumulatePowerMoments for a sample whose caller knows a is positive and finite and z in
+// [-1, 1] (pass 1: a transfer table's absorbance at a LogDepthWarp depth), where its checks
+// change nothing: the same sums without a test and two compares per sample.
+template <int N>
+[[gnu::always_inline]] inline void AccumulateCheckedPowerMoments(double* b, double z, double a)
+{
+  double w = a;
+  b[0] += w;
+  for (int k = 1; k <= N; ++k)
+  {
+    w *= z;
+    b[k] += w;
+  }
+}
+
 template <int N>
 inline void AccumulatePowerMoments(double* b, double z, double a)
 {
@@ -32,14 +47,7 @@ inline void AccumulatePowerMoments(double* b, double z, double a)
   {
     a = kAbsorbanceMax;
   }
-  z = z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
-  double w = a;
-  b[0] += w;
-  for (int k = 1; k <= N; ++k)
-  {
-    w *= z;
-    b[k] += w;
-  }
+  AccumulateCheckedPowerMoments<N>(b, z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z), a);
 }
 
 // Elementwise dst += src over N+1 moment sums (what an MPI_SUM reduction does).

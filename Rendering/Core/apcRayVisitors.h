@@ -211,11 +211,12 @@ struct Moments : NoSegments
   {
     this->SampleAtDepth(pixel, k, (*this->Warp)(k, t), scalar, s.Absorbance);
   }
-  // Sample with its depth t already warped: z = (*Warp)(k, t).
+  // Sample with its depth t already warped: z = (*Warp)(k, t), which lies in [-1, 1]; the
+  // walker passes only visible samples (absorbance > 0), and a table's absorbance is finite.
   [[gnu::always_inline]] void SampleAtDepth(
     int pixel, int64_t k, double z, double scalar, float absorbance)
   {
-    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, absorbance);
+    AccumulateCheckedPowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, absorbance);
     if (this->Recording)
     {
       // Written field by field in place: a record built on the stack and copied was read
