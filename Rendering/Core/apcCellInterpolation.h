@@ -273,9 +273,6 @@ public:
       rs * t * a[7];
   }
 
-  // ScalarAt's monomial coefficients SC[0..7] (the marcher's vectorised samples read them).
-  const double* ScalarCoefficients() const { return this->SC; }
-
   // Reference -> world.
   void WorldPosition(const double pcoords[3], double x[3]) const;
 

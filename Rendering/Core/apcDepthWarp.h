@@ -89,20 +89,6 @@ public:
     return this->Warp(t);
   }
 
-  // The table as a vectorised read takes it (apcLinearSamples.h): Z[k - Base] for
-  // 0 <= k - Base < Size, where t = k * Spacing.
-  struct Layout
-  {
-    const double* Z;
-    int64_t Base;
-    int64_t Size;
-    double Spacing;
-  };
-  Layout GetLayout() const
-  {
-    return { this->Z.data(), this->Base, static_cast<int64_t>(this->Z.size()), this->Spacing };
-  }
-
   const LogDepthWarp& GetWarp() const { return this->Warp; }
   int64_t GetNumberOfEntries() const { return static_cast<int64_t>(this->Z.size()); }
 

@@ -14,12 +14,6 @@
 namespace apc
 {
 
-// Adds one sample of absorbance a at warped depth z to a raw buffer of N+1 unnormalised
-// sums (b0, b1, ..., bN). This is the form the MPI layer reduces.
-// - a <= 0 or NaN: skipped (contributes nothing, like alpha = 0).
-// - a = +inf: treated as kAbsorbanceMax, an opaque sample, rather than poisoning the sums.
-// - z is clamped to [-1,1] (the warp's range, so |b_k| <= b0 always holds); NaN z skips
-//   the sample because there is no depth at which to place it.
 // AccumulatePowerMoments for a sample whose caller knows a is positive and finite and z in
 // [-1, 1] (pass 1: a transfer table's absorbance at a LogDepthWarp depth), where its checks
 // change nothing: the same sums without a test and two compares per sample.
@@ -35,6 +29,12 @@ template <int N>
   }
 }
 
+// Adds one sample of absorbance a at warped depth z to a raw buffer of N+1 unnormalised
+// sums (b0, b1, ..., bN). This is the form the MPI layer reduces.
+// - a <= 0 or NaN: skipped (contributes nothing, like alpha = 0).
+// - a = +inf: treated as kAbsorbanceMax, an opaque sample, rather than poisoning the sums.
+// - z is clamped to [-1,1] (the warp's range, so |b_k| <= b0 always holds); NaN z skips
+//   the sample because there is no depth at which to place it.
 template <int N>
 inline void AccumulatePowerMoments(double* b, double z, double a)
 {

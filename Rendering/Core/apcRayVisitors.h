@@ -47,11 +47,6 @@ struct NoSegments
   // The MBOIT passes leave out what lies behind an opaque ray (VolumeRayMarcher::
   // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
   static constexpr bool StopsWhenOpaque = false;
-  // True for a visitor that reads only the absorbance of a sample's TransferSample (pass 1):
-  // the walker may then leave the colour out, warp the depth itself from the visitor's Warp
-  // (a LatticeDepthWarp) and hand each sample to SampleAtDepth(pixel, k, z, scalar,
-  // absorbance) instead of Sample.
-  static constexpr bool AbsorbanceOnly = false;
   void Segment(int, double, double) {}
 };
 
@@ -173,7 +168,6 @@ template <int N>
 struct Moments : NoSegments
 {
   static constexpr bool StopsWhenOpaque = true;
-  static constexpr bool AbsorbanceOnly = true; // Sample reads s.Absorbance alone
   double* Output;
   double* Own = nullptr;
   int Width;
@@ -207,16 +201,13 @@ struct Moments : NoSegments
       this->Buffer->Counts.assign(tile.Pixels(), 0);
     }
   }
+  // The walker passes only visible samples (absorbance > 0; StopsWhenOpaque visitors take
+  // no transparent ones), a table's absorbance is finite and the warp's depth lies in
+  // [-1, 1]: AccumulatePowerMoments' checks would change nothing.
   void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
-    this->SampleAtDepth(pixel, k, (*this->Warp)(k, t), scalar, s.Absorbance);
-  }
-  // Sample with its depth t already warped: z = (*Warp)(k, t), which lies in [-1, 1]; the
-  // walker passes only visible samples (absorbance > 0), and a table's absorbance is finite.
-  [[gnu::always_inline]] void SampleAtDepth(
-    int pixel, int64_t k, double z, double scalar, float absorbance)
-  {
-    AccumulateCheckedPowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, absorbance);
+    const double z = (*this->Warp)(k, t);
+    AccumulateCheckedPowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
     if (this->Recording)
     {
       // Written field by field in place: a record built on the stack and copied was read
@@ -264,7 +255,6 @@ struct SegmentCounts
   static constexpr bool WantsSegments = true;
   static constexpr bool WantsSamples = false;
   static constexpr bool WantsTransparentSamples = false;
-  static constexpr bool AbsorbanceOnly = false;
   int32_t* Output;
   int Width;
   double Tolerance;

@@ -262,11 +262,7 @@ struct RayProgress
     {
       return false;
     }
-    return this->AddQuanta(p, k, bin, this->Bins->Quanta(absorbance));
-  }
-  // Add with the sample's absorbance already in quanta (OpaqueBins::Quanta), Bins set.
-  [[gnu::always_inline]] bool AddQuanta(int p, int64_t k, int bin, uint32_t q)
-  {
+    const uint32_t q = this->Bins->Quanta(absorbance);
     this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q);
     this->FarK[p] = std::max(this->FarK[p], k);
     if (this->Opaque[p])

@@ -7,7 +7,6 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
-#include "apcLinearSamples.h"
 #include "apcOpaqueBins.h"
 #include "apcRayClip.h"
 #include "apcRayWalk.h"
@@ -267,16 +266,6 @@ struct VolumeRayMarcher::Walker
   [[gnu::noinline]] int64_t CellSamples(const std::vector<RaySetup>& rays, int hits,
     Visitor& visitor, CellState& state, RayProgress& progress) const
   {
-#ifdef APC_HAVE_AVX2_SAMPLES
-    if constexpr ((How == Sampling::Linear || How == Sampling::LinearPyramid) &&
-      Visitor::AbsorbanceOnly)
-    {
-      if (walk::HasAvx2())
-      {
-        return this->CellSamplesAvx2<How>(rays, hits, visitor, state, progress);
-      }
-    }
-#endif
     const walk::ClippedRays& c = state.Clipped;
     // Once per cell: taken per pair, the loop's stores made the compiler reload the table's
     // fields through the table for every pair.
@@ -290,102 +279,6 @@ struct VolumeRayMarcher::Walker
         l, rays[l], static_cast<int64_t>(c.Lattice[l]), c.Tout[l], table, visitor, state, progress);
     }
     return samples;
-  }
-
-#ifdef APC_HAVE_AVX2_SAMPLES
-  // CellSamples for a nearly affine cell and a visitor that needs no colour (pass 1), four
-  // samples of a ray at a time (walk::LinearSamples4): the same samples and values.
-  template <Sampling How, class Visitor>
-  [[gnu::noinline]] APC_SAMPLES_AVX2 int64_t CellSamplesAvx2(const std::vector<RaySetup>& rays,
-    int hits, Visitor& visitor, CellState& state, RayProgress& progress) const
-  {
-    const walk::ClippedRays& c = state.Clipped;
-    const TransferTable::Layout table = this->Table.GetLayout();
-    walk::LinearScalarForm form;
-    std::copy(state.Interpolator.ScalarCoefficients(), state.Interpolator.ScalarCoefficients() + 8,
-      form.SC);
-    form.Lo = state.Lo;
-    form.Hi = state.Hi;
-    const walk::SampleBookkeeping after{ visitor.Warp->GetLayout(),
-      progress.Bins ? progress.Bins->QuantaPerAbsorbance : 0.0 };
-    walk::SampleQuad quad;
-    int64_t samples = 0;
-    for (int h = 0; h < hits; ++h)
-    {
-      const int l = c.Hits[h];
-      visitor.Segment(l, c.Tin[l], c.Tout[l]);
-      samples += this->SampleLoopAvx2<How>(l, rays[l], static_cast<int64_t>(c.Lattice[l]),
-        c.Tout[l], table, form, after, quad, visitor, state, progress);
-    }
-    return samples;
-  }
-  // SampleLoop's linear forms with the samples' depths, scalars and absorbances found four
-  // at a time; what follows per sample (the visitor, the opaque stop) is SampleLoop's.
-  template <Sampling How, class Visitor>
-  [[gnu::always_inline]] APC_SAMPLES_AVX2 int64_t SampleLoopAvx2(int local, const RaySetup& ray,
-    int64_t k, double tout, const TransferTable::Layout& table, const walk::LinearScalarForm& form,
-    const walk::SampleBookkeeping& after, walk::SampleQuad& quad, Visitor& visitor,
-    CellState& state, RayProgress& progress) const
-  {
-    double p0[3];
-    double dp[3];
-    if (this->SharedOrigin)
-    {
-      p0[0] = state.LinearOrigin[0];
-      p0[1] = state.LinearOrigin[1];
-      p0[2] = state.LinearOrigin[2];
-      state.Interpolator.LinearRayDirection(ray.D, dp);
-    }
-    else
-    {
-      state.Interpolator.LinearRay(ray.O, ray.D, p0, dp);
-    }
-    int64_t samples = 0;
-    const bool own = Visitor::StopsWhenOpaque && progress.Bins;
-    int bin = own ? progress.BinOf(k) : 0;
-    int64_t binEnd = own ? progress.Ends[bin] : 0;
-    for (;;)
-    {
-      walk::LinearSamples4<How == Sampling::LinearPyramid>(
-        this->Grid, k, ray.Offset, p0, dp, form, table, after, quad);
-      for (int lane = 0; lane < 4; ++lane, ++k)
-      {
-        const double t = quad.T[lane];
-        if (!(t < tout))
-        {
-          return samples;
-        }
-        ++samples;
-        if (quad.Absorbance[lane] > 0)
-        {
-          const double z = (quad.Tabled >> lane & 1) ? quad.Z[lane] : (*visitor.Warp)(k, t);
-          visitor.SampleAtDepth(local, k, z, quad.Scalar[lane], quad.Absorbance[lane]);
-          if (own)
-          {
-            for (; k >= binEnd; binEnd = progress.Ends[++bin])
-            {
-            }
-            if (progress.AddQuanta(local, k, bin, quad.Quanta[lane]))
-            {
-              tout = std::min(tout, this->OpaqueStop(local, ray, progress));
-            }
-          }
-        }
-      }
-    }
-  }
-#endif
-  // Pixel local's own absorbance turned opaque: nothing past the end of its farthest
-  // sample's bin is taken; what lies in front of it still is (its profile stays complete up
-  // to there). Returns the pixel's stop (the nearer of this and a bound's).
-  double OpaqueStop(int local, const RaySetup& ray, RayProgress& progress) const
-  {
-    const int64_t edge = progress.StopIndex(local);
-    const double stop = edge == std::numeric_limits<int64_t>::max()
-      ? std::numeric_limits<double>::infinity()
-      : this->Grid.At(edge, ray.Offset);
-    progress.SetStop(local, stop);
-    return progress.Stop[local];
   }
 
   // The lattice samples of the ray in [tin, tout), the same points on every rank; one loop
@@ -478,7 +371,14 @@ struct VolumeRayMarcher::Walker
           }
           if (progress.Add(local, k, bin, s.Absorbance))
           {
-            tout = std::min(tout, this->OpaqueStop(local, ray, progress));
+            // Opaque: nothing past the end of the farthest sample's bin is taken; what lies
+            // in front of it still is (this pixel's profile stays complete up to there).
+            const int64_t edge = progress.StopIndex(local);
+            const double stop = edge == std::numeric_limits<int64_t>::max()
+              ? std::numeric_limits<double>::infinity()
+              : this->Grid.At(edge, ray.Offset);
+            progress.SetStop(local, stop); // the nearer of this and a bound's stop
+            tout = std::min(tout, progress.Stop[local]);
           }
         }
       }
