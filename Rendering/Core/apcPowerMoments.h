@@ -14,6 +14,21 @@
 namespace apc
 {
 
+// AccumulatePowerMoments for a sample whose caller knows a is positive and finite and z in
+// [-1, 1] (pass 1: a transfer table's absorbance at a LogDepthWarp depth), where its checks
+// change nothing: the same sums without a test and two compares per sample.
+template <int N>
+[[gnu::always_inline]] inline void AccumulateCheckedPowerMoments(double* b, double z, double a)
+{
+  double w = a;
+  b[0] += w;
+  for (int k = 1; k <= N; ++k)
+  {
+    w *= z;
+    b[k] += w;
+  }
+}
+
 // Adds one sample of absorbance a at warped depth z to a raw buffer of N+1 unnormalised
 // sums (b0, b1, ..., bN). This is the form the MPI layer reduces.
 // - a <= 0 or NaN: skipped (contributes nothing, like alpha = 0).
@@ -32,14 +47,7 @@ inline void AccumulatePowerMoments(double* b, double z, double a)
   {
     a = kAbsorbanceMax;
   }
-  z = z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
-  double w = a;
-  b[0] += w;
-  for (int k = 1; k <= N; ++k)
-  {
-    w *= z;
-    b[k] += w;
-  }
+  AccumulateCheckedPowerMoments<N>(b, z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z), a);
 }
 
 // Elementwise dst += src over N+1 moment sums (what an MPI_SUM reduction does).

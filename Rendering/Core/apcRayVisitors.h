@@ -201,10 +201,13 @@ struct Moments : NoSegments
       this->Buffer->Counts.assign(tile.Pixels(), 0);
     }
   }
+  // The walker passes only visible samples (absorbance > 0; StopsWhenOpaque visitors take
+  // no transparent ones), a table's absorbance is finite and the warp's depth lies in
+  // [-1, 1]: AccumulatePowerMoments' checks would change nothing.
   void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
     const double z = (*this->Warp)(k, t);
-    AccumulatePowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
+    AccumulateCheckedPowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
     if (this->Recording)
     {
       // Written field by field in place: a record built on the stack and copied was read
