@@ -17,7 +17,6 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <vector>
 
 namespace apc
@@ -128,44 +127,6 @@ inline size_t MarkUnresolved(
 inline int BoundedProfileBins(uint8_t bound)
 {
   return std::min<int>(bound, OpaqueBins::kBins - 1) + 1;
-}
-
-// Moves each of pixels' profiles (kBins values each, in profiles) to its first
-// BoundedProfileBins(bounds[p]) values, one after another from the start of profiles, so that
-// the summing allreduce carries no bin that is zero everywhere. Returns the values kept. The
-// bins dropped must be zero (a bounded pass 1's profile is).
-inline size_t CompactProfiles(uint16_t* profiles, const uint8_t* bounds, size_t pixels)
-{
-  constexpr int bins = OpaqueBins::kBins;
-  size_t to = 0;
-  for (size_t p = 0; p < pixels; ++p)
-  {
-    const int keep = BoundedProfileBins(bounds[p]);
-    // to <= p * bins: the move never overwrites a later profile.
-    std::memmove(profiles + to, profiles + p * bins, sizeof(uint16_t) * keep);
-    to += keep;
-  }
-  return to;
-}
-
-// CompactProfiles undone: profiles (room for pixels * kBins values) gets back kBins values per
-// pixel, zero past each pixel's bound.
-inline void ExpandProfiles(uint16_t* profiles, const uint8_t* bounds, size_t pixels)
-{
-  constexpr int bins = OpaqueBins::kBins;
-  size_t from = 0;
-  for (size_t p = 0; p < pixels; ++p)
-  {
-    from += BoundedProfileBins(bounds[p]);
-  }
-  // From the last pixel back: a profile's compact place is at or before its full one.
-  for (size_t p = pixels; p-- > 0;)
-  {
-    const int keep = BoundedProfileBins(bounds[p]);
-    from -= keep;
-    std::memmove(profiles + p * bins, profiles + from, sizeof(uint16_t) * keep);
-    std::fill(profiles + p * bins + keep, profiles + (p + 1) * bins, uint16_t(0));
-  }
 }
 
 } // namespace apc

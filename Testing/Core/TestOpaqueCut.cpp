@@ -97,6 +97,34 @@ int CompleteCut(const OpaqueBins& bins, const std::vector<Sample>& samples)
   }
   return apc::CutBin(complete.data());
 }
+
+// Every process's pass 1 over the ray (each bounded by bound) into profiles, and their
+// summaries combined as the summaries' allreduce does.
+uint16_t SummarisedPass1(const OpaqueBins& bins, std::vector<Sample>& samples, int processes,
+  std::vector<std::array<uint16_t, OpaqueBins::kBins>>& profiles, int bound = OpaqueBins::kBins - 1)
+{
+  std::vector<bool> taken(samples.size(), false);
+  uint16_t combined = 0;
+  for (int p = 0; p < processes; ++p)
+  {
+    profiles.push_back(Pass1(bins, samples, p, taken, bound));
+    const uint16_t own = apc::OpaqueSummary::Of(profiles.back().data());
+    combined = p == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
+  }
+  return combined;
+}
+
+// The profiles' first keep bins summed, as the profiles' allreduce sends them.
+std::array<uint16_t, OpaqueBins::kBins> SumFirstBins(
+  const std::vector<std::array<uint16_t, OpaqueBins::kBins>>& profiles, int keep)
+{
+  std::array<uint16_t, OpaqueBins::kBins> summed{};
+  for (const auto& profile : profiles)
+  {
+    apc::AddProfiles(summed.data(), profile.data(), static_cast<size_t>(keep));
+  }
+  return summed;
+}
 }
 
 TEST(OpaqueCut, BinsFollowTheLattice)
@@ -252,23 +280,16 @@ TEST(OpaqueCut, ProfilesSummedAsFarAsTheSummarySaysGiveTheCompleteCut)
       }
     }
     const int expected = CompleteCut(bins, samples);
-    std::vector<bool> taken(samples.size(), false);
     std::vector<std::array<uint16_t, OpaqueBins::kBins>> profiles;
-    uint16_t combined = 0;
-    for (int p = 0; p < processes; ++p)
+    const uint16_t combined = SummarisedPass1(bins, samples, processes, profiles);
+    for (const auto& profile : profiles)
     {
-      profiles.push_back(Pass1(bins, samples, p, taken));
-      const uint16_t own = apc::OpaqueSummary::Of(profiles.back().data());
-      ASSERT_EQ(own >> apc::OpaqueSummary::kTotalBits, apc::CutBin(profiles.back().data()));
-      combined = p == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
+      ASSERT_EQ(apc::OpaqueSummary::Of(profile.data()) >> apc::OpaqueSummary::kTotalBits,
+        apc::CutBin(profile.data()));
     }
     const int keep = apc::OpaqueSummary::Bins(combined);
     ASSERT_LE(keep, OpaqueBins::kBins);
-    std::array<uint16_t, OpaqueBins::kBins> summed{};
-    for (const auto& profile : profiles)
-    {
-      apc::AddProfiles(summed.data(), profile.data(), static_cast<size_t>(keep));
-    }
+    const auto summed = SumFirstBins(profiles, keep);
     ASSERT_EQ(apc::CutBin(summed.data()), expected) << "trial " << trial << ", keep " << keep;
     binsSent += static_cast<size_t>(keep);
     noneSent += keep == 0 ? 1 : 0;
@@ -297,24 +318,12 @@ TEST(OpaqueCut, TheSummaryWithAPredictedBoundResolvesAsTheWholeSums)
     const int expected = CompleteCut(bins, samples);
     const uint8_t bound =
       static_cast<uint8_t>(std::uniform_int_distribution<int>(0, OpaqueBins::kBins - 1)(rng));
-    std::vector<bool> taken(samples.size(), false);
-    std::array<uint16_t, OpaqueBins::kBins> whole{};
     std::vector<std::array<uint16_t, OpaqueBins::kBins>> profiles;
-    uint16_t combined = 0;
-    for (int p = 0; p < processes; ++p)
-    {
-      profiles.push_back(Pass1(bins, samples, p, taken, bound));
-      apc::AddProfiles(whole.data(), profiles.back().data(), whole.size());
-      const uint16_t own = apc::OpaqueSummary::Of(profiles.back().data());
-      combined = p == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
-    }
+    const uint16_t combined = SummarisedPass1(bins, samples, processes, profiles, bound);
+    auto whole = SumFirstBins(profiles, OpaqueBins::kBins);
     const int keep = apc::OpaqueSummary::Bins(apc::OpaqueSummary::Bounded(combined, bound));
     ASSERT_LE(keep, apc::BoundedProfileBins(bound));
-    std::array<uint16_t, OpaqueBins::kBins> summed{};
-    for (const auto& profile : profiles)
-    {
-      apc::AddProfiles(summed.data(), profile.data(), static_cast<size_t>(keep));
-    }
+    auto summed = SumFirstBins(profiles, keep);
     uint8_t openWhole = 0;
     uint8_t open = 0;
     apc::MarkUnresolved(&bound, whole.data(), 1, &openWhole);
@@ -389,59 +398,4 @@ TEST(OpaqueCut, TheBoundIsTheNeighbourhoodsLargestCutPlusAMargin)
   ASSERT_TRUE(apc::PredictOpaqueBound(previous, { 64, 64 }, 12, 20, 8, 6, 1, 1, moved.data()));
   EXPECT_EQ(int(moved[2 * 8 + 2]), 10);   // image pixel (14, 22)
   EXPECT_EQ(int(moved[2 * 8 + 7]), none); // image pixel (19, 22): outside the previous one
-}
-
-// The profiles' allreduce with a bound carries each pixel's bins up to its bound alone: those
-// of several processes (zero past the bound, as a bounded pass 1 leaves them), compacted,
-// summed value by value and expanded, are the sums of the whole profiles; with no bound
-// (kBins - 1) every bin goes.
-TEST(OpaqueCut, ProfilesSummedUpToTheirBoundsAreTheWholeSums)
-{
-  constexpr int bins = OpaqueBins::kBins;
-  std::mt19937 rng(7);
-  for (int trial = 0; trial < 200; ++trial)
-  {
-    const size_t pixels = 1 + trial % 37;
-    const int processes = 2 + trial % 3;
-    std::vector<uint8_t> bound(pixels);
-    size_t kept = 0;
-    for (uint8_t& b : bound)
-    {
-      b = static_cast<uint8_t>(std::uniform_int_distribution<int>(0, bins - 1)(rng));
-      kept += b + 1u;
-    }
-    std::vector<uint16_t> whole(pixels * bins, 0);
-    std::vector<uint16_t> compactSum;
-    for (int p = 0; p < processes; ++p)
-    {
-      std::vector<uint16_t> profile(pixels * bins, 0);
-      for (size_t x = 0; x < pixels; ++x)
-      {
-        for (int b = 0; b <= bound[x]; ++b)
-        {
-          profile[x * bins + b] =
-            static_cast<uint16_t>(std::uniform_int_distribution<int>(0, 40000)(rng));
-        }
-      }
-      apc::AddProfiles(whole.data(), profile.data(), whole.size());
-      ASSERT_EQ(apc::CompactProfiles(profile.data(), bound.data(), pixels), kept);
-      compactSum.resize(kept, 0);
-      apc::AddProfiles(compactSum.data(), profile.data(), kept);
-    }
-    compactSum.resize(pixels * bins, 0xffff); // what lies past the compacted values is stale
-    apc::ExpandProfiles(compactSum.data(), bound.data(), pixels);
-    ASSERT_EQ(compactSum, whole) << "trial " << trial;
-  }
-  // Nothing bounded: all of every profile, unchanged.
-  std::vector<uint16_t> profile(3 * bins);
-  for (size_t v = 0; v < profile.size(); ++v)
-  {
-    profile[v] = static_cast<uint16_t>(v + 1);
-  }
-  const std::vector<uint16_t> original = profile;
-  const std::vector<uint8_t> none(3, uint8_t(bins - 1));
-  EXPECT_EQ(apc::CompactProfiles(profile.data(), none.data(), 3), profile.size());
-  EXPECT_EQ(profile, original);
-  apc::ExpandProfiles(profile.data(), none.data(), 3);
-  EXPECT_EQ(profile, original);
 }

@@ -8,6 +8,7 @@
 #include "apcCellMesh.h"
 #include "apcDepthWarp.h"
 #include "apcOpaquePrediction.h"
+#include "apcOpaqueSummary.h"
 #include "apcRayCamera.h"
 #include "apcResolve.h"
 #include "apcTransferTable.h"
@@ -179,19 +180,31 @@ Frame RenderPredicted(const Scene& scene, std::vector<apc::VolumeRayMarcher*> ma
   std::vector<uint16_t> profile = sum();
   if (bound)
   {
-    // As vtkAPCCompositePass sums them: only each pixel's bins up to its bound, past which a
-    // bounded pass 1 leaves every mesh's profile zero.
-    std::vector<uint16_t> compact(kPixels * bins, 0);
-    size_t kept = 0;
-    for (auto* marcher : marchers)
+    // As vtkAPCCompositePass sums them: the meshes' summaries combined, then only each
+    // pixel's bins up to the earlier of its bound and the earliest own cut; a bounded pass 1
+    // leaves every mesh's profile zero past the bound.
+    std::vector<uint16_t> partial(kPixels * bins, 0);
+    for (size_t p = 0; p < kPixels; ++p)
     {
-      std::vector<uint16_t> mine = marcher->GetOpaqueProfile();
-      kept = apc::CompactProfiles(mine.data(), bound->data(), kPixels);
-      apc::AddProfiles(compact.data(), mine.data(), kept);
+      uint16_t combined = 0;
+      for (size_t m = 0; m < marchers.size(); ++m)
+      {
+        const uint16_t* mine = marchers[m]->GetOpaqueProfile().data() + p * bins;
+        for (int b = apc::BoundedProfileBins((*bound)[p]); b < bins; ++b)
+        {
+          EXPECT_EQ(mine[b], 0) << "a bounded pass 1 left a sample past its bound";
+        }
+        const uint16_t own = apc::OpaqueSummary::Of(mine);
+        combined = m == 0 ? own : apc::OpaqueSummary::Combine(combined, own);
+      }
+      const int keep = apc::OpaqueSummary::Bins(apc::OpaqueSummary::Bounded(combined, (*bound)[p]));
+      for (auto* marcher : marchers)
+      {
+        apc::AddProfiles(partial.data() + p * bins, marcher->GetOpaqueProfile().data() + p * bins,
+          static_cast<size_t>(keep));
+      }
     }
-    apc::ExpandProfiles(compact.data(), bound->data(), kPixels);
-    EXPECT_EQ(compact, profile) << "a bounded pass 1 left a sample past its bound";
-    profile = compact;
+    profile = partial;
   }
   std::vector<uint8_t> open(kPixels, 0);
   unresolved = bound ? apc::MarkUnresolved(bound->data(), profile.data(), kPixels, open.data()) : 0;

@@ -52,10 +52,8 @@ std::vector<Frame> RenderFrames(vtkMPIController* controller, const apctest::Sce
   mapper->SetInputData(piece);
   mapper->SetStopWhereOpaque(stop);
   mapper->SetNumberOfThreads(1);
-  mapper->SetSampleDistance(scene.SampleDistance);
   vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(apctest::MakeVolumeProperty(scene.TF));
+  apctest::ConfigureVolume(volume, mapper, scene);
   pass->KeepLastImageOn();
   pass->AddVolume(volume);
   std::vector<Frame> frames;

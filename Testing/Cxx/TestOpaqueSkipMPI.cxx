@@ -50,14 +50,11 @@ Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
   mapper->SetInputData(piece);
   mapper->SetStopWhereOpaque(stop);
   mapper->SetNumberOfThreads(1);
-  mapper->SetSampleDistance(scene.SampleDistance);
   vtkNew<vtkVolume> volume;
-  volume->SetMapper(mapper);
-  volume->SetProperty(apctest::MakeVolumeProperty(scene.TF));
+  apctest::ConfigureVolume(volume, mapper, scene);
   pass->KeepLastImageOn();
   pass->AddVolume(volume);
-  apctest::ApplyView(renderer, scene.Camera);
-  renderer->ResetCameraClippingRange(bounds);
+  apctest::SetCamera(renderer, scene, bounds);
   window->Render();
   Frame frame;
   frame.Timings = pass->GetLastTimings();

@@ -28,8 +28,6 @@
 
 namespace apctest
 {
-namespace
-{
 void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const Scene& scene)
 {
   mapper->SetSampleDistance(scene.SampleDistance);
@@ -43,7 +41,6 @@ void SetCamera(vtkRenderer* renderer, const Scene& scene, const double bounds[6]
 {
   ApplyView(renderer, scene.Camera);
   renderer->ResetCameraClippingRange(bounds);
-}
 }
 
 std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& scene,

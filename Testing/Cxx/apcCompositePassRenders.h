@@ -15,7 +15,9 @@
 class vtkAPCCompositePass;
 class vtkImageData;
 class vtkMPIController;
+class vtkRenderer;
 class vtkUnstructuredGrid;
+class vtkVolume;
 
 namespace apctest
 {
@@ -27,6 +29,11 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& 
   vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
   vtkAPCCompositePass* pass, bool withVolume = true, int resolve = vtkAPCVolumeMapper::RENORMALISED,
   std::vector<unsigned char>* shown = nullptr, bool stopWhereOpaque = true);
+
+// The scene's sample distance, moments, jitter and transfer function on mapper and volume.
+void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const Scene& scene);
+// The scene's camera, clipped to the data's global bounds.
+void SetCamera(vtkRenderer* renderer, const Scene& scene, const double bounds[6]);
 
 // The one-process image of the whole grid (the reference), MBOIT or EXACT.
 std::vector<float> RenderWhole(
