@@ -54,7 +54,7 @@ public:
 };
 
 // This process's opaque profile of a band (values: pixels * OpaqueBins::kBins): one volume's
-// own (no copy), several summed; null without volumes.
+// own (no copy), several summed; zeros without volumes.
 const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentBuffers& buffers)
 {
   if (frame.Engines.size() == 1 && frame.Engines.front()->GetOpaqueProfile().size() == values)
