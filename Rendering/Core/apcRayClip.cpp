@@ -164,32 +164,61 @@ __attribute__((target("avx2"))) inline void ClipFour(const CellPlanes& planes, c
   hi = _mm256_blendv_pd(hi, minusInf, out);
 }
 
-// Lattice::First(lo) of four rays, as doubles: the ceiling of the quotient is Lattice::First's
-// first guess (truncation, then up for a positive fraction), then one step down and one up
-// as its loops take them. A lane those steps do not settle (never seen) is marked in the
-// returned mask and left to Lattice::First.
+// Lattice::First(lo) of four rays, as doubles, and t_k: the smallest k with t_k >= lo. The
+// ceiling k0 of the quotient is Lattice::First's first guess (truncation, then up for a
+// positive fraction), which rounding leaves at most one off; t_k = (k + offset) spacing with
+// Lattice::At's operations does not decrease with k, so t_(k0-2) < lo <= t_(k0+1) puts the
+// answer in k0-1 .. k0+1, and the compares of those four values, formed side by side instead
+// of a step down, a step up and a check one after the other, say which. A lane the window
+// does not settle (never seen) is marked in the returned mask and left to Lattice::First.
 __attribute__((target("avx2"))) inline __m256d FirstFour(
-  const Lattice& lattice, __m256d lo, __m256d offset, int& unsettled)
+  const Lattice& lattice, __m256d lo, __m256d offset, __m256d& tk, int& unsettled)
 {
   const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d two = _mm256_set1_pd(2.0);
   const __m256d spacing = _mm256_set1_pd(lattice.Spacing);
   const __m256d x =
     _mm256_sub_pd(_mm256_mul_pd(lo, _mm256_set1_pd(lattice.InverseSpacing)), offset);
-  __m256d k = _mm256_round_pd(x, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
-  const __m256d down = _mm256_cmp_pd(
-    _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(k, one), offset), spacing), lo, _CMP_GE_OQ);
-  k = _mm256_sub_pd(k, _mm256_and_pd(down, one));
-  const __m256d up =
-    _mm256_cmp_pd(_mm256_mul_pd(_mm256_add_pd(k, offset), spacing), lo, _CMP_LT_OQ);
-  k = _mm256_add_pd(k, _mm256_and_pd(up, one));
-  // Settled: t_(k-1) < lo <= t_k.
-  const __m256d below = _mm256_cmp_pd(
-    _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(k, one), offset), spacing), lo, _CMP_LT_OQ);
-  const __m256d above =
-    _mm256_cmp_pd(_mm256_mul_pd(_mm256_add_pd(k, offset), spacing), lo, _CMP_GE_OQ);
-  unsettled = ~_mm256_movemask_pd(_mm256_and_pd(below, above)) & 0xF;
-  return k;
+  const __m256d k0 = _mm256_round_pd(x, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+  const __m256d k1 = _mm256_add_pd(k0, one);
+  // t_(k0+j), j = -2 .. 1 (the integers k0 + j are exact).
+  const __m256d tm2 = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(k0, two), offset), spacing);
+  const __m256d tm1 = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(k0, one), offset), spacing);
+  const __m256d t0 = _mm256_mul_pd(_mm256_add_pd(k0, offset), spacing);
+  const __m256d t1 = _mm256_mul_pd(_mm256_add_pd(k1, offset), spacing);
+  const __m256d cm2 = _mm256_cmp_pd(tm2, lo, _CMP_GE_OQ);
+  const __m256d cm1 = _mm256_cmp_pd(tm1, lo, _CMP_GE_OQ);
+  const __m256d c0 = _mm256_cmp_pd(t0, lo, _CMP_GE_OQ);
+  const __m256d c1 = _mm256_cmp_pd(t1, lo, _CMP_GE_OQ);
+  // Settled: not t_(k0-2) >= lo, and t_(k0+1) >= lo; then k = k0 + 1 - [c_-1] - [c_0].
+  unsettled = _mm256_movemask_pd(_mm256_andnot_pd(cm2, c1)) ^ 0xF;
+  tk = _mm256_blendv_pd(_mm256_blendv_pd(t1, t0, c0), tm1, cm1);
+  return _mm256_sub_pd(_mm256_sub_pd(k1, _mm256_and_pd(cm1, one)), _mm256_and_pd(c0, one));
 }
+
+// The offsets in a packet of four rays of the lanes set in a 4-bit mask, in order, as four
+// 16-bit numbers: the packet's kept rays are appended to ClippedRays::Hits with one store
+// and a count instead of a loop per set lane, whose exits the processor could not predict.
+struct LaneList
+{
+  uint64_t Lanes[16];
+  constexpr LaneList()
+    : Lanes()
+  {
+    for (int m = 0; m < 16; ++m)
+    {
+      int n = 0;
+      for (int b = 0; b < 4; ++b)
+      {
+        if (m >> b & 1)
+        {
+          this->Lanes[m] |= static_cast<uint64_t>(b) << (16 * n++);
+        }
+      }
+    }
+  }
+};
+constexpr LaneList kLaneList;
 
 } // namespace
 
@@ -216,10 +245,9 @@ __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const
       {
         const __m256d offset = _mm256_loadu_pd(rays.Offset + l);
         int unsettled = 0;
-        const __m256d k = FirstFour(*lattice, lo, offset, unsettled);
+        __m256d first;
+        const __m256d k = FirstFour(*lattice, lo, offset, first, unsettled);
         _mm256_storeu_pd(out.Lattice + l, k);
-        const __m256d first =
-          _mm256_mul_pd(_mm256_add_pd(k, offset), _mm256_set1_pd(lattice->Spacing));
         const int inside = _mm256_movemask_pd(_mm256_cmp_pd(first, hi, _CMP_LT_OQ));
         keep = (keep & inside) | (keep & unsettled);
         for (int m = keep & unsettled; m; m &= m - 1)
@@ -230,10 +258,11 @@ __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const
           keep &= lattice->At(kr, rays.Offset[r]) < out.Tout[r] ? ~0 : ~(1 << (r - l));
         }
       }
-      for (; keep; keep &= keep - 1)
-      {
-        out.Hits[n++] = static_cast<uint16_t>(l + __builtin_ctz(keep));
-      }
+      // Four 16-bit ray numbers l + lane, of which the first popcount(keep) are kept.
+      const __m128i hits = _mm_add_epi16(_mm_set1_epi16(static_cast<short>(l)),
+        _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[keep])));
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n), hits);
+      n += __builtin_popcount(keep);
     }
   }
   return n;

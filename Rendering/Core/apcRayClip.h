@@ -64,7 +64,8 @@ struct ClippedRays
   double Tout[TileRays::kSize];
   // Lattice::First(Tin, Offset), exactly, as a double (an integer; only with a lattice).
   double Lattice[TileRays::kSize];
-  uint16_t Hits[kTilePixels]; // the rays kept, in the rectangle's order
+  // The rays kept, in the rectangle's order; ClipRays may write up to 3 entries past the last.
+  uint16_t Hits[kTilePixels + 3];
 };
 
 // The rays of rect clipped against one cell: [Tin, Tout) is what CellPlanes::Clip gives from

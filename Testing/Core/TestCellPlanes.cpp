@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -255,4 +256,60 @@ TEST(CellPlanes, ClipRaysAvx2MatchesPerPlaneDivision)
     GTEST_SKIP() << "no AVX2 on this processor";
   }
   CheckClipRays(apc::walk::ClipRaysAvx2);
+}
+
+// Rays entering a cell exactly at a lattice point t_k or at the next double above it (a plane
+// across axis-parallel rays from the origin, at that value): the first index must be k,
+// respectively k + 1, where the quotient tin / spacing - offset rounds to either side of an
+// integer, so that the first guess (its ceiling) is one too high or one too low. Each form
+// against the known index and Lattice::First.
+TEST(CellPlanes, ClipRaysFindTheFirstLatticeIndexOnALatticePoint)
+{
+  std::vector<ClipRaysForm> forms{ apc::walk::ClipRaysScalar, apc::walk::ClipRays };
+  if (apc::walk::HasAvx2())
+  {
+    forms.push_back(apc::walk::ClipRaysAvx2);
+  }
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int guessHigh = 0;
+  int guessLow = 0;
+  for (int trial = 0; trial < 20000; ++trial)
+  {
+    const Lattice grid(0.001 + u(rng));
+    const double offset = trial % 2 ? u(rng) : 0.0;
+    const int64_t k = static_cast<int64_t>(u(rng) * 2000);
+    const bool above = trial % 4 >= 2;
+    const double tin = above ? std::nextafter(grid.At(k, offset), 1e300) : grid.At(k, offset);
+    const int64_t first = above ? k + 1 : k;
+    const double guess = std::ceil(tin * grid.InverseSpacing - offset);
+    guessHigh += guess > static_cast<double>(first) ? 1 : 0;
+    guessLow += guess < static_cast<double>(first) ? 1 : 0;
+    // Enter through z = tin (normal -z), leave far behind it.
+    FacePlane planes[2];
+    planes[0].Normal = { 0.0f, 0.0f, -1.0f };
+    planes[0].Offset = -tin;
+    planes[1].Normal = { 0.0f, 0.0f, 1.0f };
+    planes[1].Offset = 4000.0;
+    std::vector<RaySetup> rays(4, RaySetup{ { 0, 0, 0 }, { 0, 0, 1 }, 5000.0, offset });
+    CellPlanes cell;
+    cell.Set(planes, 2, rays[0], trial % 8 < 4);
+    TileRays packed;
+    packed.Set(rays.data(), 4, 5000.0);
+    for (ClipRaysForm form : forms)
+    {
+      ClippedRays out;
+      const int n = form(cell, packed, RayRect{ 0, 4, 1, 4 }, nullptr, 0.0, &grid, out);
+      ASSERT_EQ(n, 4) << "trial " << trial;
+      for (int l = 0; l < 4; ++l)
+      {
+        ASSERT_TRUE(SameBits(out.Tin[l], tin)) << "trial " << trial;
+        ASSERT_EQ(out.Lattice[l], static_cast<double>(first)) << "trial " << trial;
+        ASSERT_EQ(grid.First(tin, offset), first) << "trial " << trial;
+      }
+    }
+  }
+  // Both ways of missing must occur, or the test would not show that both are corrected.
+  EXPECT_GT(guessHigh, 100);
+  EXPECT_GT(guessLow, 100);
 }
