@@ -127,6 +127,7 @@ void CheckClipRays(ClipRaysForm form)
   int inside = 0;
   int outside = 0;
   int stopped = 0;
+  int negativeZero = 0;
   int sampled = 0;
   int unsampled = 0;
   for (int trial = 0; trial < 4000; ++trial)
@@ -140,7 +141,10 @@ void CheckClipRays(ClipRaysForm form)
       for (int d = 0; d < 3; ++d)
       {
         ray.O[d] = shared ? rays[0].O[d] : (axis ? small(rng) : 3 * u(rng));
-        ray.D[d] = axis ? (d == static_cast<int>(p + trial) % 3 ? 1.0 : 0.0) : u(rng);
+        // Along an axis either way: a plane parallel to the ray then has a denominator of
+        // +0 or -0 (every product -0), and some pass through the ray's origin (0 / 0).
+        ray.D[d] =
+          axis ? (d == static_cast<int>(p + trial) % 3 ? (p % 2 ? -1.0 : 1.0) : 0.0) : u(rng);
       }
       ray.End = p % 7 == 3 ? 0.5 : 10.0;
       ray.Offset = p % 3 == 0 ? 0.5 * (u(rng) + 1.0) : 0.0;
@@ -157,6 +161,14 @@ void CheckClipRays(ClipRaysForm form)
     }
     CellPlanes cell;
     cell.Set(planes, count, rays[0], shared);
+    for (const RaySetup& ray : rays)
+    {
+      for (int p = 0; p < count; ++p)
+      {
+        const double denom = cell.Nx[p] * ray.D[0] + cell.Ny[p] * ray.D[1] + cell.Nz[p] * ray.D[2];
+        negativeZero += denom == 0 && std::signbit(denom) ? 1 : 0;
+      }
+    }
     TileRays packed;
     packed.Set(rays.data(), kWidth * kWidth, 8.0);
     std::vector<double> stop(kWidth * kWidth, std::numeric_limits<double>::infinity());
@@ -239,6 +251,7 @@ void CheckClipRays(ClipRaysForm form)
   EXPECT_GT(inside, 10000);
   EXPECT_GT(outside, 10000);
   EXPECT_GT(stopped, 1000);
+  EXPECT_GT(negativeZero, 1000);
 }
 
 } // namespace
