@@ -197,17 +197,17 @@ struct VolumeRayMarcher::Walker
       {
         return this->CellSamples<Sampling::Constant>(rays, hits, visitor, state, progress);
       }
+      if (state.Linear && AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples &&
+        this->SharedOrigin && this->Lanes)
+      {
+        return this->LaneSamples(rays, hits, visitor, state, progress);
+      }
       if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
       {
         return this->CellSamples<Sampling::LinearPyramid>(rays, hits, visitor, state, progress);
       }
       if (state.Linear)
       {
-        if (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples &&
-          this->SharedOrigin && this->Lanes)
-        {
-          return this->LaneSamples(rays, hits, visitor, state, progress);
-        }
         return this->CellSamples<Sampling::Linear>(rays, hits, visitor, state, progress);
       }
       if (state.Interpolator.HasPyramidInverse())
@@ -303,7 +303,7 @@ struct VolumeRayMarcher::Walker
     return samples;
   }
 
-  // CellSamples<Sampling::Linear> for a cell other than a pyramid with a shared origin, four
+  // CellSamples<Sampling::Linear> or <LinearPyramid> with a shared origin, four
   // rays at a time: LaneSamplesAvx2 finds up to kLaneSteps samples of each (lane i holds ray
   // i's k-th sample, so the rays' table look-ups overlap), then each ray's samples go to the
   // visitor and the stop's bookkeeping in the scalar loop's order, ray after ray. A ray that
@@ -315,6 +315,7 @@ struct VolumeRayMarcher::Walker
   {
     const walk::ClippedRays& c = state.Clipped;
     walk::LaneCell cell;
+    cell.Pyramid = state.Interpolator.Shape() == CellShape::Pyramid;
     const auto& inverse = state.Interpolator.GetLinearInverse();
     for (int i = 0; i < 3; ++i)
     {

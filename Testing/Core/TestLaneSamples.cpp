@@ -1,6 +1,6 @@
 // Pass 1's samples of four rays at a time (LaneSamplesAvx2) against the walker's scalar
 // sample loop, written out here with the same calls (LinearRayOrigin, LinearRayDirection,
-// p0 + t dp, ScalarAt, the clamp, TransferTable::Lookup): every depth, scalar and absorbance
+// p0 + t dp, LinearScalarAt, the clamp, TransferTable::Lookup): every depth, scalar and absorbance
 // the same bit for bit, on random distorted cells, rays, lattice offsets and tables.
 #include "apcCellInterpolation.h"
 #include "apcLaneSamples.h"
@@ -81,13 +81,14 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
   std::mt19937 rng(1234);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const CellShape shapes[] = { CellShape::Hexahedron, CellShape::Tetra, CellShape::Wedge };
+  const CellShape shapes[] = { CellShape::Hexahedron, CellShape::Tetra, CellShape::Wedge,
+    CellShape::Pyramid };
   const double inf = std::numeric_limits<double>::infinity();
   int compared = 0;
   int visible = 0;
   for (int trial = 0; trial < 2000; ++trial)
   {
-    const CellShape shape = shapes[trial % 3];
+    const CellShape shape = shapes[trial % 4];
     const CellCorners corners = DistortedCell(shape, distortion, rng);
     CellInterpolator interpolator;
     interpolator.Set(corners);
@@ -97,6 +98,7 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
     const double eye[3] = { 50.0 + 10 * u(rng), 50.0 + 10 * u(rng), 40.0 + 5 * u(rng) };
 
     apc::walk::LaneCell cell;
+    cell.Pyramid = shape == CellShape::Pyramid;
     const auto& inverse = interpolator.GetLinearInverse();
     double p0[3];
     interpolator.LinearRayOrigin(eye, p0);
@@ -169,7 +171,8 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
         {
           pcoords[a] = p0[a] + t * dp[a];
         }
-        const double scalar = std::min(std::max(interpolator.ScalarAt(pcoords), cell.Lo), cell.Hi);
+        const double scalar =
+          std::min(std::max(interpolator.LinearScalarAt(pcoords), cell.Lo), cell.Hi);
         const apc::TransferSample sample = apc::TransferTable::Lookup(layout, scalar);
         ASSERT_TRUE(SameBits(steps.T[s][i], t)) << "trial " << trial << " lane " << i;
         ASSERT_TRUE(SameBits(steps.Scalar[s][i], scalar) ||
