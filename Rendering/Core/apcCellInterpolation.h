@@ -273,6 +273,11 @@ public:
       rs * t * a[7];
   }
 
+  // LinearRayDirection's matrix and ScalarAt's coefficients, for a vectorised sample loop
+  // that repeats their arithmetic (apcLaneSamples.h).
+  const double (&GetLinearInverse() const)[3][3] { return this->Inverse; }
+  const double (&GetScalarCoefficients() const)[8] { return this->SC; }
+
   // Reference -> world.
   void WorldPosition(const double pcoords[3], double x[3]) const;
 

@@ -168,6 +168,9 @@ template <int N>
 struct Moments : NoSegments
 {
   static constexpr bool StopsWhenOpaque = true;
+  // Sample reads a TransferSample's absorbance, not its colour (the walker's lanes fill no
+  // colour).
+  static constexpr bool SamplesAbsorbanceOnly = true;
   double* Output;
   double* Own = nullptr;
   int Width;

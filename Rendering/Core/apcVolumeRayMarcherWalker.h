@@ -7,6 +7,7 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
+#include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
 #include "apcRayClip.h"
 #include "apcRayWalk.h"
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace apc
@@ -30,6 +32,18 @@ using walk::RaySetup;
 using walk::TileRays;
 static_assert(walk::kTilePixels == VolumeRayMarcher::kTileSize * VolumeRayMarcher::kTileSize,
   "a tile's progress holds every pixel of it");
+
+// Visitors whose Sample reads only the absorbance of its TransferSample (the lanes fill no
+// colour) say so with SamplesAbsorbanceOnly.
+template <class Visitor, class = void>
+struct AbsorbanceOnly : std::false_type
+{
+};
+template <class Visitor>
+struct AbsorbanceOnly<Visitor, std::void_t<decltype(Visitor::SamplesAbsorbanceOnly)>>
+  : std::bool_constant<Visitor::SamplesAbsorbanceOnly>
+{
+};
 
 //------------------------------------------------------------------------------
 // Marches one tile: all its cells against all its pixels.
@@ -54,6 +68,9 @@ struct VolumeRayMarcher::Walker
   // predicted cut, the same on every process; kBins - 1 bounds nothing), or null.
   const uint8_t* Bound = nullptr;
   int BandWidth = 0;
+  // Nearly affine cells' samples four rays at a time (LaneSamplesAvx2) where the processor
+  // has AVX2 and the visitor reads only absorbance.
+  bool Lanes = walk::HasAvx2();
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
   // in its own coordinates, LinearPyramid), a twisted pyramid's closed-form inverse, or by
@@ -180,6 +197,11 @@ struct VolumeRayMarcher::Walker
       {
         return this->CellSamples<Sampling::Constant>(rays, hits, visitor, state, progress);
       }
+      if (state.Linear && AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples &&
+        this->SharedOrigin && this->Lanes)
+      {
+        return this->LaneSamples(rays, hits, visitor, state, progress);
+      }
       if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
       {
         return this->CellSamples<Sampling::LinearPyramid>(rays, hits, visitor, state, progress);
@@ -277,6 +299,116 @@ struct VolumeRayMarcher::Walker
       visitor.Segment(l, c.Tin[l], c.Tout[l]);
       samples += this->SampleLoop<How>(
         l, rays[l], static_cast<int64_t>(c.Lattice[l]), c.Tout[l], table, visitor, state, progress);
+    }
+    return samples;
+  }
+
+  // CellSamples<Sampling::Linear> or <LinearPyramid> with a shared origin, four
+  // rays at a time: LaneSamplesAvx2 finds up to kLaneSteps samples of each (lane i holds ray
+  // i's k-th sample, so the rays' table look-ups overlap), then each ray's samples go to the
+  // visitor and the stop's bookkeeping in the scalar loop's order, ray after ray. A ray that
+  // turns opaque leaves the rest of its steps untaken, as its loop's lowered tout does. Each
+  // pixel sees the same samples in the same order as from the scalar loop.
+  template <class Visitor>
+  [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, int hits,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    const walk::ClippedRays& c = state.Clipped;
+    walk::LaneCell cell;
+    cell.Pyramid = state.Interpolator.Shape() == CellShape::Pyramid;
+    const auto& inverse = state.Interpolator.GetLinearInverse();
+    for (int i = 0; i < 3; ++i)
+    {
+      for (int j = 0; j < 3; ++j)
+      {
+        cell.Inverse[i][j] = inverse[i][j];
+      }
+      cell.P0[i] = state.LinearOrigin[i];
+    }
+    const auto& coefficients = state.Interpolator.GetScalarCoefficients();
+    for (int i = 0; i < 8; ++i)
+    {
+      cell.SC[i] = coefficients[i];
+    }
+    cell.Lo = state.Lo;
+    cell.Hi = state.Hi;
+    cell.Table = this->Table.GetLayout();
+    cell.Spacing = this->Grid.Spacing;
+    const bool own = Visitor::StopsWhenOpaque && progress.Bins;
+    walk::LaneRays lanes;
+    walk::LaneSteps steps;
+    int64_t samples = 0;
+    for (int h = 0; h < hits; h += 4)
+    {
+      const int n = std::min(4, hits - h);
+      int local[4] = { 0, 0, 0, 0 };
+      int64_t k[4] = { 0, 0, 0, 0 };
+      for (int i = 0; i < 4; ++i)
+      {
+        const int l = c.Hits[h + (i < n ? i : 0)];
+        local[i] = l;
+        k[i] = static_cast<int64_t>(c.Lattice[l]);
+        lanes.K[i] = c.Lattice[l];
+        lanes.Offset[i] = rays[l].Offset;
+        lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
+        for (int d = 0; d < 3; ++d)
+        {
+          lanes.D[d][i] = rays[l].D[d];
+        }
+        if (i < n)
+        {
+          visitor.Segment(l, c.Tin[l], c.Tout[l]);
+        }
+      }
+      for (bool more = true; more;)
+      {
+        const int taken = walk::LaneSamplesAvx2(cell, lanes, steps);
+        more = false;
+        for (int i = 0; i < n; ++i)
+        {
+          const int l = local[i];
+          double tout = lanes.Tout[i];
+          int64_t kk = k[i];
+          int bin = own ? progress.BinOf(kk) : 0;
+          int64_t binEnd = own ? progress.Ends[bin] : 0;
+          int s = 0;
+          for (; s < taken; ++s, ++kk)
+          {
+            const double t = steps.T[s][i];
+            if (!(t < tout))
+            {
+              break;
+            }
+            ++samples;
+            const float absorbance = steps.Absorbance[s][i];
+            if (absorbance > 0)
+            {
+              const TransferSample sample{ { 0.f, 0.f, 0.f }, absorbance };
+              visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
+              if (own)
+              {
+                for (; kk >= binEnd; binEnd = progress.Ends[++bin])
+                {
+                }
+                if (progress.Add(l, kk, bin, absorbance))
+                {
+                  const int64_t edge = progress.StopIndex(l);
+                  const double stop = edge == std::numeric_limits<int64_t>::max()
+                    ? std::numeric_limits<double>::infinity()
+                    : this->Grid.At(edge, rays[l].Offset);
+                  progress.SetStop(l, stop);
+                  tout = std::min(tout, progress.Stop[l]);
+                }
+              }
+            }
+          }
+          k[i] = kk;
+          lanes.K[i] = static_cast<double>(kk);
+          // A ray that left the chunk before its end is done.
+          lanes.Tout[i] = s == walk::kLaneSteps ? tout : -std::numeric_limits<double>::infinity();
+          more = more || s == walk::kLaneSteps;
+        }
+      }
     }
     return samples;
   }

@@ -1,0 +1,134 @@
+#include "apcLaneSamples.h"
+
+#include <immintrin.h>
+
+#include <limits>
+
+namespace apc
+{
+namespace walk
+{
+
+namespace
+{
+
+// Only AVX2, no FMA: a fused multiply-add would round once where the scalar loop rounds
+// twice. Pyramid: CellInterpolator::LinearScalarAt's pyramid form, else ScalarAt.
+template <bool Pyramid>
+__attribute__((target("avx2"), always_inline)) inline int Lanes(
+  const LaneCell& cell, const LaneRays& rays, LaneSteps& steps)
+{
+  // The pair's set-up for four rays at once: dp = Inverse d, row by row as
+  // LinearRayDirection sums it.
+  const __m256d dx = _mm256_load_pd(rays.D[0]);
+  const __m256d dy = _mm256_load_pd(rays.D[1]);
+  const __m256d dz = _mm256_load_pd(rays.D[2]);
+  __m256d dp[3];
+  __m256d p0[3];
+  for (int i = 0; i < 3; ++i)
+  {
+    dp[i] = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(cell.Inverse[i][0]), dx),
+                            _mm256_mul_pd(_mm256_set1_pd(cell.Inverse[i][1]), dy)),
+      _mm256_mul_pd(_mm256_set1_pd(cell.Inverse[i][2]), dz));
+    p0[i] = _mm256_set1_pd(cell.P0[i]);
+  }
+  __m256d a[8];
+  for (int i = 0; i < 8; ++i)
+  {
+    a[i] = _mm256_set1_pd(cell.SC[i]);
+  }
+  const __m256d lo = _mm256_set1_pd(cell.Lo);
+  const __m256d hi = _mm256_set1_pd(cell.Hi);
+  const __m256d spacing = _mm256_set1_pd(cell.Spacing);
+  const __m256d min = _mm256_set1_pd(cell.Table.Min);
+  const __m256d scale = _mm256_set1_pd(cell.Table.Scale);
+  const __m256d last = _mm256_set1_pd(cell.Table.Last);
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+  const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+  const __m128i count = _mm_set1_epi32(cell.Table.Count);
+  const __m128i oneIndex = _mm_set1_epi32(1);
+  // Each 64-bit lane's low half: a double mask as four floats.
+  const __m256i lowHalves = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+  const float* absorbances = &cell.Table.Entries[0].Absorbance;
+  static_assert(sizeof(TransferSample) == 4 * sizeof(float), "an entry is four floats");
+  const __m256d offset = _mm256_load_pd(rays.Offset);
+  const __m256d tout = _mm256_load_pd(rays.Tout);
+  __m256d k = _mm256_load_pd(rays.K);
+  const __m256d step = _mm256_set1_pd(1.0);
+  int s = 0;
+  for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, step)) // k + 1 is exact: an integer
+  {
+    // Lattice::At.
+    const __m256d t = _mm256_mul_pd(_mm256_add_pd(k, offset), spacing);
+    if (_mm256_movemask_pd(_mm256_cmp_pd(t, tout, _CMP_LT_OQ)) == 0)
+    {
+      break;
+    }
+    const __m256d r = _mm256_add_pd(p0[0], _mm256_mul_pd(t, dp[0]));
+    const __m256d q = _mm256_add_pd(p0[1], _mm256_mul_pd(t, dp[1]));
+    const __m256d u = _mm256_add_pd(p0[2], _mm256_mul_pd(t, dp[2]));
+    __m256d v;
+    if (Pyramid)
+    {
+      // LinearScalarAt of a pyramid, (r, q, u) its (u, v, t): the twist where 1 - t > 0
+      // (0 elsewhere, and for NaN), r and s clamped as std::min(std::max(x, 0.0), 1.0).
+      const __m256d below = _mm256_sub_pd(one, u);
+      const __m256d rr = _mm256_min_pd(one, _mm256_max_pd(zero, _mm256_div_pd(r, below)));
+      const __m256d ss = _mm256_min_pd(one, _mm256_max_pd(zero, _mm256_div_pd(q, below)));
+      const __m256d twist = _mm256_and_pd(
+        _mm256_cmp_pd(below, zero, _CMP_GT_OQ), _mm256_mul_pd(_mm256_mul_pd(rr, ss), below));
+      v = _mm256_add_pd(a[0], _mm256_mul_pd(u, a[3]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(r, a[1]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(q, a[2]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(twist, a[4]));
+    }
+    else
+    {
+      // ScalarAt, summed left to right.
+      const __m256d rq = _mm256_mul_pd(r, q);
+      v = _mm256_add_pd(a[0], _mm256_mul_pd(r, a[1]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(q, a[2]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(u, a[3]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(rq, a[4]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(r, u), a[5]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(q, u), a[6]));
+      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(rq, u), a[7]));
+    }
+    // std::min(std::max(v, Lo), Hi): max_pd(Lo, v) is (Lo > v ? Lo : v), NaN kept, as
+    // std::max(v, Lo); likewise min_pd(Hi, w) and std::min(w, Hi).
+    const __m256d scalar = _mm256_min_pd(hi, _mm256_max_pd(lo, v));
+    // TransferTable::Lookup: a scalar that is not finite gives 0 (its lane reads entry 0).
+    const __m256d finite = _mm256_cmp_pd(_mm256_and_pd(scalar, absMask), inf, _CMP_LT_OQ);
+    const __m256d position = _mm256_mul_pd(_mm256_sub_pd(scalar, min), scale);
+    const __m256d above =
+      _mm256_blendv_pd(position, last, _mm256_cmp_pd(position, last, _CMP_GT_OQ));
+    __m256d x = _mm256_blendv_pd(above, zero, _mm256_cmp_pd(position, zero, _CMP_LT_OQ));
+    x = _mm256_and_pd(x, finite);
+    const __m128i i = _mm256_cvttpd_epi32(x);
+    const __m128i i1 = _mm_add_epi32(i, oneIndex);
+    const __m128i j = _mm_blendv_epi8(i, i1, _mm_cmplt_epi32(i1, count));
+    const __m128 f = _mm256_cvtpd_ps(_mm256_sub_pd(x, _mm256_cvtepi32_pd(i)));
+    const __m128 ea = _mm_i32gather_ps(absorbances, _mm_slli_epi32(i, 2), 4);
+    const __m128 eb = _mm_i32gather_ps(absorbances, _mm_slli_epi32(j, 2), 4);
+    const __m128 absorbance = _mm_add_ps(ea, _mm_mul_ps(f, _mm_sub_ps(eb, ea)));
+    const __m128 keep =
+      _mm256_castps256_ps128(_mm256_permutevar8x32_ps(_mm256_castpd_ps(finite), lowHalves));
+    _mm256_store_pd(steps.T[s], t);
+    _mm256_store_pd(steps.Scalar[s], scalar);
+    _mm_store_ps(steps.Absorbance[s], _mm_and_ps(absorbance, keep));
+  }
+  return s;
+}
+
+} // namespace
+
+__attribute__((target("avx2"))) int LaneSamplesAvx2(
+  const LaneCell& cell, const LaneRays& rays, LaneSteps& steps)
+{
+  return cell.Pyramid ? Lanes<true>(cell, rays, steps) : Lanes<false>(cell, rays, steps);
+}
+
+} // namespace walk
+} // namespace apc

@@ -1,0 +1,62 @@
+// Pass 1's samples of up to four rays of one nearly affine cell at a time, one ray per AVX2
+// lane: lane i holds ray i's k-th sample, so the rays' independent table look-ups overlap
+// (internal to the marcher; VolumeRayMarcher::Walker hands the results to its visitor ray by
+// ray). The same samples and values, bit for bit, as the walker's scalar sample loop.
+#ifndef apcLaneSamples_h
+#define apcLaneSamples_h
+
+#include "apcTransferTable.h"
+
+namespace apc
+{
+namespace walk
+{
+
+// What the lanes need of a cell sampled by its linear inverse (CellInterpolator::LinearRay,
+// LinearScalarAt) with every ray starting at the same point.
+struct LaneCell
+{
+  bool Pyramid;         // LinearScalarAt's pyramid form (SC[0 .. 4]), else ScalarAt
+  double Inverse[3][3]; // LinearRayDirection's matrix
+  double P0[3];         // LinearRayOrigin of the shared origin
+  double SC[8];         // LinearScalarAt's coefficients
+  double Lo;            // the cell's scalar range (the loop's clamp)
+  double Hi;
+  TransferTable::Layout Table;
+  double Spacing; // Lattice::Spacing
+};
+
+// Four rays, one per lane: each one's next lattice index (an integer, as a double), its
+// lattice offset, the end of its interval (-inf for an unused lane) and its direction.
+struct LaneRays
+{
+  alignas(32) double K[4];
+  alignas(32) double Offset[4];
+  alignas(32) double Tout[4];
+  alignas(32) double D[3][4];
+};
+
+// Samples per lane and call: most (cell, ray) pairs hold one to three.
+constexpr int kLaneSteps = 8;
+
+// Step s of lane i: the depth t of lattice index K[i] + s, the clamped scalar there and the
+// table's absorbance (0 for a scalar that is not finite, as TransferTable::Lookup gives).
+// Values of a step at or past a lane's Tout are left unspecified.
+struct LaneSteps
+{
+  alignas(32) double T[kLaneSteps][4];
+  alignas(32) double Scalar[kLaneSteps][4];
+  alignas(16) float Absorbance[kLaneSteps][4];
+};
+
+// Fills steps 0 .. n - 1 for the four lanes and returns n: kLaneSteps, or fewer where no
+// lane has a sample at step n (t >= Tout in every lane). Each lane performs the IEEE
+// operations of the scalar loop (LinearRayDirection, p0 + t dp, LinearScalarAt, the clamp,
+// TransferTable::Lookup's position, entries and interpolation) in the same order and without
+// FMA. Only where HasAvx2() (apcRayClip.h).
+int LaneSamplesAvx2(const LaneCell& cell, const LaneRays& rays, LaneSteps& steps);
+
+} // namespace walk
+} // namespace apc
+
+#endif
