@@ -147,12 +147,8 @@ struct FrameRecord
   vtkIdType OpaquePixels = 0;
   int OpaqueStopSkipped = 0;
   int OpaqueStopRedone = 0;
-  // Tiles pass 1 kept as marched without the stop: on one process with one volume, or on
-  // several processes without a predicted bound (a first frame).
+  // APC on one process with one volume: tiles pass 1 kept as marched without the stop.
   vtkIdType OpaqueUnstoppedTiles = 0;
-  // Of the latter, the tiles marched again for their profiles, where the processes' summaries
-  // together may reach the threshold.
-  vtkIdType OpaqueUnstoppedProfiled = 0;
   // APC on several processes: pixels whose cut pass 1's predicted bound left unknown, and the
   // marcher tiles marched again for them (docs/sampler.md).
   vtkIdType OpaquePredictedUnresolved = 0;
@@ -200,8 +196,6 @@ struct MomentBuffers
   OpaqueCutMemory Cuts;
   std::vector<uint8_t> Bound;
   std::vector<uint8_t> Unresolved;
-  std::vector<uint8_t> Needed; // the pixels whose profiles the sums take (and a volume's copy)
-  std::vector<uint8_t> NeededCopy;
   std::vector<float> ColourSend; // the colour sums' wire (CompositeInDouble: the double pair)
   std::vector<float> ColourReceived;
   std::vector<double> DoubleSend;

@@ -436,21 +436,6 @@ void FrameEngine::ApplyOpaqueCut(
   this->Clock.Lap("cut");
 }
 
-int64_t FrameEngine::ProfileKeptTiles(
-  const MomentParameters& parameters, uint8_t* needed, double* moments, const RowBand& band)
-{
-  if (!this->Ready)
-  {
-    return 0;
-  }
-  DispatchMoments(parameters.Moments,
-    [&](auto n)
-    { this->Marcher.ProfileKeptTiles<n()>(*this->Table, *this->Warp, needed, moments, band); });
-  this->Samples += this->Marcher.GetLastRedoSampleCount();
-  this->Clock.Lap("moments");
-  return this->Marcher.GetLastProfiledTileCount();
-}
-
 void FrameEngine::RedoOpaqueTiles(const MomentParameters& parameters, const uint8_t* unresolved,
   double* moments, const RowBand& band)
 {

@@ -165,20 +165,6 @@ public:
   /// volume): pass 1 then keeps tiles marched without the stop where no ray came near it
   /// (VolumeRayMarcher::SetOpaqueStopAlone).
   void SetOpaqueStopAlone(bool alone) { this->Marcher.SetOpaqueStopAlone(alone); }
-  /// True where the cut takes other processes' profiles too and pass 1 has no predicted
-  /// bound (a first frame): pass 1 keeps tiles marched without the stop where no ray came near
-  /// it on this volume's own samples, with their profiles left to ProfileKeptTiles
-  /// (VolumeRayMarcher::SetOpaqueStopSpeculative).
-  void SetOpaqueStopSpeculative(bool speculative)
-  {
-    this->Marcher.SetOpaqueStopSpeculative(speculative);
-  }
-  /// After such a RenderMoments of band: marches again, for their profiles, the tiles kept
-  /// without the stop that hold a pixel with needed[pixel] set (cleared elsewhere;
-  /// VolumeRayMarcher::ProfileKeptTiles); moments: this volume's own. Returns the tiles
-  /// marched; their samples count as pass 1's.
-  int64_t ProfileKeptTiles(
-    const MomentParameters& parameters, uint8_t* needed, double* moments, const RowBand& band);
   const std::vector<uint16_t>& GetOpaqueProfile() const;
   /// The cut agreed from the profiles of every volume and process (ApplyOpaqueCut): moments
   /// holds this volume's own pass-1 moments of band, which lose the samples past it.

@@ -109,7 +109,6 @@ vtkAPCCompositePass::Timings TimingsOf(const FrameRecord& record)
   t.OpaqueStopSkipped = record.OpaqueStopSkipped;
   t.OpaqueStopRedone = record.OpaqueStopRedone;
   t.OpaqueUnstoppedTiles = static_cast<double>(record.OpaqueUnstoppedTiles);
-  t.OpaqueUnstoppedProfiled = static_cast<double>(record.OpaqueUnstoppedProfiled);
   t.ProfileBytes = record.ProfileBytes;
   t.OpaquePredictedUnresolved = static_cast<double>(record.OpaquePredictedUnresolved);
   t.OpaquePredictedRedone = static_cast<double>(record.OpaquePredictedRedone);

@@ -336,10 +336,6 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
       engine->SetOpaqueStopActive(stops);
       // One process with one volume: its own absorbance is the global one.
       engine->SetOpaqueStopAlone(!group.Parallel && frame.Engines.size() == 1);
-      // Several processes without a predicted bound: tiles that stay below the
-      // threshold on a volume's own samples are marched without the stop's bookkeeping, their
-      // profiles left to the cut (CutWhereOpaque), which marches again only those it needs.
-      engine->SetOpaqueStopSpeculative(group.Parallel);
     }
     PassOne(
       group, frame, band, tiles, stops, pixels, moments, covered, ownCovered, buffers, record);

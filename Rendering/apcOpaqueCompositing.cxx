@@ -17,7 +17,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 namespace apc
@@ -99,13 +98,9 @@ void AllReduceInMessages(const ProcessGroup& group, const CompositeFrame& frame,
 // band pixels, the same on every process) none past it, where every process's profile is
 // zero. The marked tiles of summed get their sums, zero past the bins sent. Every process
 // makes the same calls: a process without volumes sends zeros.
-// complete, if not null, is called (on every process alike) once the summaries are combined,
-// with the pixels whose bins are summed marked (of the band's pixels): it completes this process's
-// profiles of those pixels and returns its profile again (speculative pass 1, no bound).
 void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
   const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
-  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record, size_t bandPixels = 0,
-  const std::function<const uint16_t*(uint8_t*)>& complete = nullptr)
+  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
 {
   constexpr int bins = OpaqueBins::kBins;
   const size_t pixels = tiles.PixelsIn(mask);
@@ -138,15 +133,6 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
   {
     tiles.ForEachPacked(mask, [&](size_t p) { std::fill_n(summed + p * bins, bins, uint16_t(0)); });
     return;
-  }
-  if (complete)
-  {
-    uint8_t* needed = Hold(buffers.Needed, bandPixels);
-    std::fill_n(needed, bandPixels, uint8_t(0));
-    i = 0;
-    tiles.ForEachPacked(
-      mask, [&](size_t p) { needed[p] = OpaqueSummary::Bins(combined[i++]) > 0; });
-    mine = complete(needed);
   }
   uint16_t* send = Hold(buffers.ProfileSend, count);
   uint16_t* received = Hold(buffers.ProfileSum, count);
@@ -241,26 +227,8 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
   {
     summed = Hold(buffers.Profile, values);
     std::fill_n(summed, values, uint16_t(0)); // the uncovered tiles have no samples anywhere
-    // Without a bound, pass 1 may have kept tiles without their profiles (speculative): those
-    // the sums take are marched again for them; their samples and moments stay the same.
-    auto complete = [&](uint8_t* needed)
-    {
-      for (size_t e = 0; e < frame.Engines.size(); ++e)
-      {
-        if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
-        {
-          uint8_t* mask = Hold(buffers.NeededCopy, pixels);
-          std::copy_n(needed, pixels, mask);
-          record.OpaqueUnstoppedProfiled +=
-            static_cast<vtkIdType>(frame.Engines[e]->ProfileKeptTiles(
-              frame.Moments, mask, own.empty() ? moments : own[e].data(), band));
-        }
-      }
-      return LocalProfile(frame, values, buffers);
-    };
     SumProfiles(group, frame, tiles, covered, mine, bounded ? buffers.Bound.data() : nullptr,
-      summed, buffers, record, pixels,
-      bounded ? nullptr : std::function<const uint16_t*(uint8_t*)>(complete));
+      summed, buffers, record);
     mine = summed;
   }
   record.Clock.Lap("profile");

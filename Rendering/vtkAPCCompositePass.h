@@ -361,12 +361,9 @@ public:
     // reached the threshold after all).
     double OpaqueStopSkipped = 0;
     double OpaqueStopRedone = 0;
-    // Marcher tiles pass 1 kept as marched without the stop (no ray of theirs came near its
-    // threshold on this process's own samples): on one process with one volume, and on
-    // several processes without a predicted cut (a first frame); of the latter, the tiles
-    // marched again for their profiles (the processes' summaries together may reach it).
+    // On one process with one volume: marcher tiles pass 1 kept as marched without the stop
+    // (no ray of theirs came near its threshold).
     double OpaqueUnstoppedTiles = 0;
-    double OpaqueUnstoppedProfiled = 0;
     // Stop Where Opaque: the bytes of the profiles' summaries and sums this process sent
     // (part of BytesSent).
     double ProfileBytes = 0;
@@ -443,7 +440,6 @@ public:
     f("opaque_stop_skipped", timings.OpaqueStopSkipped);
     f("opaque_stop_redone", timings.OpaqueStopRedone);
     f("opaque_unstopped_tiles", timings.OpaqueUnstoppedTiles);
-    f("opaque_unstopped_profiled", timings.OpaqueUnstoppedProfiled);
     f("profile_bytes", timings.ProfileBytes);
     f("opaque_predicted_unresolved", timings.OpaquePredictedUnresolved);
     f("opaque_predicted_redone", timings.OpaquePredictedRedone);
@@ -479,7 +475,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 70;
+  static constexpr int NumberOfTimings = 69;
 
   ///@{
   /**

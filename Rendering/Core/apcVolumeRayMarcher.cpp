@@ -215,21 +215,6 @@ bool VolumeRayMarcher::KeepUnstoppedTile(
   }
   if (!near)
   {
-    if (this->OpaqueShared)
-    {
-      // Each pixel's total in quanta is a sum of absorbances rounded down, so at most b0 in
-      // quanta: a margin for b0's own rounding and a quantum more bound it from above (and
-      // stay below kOpaque, b0 being below the limit).
-      for (int p = 0; p < inBand.Pixels(); ++p)
-      {
-        const double b0 = visitor.Sums[p * (N + 1)];
-        const double bound = std::ceil(b0 * this->Opaque.QuantaPerAbsorbance * (1 + 1e-6)) + 1;
-        this->Profile[static_cast<size_t>(inBand.ImagePixel(p, visitor.Width)) * OpaqueBins::kBins +
-          OpaqueBins::kBins - 1] =
-          static_cast<uint16_t>(std::min<double>(bound, OpaqueBins::kOpaque));
-      }
-      this->Unprofiled[static_cast<size_t>(tile)] = 1;
-    }
     return true;
   }
   // Undone: the tile's moments (pass 1 starts from zero, this mesh alone) and its samples.
@@ -296,14 +281,9 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
     std::vector<double>().swap(this->OwnMoments); // no memory unless Hybrid asks for it
   }
   this->RecordProfile = true;
-  this->OpaqueAlone =
-    (this->OpaqueStopAlone || this->OpaqueStopSpeculative) && this->Opaque.Active() && !visitor.Own;
-  this->OpaqueShared = this->OpaqueAlone && !this->OpaqueStopAlone;
-  this->Unprofiled.assign(
-    this->OpaqueShared ? static_cast<size_t>(this->Bins->Grid.Count()) : 0, 0);
+  this->OpaqueAlone = this->OpaqueStopAlone && this->Opaque.Active() && !visitor.Own;
   this->March(visitor, table, nullptr, rows);
   this->OpaqueAlone = false;
-  this->OpaqueShared = false;
   this->RecordProfile = false;
   this->OwnMomentsOrder = visitor.Own ? N : 0;
   cache.Valid = cache.MaxBytes > 0;
@@ -411,10 +391,6 @@ void VolumeRayMarcher::RedoOpaqueTiles(const TransferTable& table, const LogDept
     }
     skip[t] = 0;
     any = true;
-    if (static_cast<size_t>(t) < this->Unprofiled.size())
-    {
-      this->Unprofiled[static_cast<size_t>(t)] = 0; // its profile is recorded below
-    }
     for (int p = 0; p < inBand.Pixels(); ++p)
     {
       std::fill_n(moments + (N + 1) * inBand.ImagePixel(p, width), N + 1, 0.0);
@@ -447,42 +423,6 @@ void VolumeRayMarcher::RedoOpaqueTiles(const TransferTable& table, const LogDept
   this->Bound = bound;
   this->LastRedoSamples = this->LastSamples;
   this->LastSamples = pass1;
-}
-
-//------------------------------------------------------------------------------
-template <int N>
-void VolumeRayMarcher::ProfileKeptTiles(const TransferTable& table, const LogDepthWarp& warp,
-  uint8_t* needed, double* moments, const RowBand& rows)
-{
-  this->LastProfiledTiles = 0;
-  this->LastRedoSamples = 0;
-  if (this->Unprofiled.empty() || !this->Camera)
-  {
-    return;
-  }
-  int64_t first = 0;
-  int64_t last = 0;
-  this->TilesOf(rows, first, last);
-  const int width = this->Width();
-  for (int64_t t = first; t < last; ++t)
-  {
-    const TileRect inBand = Walker::Shifted(this->Bins->Grid.Tile(t), rows.J0);
-    bool any = false;
-    for (int p = 0; p < inBand.Pixels(); ++p)
-    {
-      uint8_t& pixel = needed[inBand.ImagePixel(p, width)];
-      if (!this->Unprofiled[static_cast<size_t>(t)])
-      {
-        pixel = 0;
-      }
-      any = any || pixel != 0;
-    }
-    this->LastProfiledTiles += any ? 1 : 0;
-  }
-  if (this->LastProfiledTiles > 0)
-  {
-    this->RedoOpaqueTiles<N>(table, warp, needed, moments, rows);
-  }
 }
 
 //------------------------------------------------------------------------------
@@ -627,12 +567,6 @@ template void VolumeRayMarcher::ApplyOpaqueCut<6>(
   const TransferTable&, const LogDepthWarp&, const uint16_t*, double*, const RowBand&);
 template void VolumeRayMarcher::ApplyOpaqueCut<8>(
   const TransferTable&, const LogDepthWarp&, const uint16_t*, double*, const RowBand&);
-template void VolumeRayMarcher::ProfileKeptTiles<4>(
-  const TransferTable&, const LogDepthWarp&, uint8_t*, double*, const RowBand&);
-template void VolumeRayMarcher::ProfileKeptTiles<6>(
-  const TransferTable&, const LogDepthWarp&, uint8_t*, double*, const RowBand&);
-template void VolumeRayMarcher::ProfileKeptTiles<8>(
-  const TransferTable&, const LogDepthWarp&, uint8_t*, double*, const RowBand&);
 template void VolumeRayMarcher::RedoOpaqueTiles<4>(
   const TransferTable&, const LogDepthWarp&, const uint8_t*, double*, const RowBand&);
 template void VolumeRayMarcher::RedoOpaqueTiles<6>(

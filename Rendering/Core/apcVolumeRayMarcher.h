@@ -99,15 +99,7 @@ public:
   // kTilesPerThreadWithoutStop tiles per thread). False by default.
   void SetOpaqueStopAlone(bool alone) { this->OpaqueStopAlone = alone; }
   static constexpr int kTilesPerThreadWithoutStop = 64;
-  // The same first march without the stop where other meshes or processes add to the cut
-  // (several processes, no predicted bound): a tile whose rays all stay below the threshold on
-  // this mesh's own samples is kept too, since its own stop would have stopped none of them,
-  // but its profile is not recorded (the bookkeeping is what the march without the stop
-  // saves): each of its pixels holds only an upper bound of its total in its last bin (all
-  // OpaqueSummary needs to prove a pixel below the threshold), until ProfileKeptTiles marches
-  // the tile again for its profile. False by default; SetOpaqueStopAlone comes first.
-  void SetOpaqueStopSpeculative(bool speculative) { this->OpaqueStopSpeculative = speculative; }
-  // Tiles the last pass 1 kept as marched without the stop (alone or speculative).
+  // Tiles the last pass 1 kept as marched without the stop (alone only).
   int64_t GetLastUnstoppedTileCount() const { return this->LastUnstoppedTiles; }
   // ln 10^4: what a ray leaves unsampled is hidden behind a transmittance of at most 1e-4,
   // far below one step of an 8-bit colour (1/255).
@@ -138,14 +130,6 @@ public:
   void RedoOpaqueTiles(const TransferTable& table, const LogDepthWarp& warp,
     const uint8_t* unresolved, double* moments, const RowBand& rows = {});
   int64_t GetLastRedoSampleCount() const { return this->LastRedoSamples; }
-  // After a speculative pass 1: marches again (as RedoOpaqueTiles), for its profile, every
-  // tile kept without the stop that holds a pixel with needed[pixel] set (W*rows bytes, which
-  // this clears outside those tiles); the samples and moments come out the same, since no ray
-  // of such a tile reaches its own stop. Tiles marched: GetLastProfiledTileCount.
-  template <int N>
-  void ProfileKeptTiles(const TransferTable& table, const LogDepthWarp& warp, uint8_t* needed,
-    double* moments, const RowBand& rows = {});
-  int64_t GetLastProfiledTileCount() const { return this->LastProfiledTiles; }
 
   // Nearly affine cells take their parametric coordinates linearly along a ray (the inverse
   // of the map's affine part about the cell's centre) where that moves no sample's scalar by
@@ -263,12 +247,7 @@ private:
   bool CutSet = false;
   bool RecordProfile = false;
   bool OpaqueStopAlone = false;
-  bool OpaqueStopSpeculative = false;
-  bool OpaqueAlone = false;  // this pass 1 marches tiles without the stop first
-  bool OpaqueShared = false; // ... and keeps them without their profiles (speculative)
-  // Per tile of the bins' grid: kept by a speculative pass 1 without its profile.
-  std::vector<uint8_t> Unprofiled;
-  int64_t LastProfiledTiles = 0;
+  bool OpaqueAlone = false; // this pass 1 marches tiles without the stop first
   int64_t LastUnstoppedTiles = 0;
   const uint8_t* Bound = nullptr;
   int64_t LastCutSamples = 0;

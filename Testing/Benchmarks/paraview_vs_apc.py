@@ -115,7 +115,7 @@ COLLECTIVES = ["tiles", "profile", "allreduce", "reduce"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
 FIRST_STAGES = ["pass1", "tiles", "profile", "cut", "allreduce", "pass2", "reduce"]
 FIRST_COUNTS = ["bytes_display_rank", "profile_bytes_per_covered_pixel", "pass1_samples",
-                "opaque_unstopped_tiles", "opaque_unstopped_profiled"]
+                "opaque_unstopped_tiles"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s",
             "first_frame_sys_s", "frame_sys_s", "first_frame_faults", "setup", "opacity",
@@ -443,8 +443,7 @@ def main(args):
                     if t0.get("profile_bytes", None) is not None and t0["covered_pixels"] > 0:
                         row["first_profile_bytes_per_covered_pixel"] = "%.2f" % (
                             t0["profile_bytes"] / t0["covered_pixels"])
-                    for c in ("pass1_samples", "opaque_unstopped_tiles",
-                              "opaque_unstopped_profiled"):
+                    for c in ("pass1_samples", "opaque_unstopped_tiles"):
                         row["first_" + c] = "%d" % t0.get(c, 0)
                 for s in ("opaque_stop_skipped", "opaque_stop_redone", "opaque_unstopped_tiles",
                           "opaque_predicted_unresolved",

@@ -1,10 +1,9 @@
 // Run under mpirun -np N. Stop Where Opaque on a first frame (no last frame to say whether it
-// cuts anything): pass 1 keeps the tiles no ray of which comes near the threshold (on a
-// process's own samples) as marched without the stop, on one process and on several (where
-// the cut marches them again for their profiles if the processes' summaries together may
-// reach it). A faint first frame must give the image of the stop off, bit for bit, with its
-// tiles marched without the stop and none marched again; an opaque first frame must still be
-// cut (fewer pass-1 samples than with the stop off).
+// cuts anything): on one process with one volume, pass 1 keeps the tiles no ray of which comes
+// near the threshold as marched without the stop. A faint first frame must give the image of
+// the stop off, bit for bit, with its tiles marched without the stop on one process (none on
+// several, where a process's own absorbance is not the global one); an opaque first frame
+// must still be cut (fewer pass-1 samples than with the stop off).
 #include "apcCompositePassRenders.h"
 #include "apcMPITest.h"
 #include "apcTestCompositePass.h"
@@ -84,8 +83,8 @@ int main(int argc, char* argv[])
     const Frame on = RenderFirst(controller, scene, piece, bounds, true);
     const Frame off = RenderFirst(controller, scene, piece, bounds, false);
     Check(on.Timings.OpaqueStopSkipped == 0, rank, "faint first frame: the stop is on");
-    Check(on.Timings.OpaqueUnstoppedTiles > 0 && on.Timings.OpaqueUnstoppedProfiled == 0, rank,
-      "faint first frame: tiles marched without the stop, none again");
+    Check(ranks == 1 ? on.Timings.OpaqueUnstoppedTiles > 0 : on.Timings.OpaqueUnstoppedTiles == 0,
+      rank, "faint first frame: tiles marched without the stop on one process only");
     Check(on.Timings.Pass1Samples == off.Timings.Pass1Samples, rank,
       "faint first frame: the samples of the stop off");
     if (rank == 0)
