@@ -131,6 +131,7 @@ struct FrameRecord
   std::vector<double> RankRender;
   std::vector<double> RankWait;
   double BytesSent = 0;
+  double ProfileBytes = 0; // of BytesSent, Stop Where Opaque's summaries and profiles
   vtkIdType MessagesSent = 0;
   vtkIdType Pixels = 0;           // pixels whose values travel (APC: the covered tiles')
   vtkIdType CoveredPixels = 0;    // pixels some process's volume covers (APC)

@@ -109,6 +109,7 @@ vtkAPCCompositePass::Timings TimingsOf(const FrameRecord& record)
   t.OpaqueStopSkipped = record.OpaqueStopSkipped;
   t.OpaqueStopRedone = record.OpaqueStopRedone;
   t.OpaqueUnstoppedTiles = static_cast<double>(record.OpaqueUnstoppedTiles);
+  t.ProfileBytes = record.ProfileBytes;
   t.OpaquePredictedUnresolved = static_cast<double>(record.OpaquePredictedUnresolved);
   t.OpaquePredictedRedone = static_cast<double>(record.OpaquePredictedRedone);
   t.Bands = record.Bands;

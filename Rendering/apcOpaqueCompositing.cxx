@@ -88,6 +88,7 @@ void AllReduceInMessages(const ProcessGroup& group, const CompositeFrame& frame,
         });
     });
   record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
+  record.ProfileBytes += static_cast<double>(sizeof(uint16_t) * count);
 }
 
 // The profiles of the marked tiles summed over every process into summed (band pixels; the

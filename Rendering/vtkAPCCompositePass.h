@@ -364,6 +364,9 @@ public:
     // On one process with one volume: marcher tiles pass 1 kept as marched without the stop
     // (no ray of theirs came near its threshold).
     double OpaqueUnstoppedTiles = 0;
+    // Stop Where Opaque: the bytes of the profiles' summaries and sums this process sent
+    // (part of BytesSent).
+    double ProfileBytes = 0;
     // On several processes, pass 1 also stops each ray at a cut predicted from the last
     // frame's: the pixels whose cut that left unknown, and the 16x16 tiles marched again
     // without it for them.
@@ -437,6 +440,7 @@ public:
     f("opaque_stop_skipped", timings.OpaqueStopSkipped);
     f("opaque_stop_redone", timings.OpaqueStopRedone);
     f("opaque_unstopped_tiles", timings.OpaqueUnstoppedTiles);
+    f("profile_bytes", timings.ProfileBytes);
     f("opaque_predicted_unresolved", timings.OpaquePredictedUnresolved);
     f("opaque_predicted_redone", timings.OpaquePredictedRedone);
     f("bands", timings.Bands);
@@ -471,7 +475,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 68;
+  static constexpr int NumberOfTimings = 69;
 
   ///@{
   /**

@@ -138,7 +138,7 @@ public:
    * them by name, with GetLastTimingNames (apcparaview.last_timings in Python), never by
    * position: fields are added as the pass measures more.
    */
-  double* GetLastTimings() VTK_SIZEHINT(68);
+  double* GetLastTimings() VTK_SIZEHINT(69);
   /**
    * The names of GetLastTimings' values, in their order, separated by spaces.
    */
@@ -172,7 +172,7 @@ protected:
   vtkWeakPointer<vtkPVRenderView> View;
   std::unique_ptr<apc::ViewRequest> ViewRequest; // the view settings above, for the pass
   bool SaidNoArray = false; // that Solid Color draws nothing, until an array is chosen
-  double LastTimings[68] = {};
+  double LastTimings[69] = {};
   std::string LastTimingNames;
   std::string LastRankRenderSeconds;
 

@@ -70,6 +70,7 @@ def last_timings(display):
     "opaque_stop_redone" (bands rendered without Stop Where Opaque, as it would cut nothing,
     and bands marched again with it), "opaque_unstopped_tiles" (one rank, one volume: tiles
     pass 1 kept as marched without the stop, no ray of theirs near its threshold),
+    "profile_bytes" (the opaque summaries' and profiles' share of "bytes_sent"),
     "opaque_predicted_unresolved" and
     "opaque_predicted_redone" (on several ranks: pixels whose cut the previous frame's
     predicted bound left unknown, and the 16x16 tiles marched again for them), "bands" (APC

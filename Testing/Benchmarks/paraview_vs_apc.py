@@ -113,6 +113,9 @@ STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", 
 # APC's collectives: each stage's wait for the slowest rank and its transfer after it.
 COLLECTIVES = ["tiles", "profile", "allreduce", "reduce"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
+FIRST_STAGES = ["pass1", "tiles", "profile", "cut", "allreduce", "pass2", "reduce"]
+FIRST_COUNTS = ["bytes_display_rank", "profile_bytes_per_covered_pixel", "pass1_samples",
+                "opaque_unstopped_tiles"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s",
             "first_frame_sys_s", "frame_sys_s", "first_frame_faults", "setup", "opacity",
@@ -124,7 +127,10 @@ COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "f
             "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped", "opaque_unstopped_tiles",
             "opaque_stop_redone", "opaque_predicted_unresolved", "opaque_predicted_redone",
             "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
-            "cells_per_rank_after", "note"])
+            "cells_per_rank_after"] +
+           # The first frame's own (APC mode): its stages, wire bytes and opaque-stop counts.
+           ["first_" + s + "_s" for s in FIRST_STAGES] +
+           ["first_" + c for c in FIRST_COUNTS] + ["note"])
 
 # Runs on every rank inside a programmable filter (its input: the reader's piece on that rank).
 # Writes <folder>/probe_<tag>_rank<r>.json. For tag "input" only the rank's own piece is
@@ -427,6 +433,18 @@ def main(args):
                 # Bands marched without Stop Where Opaque, and again with it, in the later frames.
                 # One rank: tiles pass 1 kept without the stop. On several ranks: pixels the
                 # predicted cut left unknown, tiles marched again.
+                # The first frame's: its stages, bytes (the profiles' share: beyond the tiles'
+                # mask, the moments' exponents and codes and the colour sums, per covered pixel).
+                t0 = timings[0]
+                if int(t0["mode"]) == 0:
+                    for s in FIRST_STAGES:
+                        row["first_" + s + "_s"] = "%.4f" % t0.get(s, 0)
+                    row["first_bytes_display_rank"] = "%d" % t0["bytes_sent"]
+                    if t0.get("profile_bytes", None) is not None and t0["covered_pixels"] > 0:
+                        row["first_profile_bytes_per_covered_pixel"] = "%.2f" % (
+                            t0["profile_bytes"] / t0["covered_pixels"])
+                    for c in ("pass1_samples", "opaque_unstopped_tiles"):
+                        row["first_" + c] = "%d" % t0.get(c, 0)
                 for s in ("opaque_stop_skipped", "opaque_stop_redone", "opaque_unstopped_tiles",
                           "opaque_predicted_unresolved",
                           "opaque_predicted_redone"):

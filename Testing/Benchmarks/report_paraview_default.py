@@ -25,7 +25,10 @@ def main(out, docs):
         sys.exit("error: no np<N>_<W>x<H>.csv in %s" % out)
     os.makedirs(docs, exist_ok=True)
     with open(os.path.join(docs, "paraview_default_setup.csv"), "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0].keys()))
+        # Every part's columns (parts run at different times may add columns, e.g. the first
+        # frame's), in the order they first appear; a part without one leaves it empty.
+        names = list(dict.fromkeys(k for r in rows for k in r))
+        w = csv.DictWriter(fh, fieldnames=names, restval="")
         w.writeheader()
         w.writerows(rows)
     by = {(r["ranks"], r["width"], r["height"], r["camera"], r.get("opacity") or "ramp",

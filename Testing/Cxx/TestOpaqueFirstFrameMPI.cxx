@@ -28,6 +28,7 @@ struct Frame
   double Bytes = 0;        // this rank's bytes on the wire
   double Composited = 0;   // the pixels of the agreed tiles
   double Skipped = 0;      // bands rendered without the stop
+  double ProfileBytes = 0; // of Bytes, the opaque summaries' and profiles'
 };
 
 // The first frame of a fresh pass over each rank's piece, with the stop on or off.
@@ -41,6 +42,7 @@ Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
   frame.Bytes = pass->GetLastBytesSent();
   frame.Composited = static_cast<double>(pass->GetLastCompositedPixels());
   frame.Skipped = pass->GetLastTimings().OpaqueStopSkipped;
+  frame.ProfileBytes = pass->GetLastTimings().ProfileBytes;
   return frame;
 }
 
@@ -59,6 +61,9 @@ void CheckView(vtkMPIController* controller, const char* name, apctest::Scene sc
       std::string(name) + ": the same tiles composited");
     Check(profileBytes <= maxProfileBytes, rank,
       std::string(name) + ": the profiles' bytes a composited pixel");
+    // The timing profile_bytes is what the stop adds to the wire (the rest is the same).
+    Check(on.ProfileBytes == on.Bytes - off.Bytes && off.ProfileBytes == 0, rank,
+      std::string(name) + ": profile_bytes counts the profiles' bytes");
   }
   if (rank == 0)
   {
