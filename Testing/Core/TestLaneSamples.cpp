@@ -6,6 +6,7 @@
 #include "apcLaneSamples.h"
 #include "apcRayClip.h"
 #include "apcRayWalk.h"
+#include "apcTestCells.h"
 #include "apcTransferTable.h"
 
 #include <gtest/gtest.h>
@@ -23,32 +24,6 @@ namespace
 using apc::CellCorners;
 using apc::CellInterpolator;
 using apc::CellShape;
-
-// A reference cell with every corner moved by up to distortion, sheared and shifted; corner
-// scalars in [0, 10].
-CellCorners DistortedCell(CellShape shape, double distortion, std::mt19937& rng)
-{
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::uniform_real_distribution<double> value(0.0, 10.0);
-  CellCorners cell;
-  cell.Shape = shape;
-  const auto& reference = apc::ReferenceCorners(shape);
-  const double A[3][3] = { { 2.0, 0.4, 0.1 }, { -0.3, 1.5, 0.2 }, { 0.2, -0.1, 2.5 } };
-  for (int i = 0; i < apc::NumberOfCorners(shape); ++i)
-  {
-    double m[3];
-    for (int d = 0; d < 3; ++d)
-    {
-      m[d] = reference[i][d] + distortion * u(rng);
-    }
-    for (int d = 0; d < 3; ++d)
-    {
-      cell.X[i][d] = 50.0 + A[d][0] * m[0] + A[d][1] * m[1] + A[d][2] * m[2];
-    }
-    cell.S[i] = value(rng);
-  }
-  return cell;
-}
 
 // A table over [0, 10] whose opacity is zero over random stretches (transparent samples).
 apc::TransferTable RandomTable(std::mt19937& rng)
@@ -89,7 +64,7 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
   for (int trial = 0; trial < 2000; ++trial)
   {
     const CellShape shape = shapes[trial % 4];
-    const CellCorners corners = DistortedCell(shape, distortion, rng);
+    const CellCorners corners = apctest::DistortedCell(shape, distortion, rng);
     CellInterpolator interpolator;
     interpolator.Set(corners);
     const apc::TransferTable table = RandomTable(rng);

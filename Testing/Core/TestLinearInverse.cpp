@@ -2,6 +2,7 @@
 // interpolant and Newton's inverse: the stated scalar error bound must hold at every point of
 // the cell, and be tight enough to be useful.
 #include "apcCellInterpolation.h"
+#include "apcTestCells.h"
 
 #include <gtest/gtest.h>
 
@@ -16,33 +17,6 @@ namespace
 using apc::CellCorners;
 using apc::CellInterpolator;
 using apc::CellShape;
-
-// The reference cell moved by up to distortion per corner and axis, scaled by 2 and shifted
-// away from the origin; corner scalars in [0, 10].
-CellCorners NearlyAffineCell(CellShape shape, double distortion, std::mt19937& rng)
-{
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::uniform_real_distribution<double> value(0.0, 10.0);
-  CellCorners cell;
-  cell.Shape = shape;
-  const auto& reference = apc::ReferenceCorners(shape);
-  // A fixed shear, so that the affine part is not diagonal.
-  const double A[3][3] = { { 2.0, 0.4, 0.1 }, { -0.3, 1.5, 0.2 }, { 0.2, -0.1, 2.5 } };
-  for (int i = 0; i < apc::NumberOfCorners(shape); ++i)
-  {
-    double m[3];
-    for (int d = 0; d < 3; ++d)
-    {
-      m[d] = reference[i][d] + distortion * u(rng);
-    }
-    for (int d = 0; d < 3; ++d)
-    {
-      cell.X[i][d] = 50.0 + A[d][0] * m[0] + A[d][1] * m[1] + A[d][2] * m[2];
-    }
-    cell.S[i] = value(rng);
-  }
-  return cell;
-}
 
 void RandomPCoords(CellShape shape, std::mt19937& rng, double p[3])
 {
@@ -93,7 +67,7 @@ TEST(LinearInverse, ErrorBoundHoldsAndIsTight)
       double tightest = 0.0; // largest error seen over its bound, over the cells
       for (int c = 0; c < 40; ++c)
       {
-        const CellCorners corners = NearlyAffineCell(shape, distortion, rng);
+        const CellCorners corners = apctest::DistortedCell(shape, distortion, rng);
         const CellInterpolator cell(corners);
         ASSERT_FALSE(cell.IsAffine());
         const double bound = cell.GetLinearScalarError();
@@ -137,7 +111,7 @@ TEST(LinearInverse, BoundGrowsWithDistortion)
     {
       std::mt19937 same(static_cast<unsigned>(c));
       mean[i] +=
-        CellInterpolator(NearlyAffineCell(CellShape::Hexahedron, i == 0 ? 1e-4 : 1e-3, same))
+        CellInterpolator(apctest::DistortedCell(CellShape::Hexahedron, i == 0 ? 1e-4 : 1e-3, same))
           .GetLinearScalarError();
     }
   }
@@ -150,7 +124,7 @@ TEST(LinearInverse, AffineCellsAreExact)
   std::mt19937 rng(3);
   for (CellShape shape : { CellShape::Tetra, CellShape::Wedge, CellShape::Hexahedron })
   {
-    const CellInterpolator cell(NearlyAffineCell(shape, 0.0, rng));
+    const CellInterpolator cell(apctest::DistortedCell(shape, 0.0, rng));
     ASSERT_TRUE(cell.IsAffine());
     EXPECT_EQ(cell.GetLinearScalarError(), 0.0);
     const double o[3] = { 1.0, -2.0, 3.0 };
@@ -165,9 +139,9 @@ TEST(LinearInverse, AffineCellsAreExact)
     }
   }
   // A pyramid over a parallelogram: affine in (u, v, t) = ((1-t) r, (1-t) s, t).
-  const CellInterpolator pyramid(NearlyAffineCell(CellShape::Pyramid, 0.0, rng));
+  const CellInterpolator pyramid(apctest::DistortedCell(CellShape::Pyramid, 0.0, rng));
   EXPECT_LT(pyramid.GetLinearScalarError(), 1e-12);
-  CellCorners flat = NearlyAffineCell(CellShape::Hexahedron, 0.0, rng);
+  CellCorners flat = apctest::DistortedCell(CellShape::Hexahedron, 0.0, rng);
   for (auto& x : flat.X)
   {
     x[2] = 0.0;
@@ -181,7 +155,7 @@ TEST(LinearInverse, MonomialScalarMatchesShapeFunctions)
   for (CellShape shape :
     { CellShape::Tetra, CellShape::Pyramid, CellShape::Wedge, CellShape::Hexahedron })
   {
-    const CellInterpolator cell(NearlyAffineCell(shape, 0.1, rng));
+    const CellInterpolator cell(apctest::DistortedCell(shape, 0.1, rng));
     for (int k = 0; k < 100; ++k)
     {
       double p[3];
@@ -202,7 +176,7 @@ TEST(LinearInverse, PyramidClosedFormIsExact)
   {
     for (int c = 0; c < 40; ++c)
     {
-      const CellInterpolator cell(NearlyAffineCell(CellShape::Pyramid, distortion, rng));
+      const CellInterpolator cell(apctest::DistortedCell(CellShape::Pyramid, distortion, rng));
       if (cell.IsDegenerate())
       {
         continue;
@@ -238,5 +212,5 @@ TEST(LinearInverse, PyramidClosedFormIsExact)
   EXPECT_GT(checked, 20000);
   // Other shapes never take it.
   EXPECT_FALSE(
-    CellInterpolator(NearlyAffineCell(CellShape::Hexahedron, 0.1, rng)).HasPyramidInverse());
+    CellInterpolator(apctest::DistortedCell(CellShape::Hexahedron, 0.1, rng)).HasPyramidInverse());
 }
