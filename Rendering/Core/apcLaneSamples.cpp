@@ -56,9 +56,8 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
   const __m256d offset = _mm256_load_pd(rays.Offset);
   const __m256d tout = _mm256_load_pd(rays.Tout);
   __m256d k = _mm256_load_pd(rays.K);
-  const __m256d step = _mm256_set1_pd(1.0);
   int s = 0;
-  for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, step)) // k + 1 is exact: an integer
+  for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
   {
     // Lattice::At.
     const __m256d t = _mm256_mul_pd(_mm256_add_pd(k, offset), spacing);

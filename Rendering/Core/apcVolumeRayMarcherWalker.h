@@ -387,18 +387,7 @@ struct VolumeRayMarcher::Walker
               visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
               if (own)
               {
-                for (; kk >= binEnd; binEnd = progress.Ends[++bin])
-                {
-                }
-                if (progress.Add(l, kk, bin, absorbance))
-                {
-                  const int64_t edge = progress.StopIndex(l);
-                  const double stop = edge == std::numeric_limits<int64_t>::max()
-                    ? std::numeric_limits<double>::infinity()
-                    : this->Grid.At(edge, rays[l].Offset);
-                  progress.SetStop(l, stop);
-                  tout = std::min(tout, progress.Stop[l]);
-                }
+                this->OwnStop(l, rays[l].Offset, kk, absorbance, bin, binEnd, tout, progress);
               }
             }
           }
@@ -411,6 +400,28 @@ struct VolumeRayMarcher::Walker
       }
     }
     return samples;
+  }
+
+  // Pass 1's own stop after a visible sample at lattice index k of pixel local: bin and
+  // binEnd (the bin of k and the first index past it) follow k, and where the pixel turns
+  // opaque tout falls to its stop. Shared by the scalar sample loop and the lanes' hand-over.
+  [[gnu::always_inline]] void OwnStop(int local, double offset, int64_t k, float absorbance,
+    int& bin, int64_t& binEnd, double& tout, RayProgress& progress) const
+  {
+    for (; k >= binEnd; binEnd = progress.Ends[++bin])
+    {
+    }
+    if (progress.Add(local, k, bin, absorbance))
+    {
+      // Opaque: nothing past the end of the farthest sample's bin is taken; what lies in
+      // front of it still is (this pixel's profile stays complete up to there).
+      const int64_t edge = progress.StopIndex(local);
+      const double stop = edge == std::numeric_limits<int64_t>::max()
+        ? std::numeric_limits<double>::infinity()
+        : this->Grid.At(edge, offset);
+      progress.SetStop(local, stop); // the nearer of this and a bound's stop
+      tout = std::min(tout, progress.Stop[local]);
+    }
   }
 
   // The lattice samples of the ray in [tin, tout), the same points on every rank; one loop
@@ -498,20 +509,7 @@ struct VolumeRayMarcher::Walker
         visitor.Sample(local, k, t, scalar, s);
         if (own)
         {
-          for (; k >= binEnd; binEnd = progress.Ends[++bin])
-          {
-          }
-          if (progress.Add(local, k, bin, s.Absorbance))
-          {
-            // Opaque: nothing past the end of the farthest sample's bin is taken; what lies
-            // in front of it still is (this pixel's profile stays complete up to there).
-            const int64_t edge = progress.StopIndex(local);
-            const double stop = edge == std::numeric_limits<int64_t>::max()
-              ? std::numeric_limits<double>::infinity()
-              : this->Grid.At(edge, ray.Offset);
-            progress.SetStop(local, stop); // the nearer of this and a bound's stop
-            tout = std::min(tout, progress.Stop[local]);
-          }
+          this->OwnStop(local, ray.Offset, k, s.Absorbance, bin, binEnd, tout, progress);
         }
       }
     }
