@@ -430,21 +430,21 @@ def main(args):
                 # Pass 2's samples: pass 1's with an opacity (less the opaque cut's).
                 row["pass2_samples"] = "%d" % statistics.median(
                     t.get("pass2_samples", 0) for t in same)
-                # Bands marched without Stop Where Opaque, and again with it, in the later frames.
-                # One rank: tiles pass 1 kept without the stop. On several ranks: pixels the
-                # predicted cut left unknown, tiles marched again.
-                # The first frame's: its stages, bytes (the profiles' share: beyond the tiles'
-                # mask, the moments' exponents and codes and the colour sums, per covered pixel).
+                # The first frame's own (when it ran APC mode): its stages, its bytes on the
+                # wire, the opaque summaries' and profiles' bytes per covered pixel, its counts.
                 t0 = timings[0]
                 if int(t0["mode"]) == 0:
                     for s in FIRST_STAGES:
                         row["first_" + s + "_s"] = "%.4f" % t0.get(s, 0)
                     row["first_bytes_display_rank"] = "%d" % t0["bytes_sent"]
-                    if t0.get("profile_bytes", None) is not None and t0["covered_pixels"] > 0:
+                    if "profile_bytes" in t0 and t0["covered_pixels"] > 0:
                         row["first_profile_bytes_per_covered_pixel"] = "%.2f" % (
                             t0["profile_bytes"] / t0["covered_pixels"])
                     for c in ("pass1_samples", "opaque_unstopped_tiles"):
                         row["first_" + c] = "%d" % t0.get(c, 0)
+                # Bands marched without Stop Where Opaque, and again with it, in the later frames.
+                # One rank: tiles pass 1 kept without the stop. On several ranks: pixels the
+                # predicted cut left unknown, tiles marched again.
                 for s in ("opaque_stop_skipped", "opaque_stop_redone", "opaque_unstopped_tiles",
                           "opaque_predicted_unresolved",
                           "opaque_predicted_redone"):
