@@ -7,6 +7,8 @@
 
 #include "apcTransferTable.h"
 
+#include <cstdint>
+
 namespace apc
 {
 namespace walk
@@ -24,7 +26,14 @@ struct LaneCell
   double Hi;
   TransferTable::Layout Table;
   double Spacing; // Lattice::Spacing
+  // Pass 1's own stop: the first kBinEnds bin ends (RayProgress::BinEnds, exact as doubles),
+  // or null (no bins to find).
+  const double* BinEnds = nullptr;
+  double QuantaPerAbsorbance = 0; // with BinEnds: OpaqueBins::Quanta's factor
 };
+
+// The bin ends a lane compares with (the last bin reaches to the end of every ray).
+constexpr int kBinEnds = 15;
 
 // Four rays, one per lane: each one's next lattice index (an integer, as a double), its
 // lattice offset, the end of its interval (-inf for an unused lane) and its direction.
@@ -47,6 +56,11 @@ struct LaneSteps
   alignas(32) double T[kLaneSteps][4];
   alignas(32) double Scalar[kLaneSteps][4];
   alignas(16) float Absorbance[kLaneSteps][4];
+  // With BinEnds: the opaque bin of each lane's first index K (RayProgress::BinOf's value),
+  // from compares side by side instead of BinOf's chain of dependent loads.
+  alignas(32) int64_t Bin[4];
+  // With BinEnds: OpaqueBins::Quanta of each step's absorbance.
+  alignas(16) uint32_t Quanta[kLaneSteps][4];
 };
 
 // Fills steps 0 .. n - 1 for the four lanes and returns n: kLaneSteps, or fewer where no

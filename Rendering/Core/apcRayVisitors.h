@@ -200,7 +200,7 @@ struct Moments : NoSegments
     if (this->Recording)
     {
       this->Buffer = &this->Cache->Buffers.local();
-      this->Buffer->Recorded.clear();
+      this->Buffer->Used = 0;
       this->Buffer->Counts.assign(tile.Pixels(), 0);
     }
   }
@@ -215,12 +215,65 @@ struct Moments : NoSegments
     {
       // Written field by field in place: a record built on the stack and copied was read
       // back across its two 16-bit stores, which stalls store forwarding (a tenth of pass 1).
-      RecordedSample& record = this->Buffer->Recorded.emplace_back();
+      RecordedSample& record = *this->Buffer->Room(1);
+      ++this->Buffer->Used;
       record.Z = static_cast<float>(z);
       record.Scalar = static_cast<float>(scalar);
       record.Pixel = static_cast<uint16_t>(pixel);
       record.K16 = static_cast<uint16_t>(k);
       ++this->Buffer->Counts[pixel];
+    }
+  }
+  // A run of one pixel's samples at once (the walker's lanes): RunBegin, RunAdd for each
+  // sample in lattice order, visible or not (absorbance 0: it adds nothing), and RunEnd to
+  // keep what the run added (without it the run leaves nothing behind). The same sums,
+  // records and counts, bit for bit, as Sample for each visible one in order: the pixel's
+  // sums are read once and added to in the same order (adding an invisible sample's +-0
+  // leaves a sum as it is: the sums start at +0 and never become -0), and the records are
+  // written without a test of the buffer's room or of visibility per sample.
+  struct Run
+  {
+    double B[N + 1];
+    RecordedSample* Record;
+    uint32_t Kept;
+  };
+  // A run of at most n samples of pixel.
+  [[gnu::always_inline]] void RunBegin(Run& run, int pixel, int n)
+  {
+    const double* sums = this->Sums.data() + pixel * (N + 1);
+    for (int m = 0; m <= N; ++m)
+    {
+      run.B[m] = sums[m];
+    }
+    run.Record = this->Recording ? this->Buffer->Room(static_cast<size_t>(n)) : nullptr;
+    run.Kept = 0;
+  }
+  [[gnu::always_inline]] void RunAdd(
+    Run& run, int pixel, int64_t k, double t, double scalar, float absorbance) const
+  {
+    const double z = (*this->Warp)(k, t);
+    AccumulateCheckedPowerMoments<N>(run.B, z, absorbance);
+    if (run.Record)
+    {
+      RecordedSample& record = run.Record[run.Kept];
+      record.Z = static_cast<float>(z);
+      record.Scalar = static_cast<float>(scalar);
+      record.Pixel = static_cast<uint16_t>(pixel);
+      record.K16 = static_cast<uint16_t>(k);
+    }
+    run.Kept += absorbance > 0 ? 1u : 0u;
+  }
+  [[gnu::always_inline]] void RunEnd(const Run& run, int pixel)
+  {
+    double* sums = this->Sums.data() + pixel * (N + 1);
+    for (int m = 0; m <= N; ++m)
+    {
+      sums[m] = run.B[m];
+    }
+    if (run.Record)
+    {
+      this->Buffer->Used += run.Kept;
+      this->Buffer->Counts[pixel] += run.Kept;
     }
   }
   void EndTile(const TileRect& tile)
@@ -230,7 +283,7 @@ struct Moments : NoSegments
       if (this->Cache->Record)
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
-        this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Recorded.size(),
+        this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Used,
           this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder);
       }
       else

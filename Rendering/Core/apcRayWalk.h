@@ -221,6 +221,9 @@ struct RayProgress
   // With Bins: Bins->End(b) for every bin, read per (cell, ray) pair and per bin crossing
   // instead of a multiplication each time.
   int64_t Ends[kBins];
+  // With Bins: Ends[0 .. kBins - 2] as doubles, exact (OpaqueBins::Make keeps them below
+  // 2^53), for the lanes' bins (walk::LaneCell::BinEnds).
+  double BinEnds[kBins - 1];
   uint32_t Profile[kPixels][kBins];
   uint32_t Total[kPixels];
   int64_t FarK[kPixels]; // the largest lattice index summed
@@ -248,6 +251,10 @@ struct RayProgress
       {
         this->Ends[b] = own->End(b);
       }
+      for (int b = 0; b < kBins - 1; ++b)
+      {
+        this->BinEnds[b] = static_cast<double>(this->Ends[b]);
+      }
       std::fill(&this->Profile[0][0], &this->Profile[0][0] + pixels * kBins, 0u);
       std::fill(this->Total, this->Total + pixels, 0u);
       std::fill(this->FarK, this->FarK + pixels, std::numeric_limits<int64_t>::min());
@@ -272,6 +279,48 @@ struct RayProgress
     this->Total[p] = OpaqueBins::Add(this->Total[p], q);
     this->Opaque[p] = this->Total[p] >= OpaqueBins::kOpaque;
     return this->Opaque[p];
+  }
+  // Runs of pass 1's samples of one pixel added at once (the walker's lanes): at most kMaxRun
+  // samples at lattice indices k, k + 1, ..., q[s] the quanta of sample s (0 where it is
+  // not visible), sum their sum and last the index of the run's last visible sample. Such a
+  // run adds as Add adds each of its visible samples in order, bin following k, only where
+  // it cannot make the pixel opaque (RunStaysOpen: then no Add would return true, and the
+  // saturating sums of the run's quanta are those of its samples one at a time); the walker
+  // takes any other run sample by sample, so that the stop falls where it does.
+  static constexpr int kMaxRun = 8;
+  bool RunStaysOpen(int p, uint32_t sum) const
+  {
+    return this->Opaque[p] || this->Total[p] + sum < OpaqueBins::kOpaque;
+  }
+  // bin: BinOf(k); sample s's quanta q[s * stride].
+  [[gnu::always_inline]] void AddRun(
+    int p, int64_t k, int bin, const uint32_t* q, int stride, uint32_t sum, int last)
+  {
+    if (last < 0)
+    {
+      return; // no visible sample
+    }
+    if (k + last < this->Ends[bin])
+    {
+      // One bin: min(a + b + c, max) is the saturating sum's value for values that are not
+      // negative.
+      this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], sum);
+    }
+    else
+    {
+      for (int s = 0; s <= last; ++s)
+      {
+        for (; k + s >= this->Ends[bin]; ++bin)
+        {
+        }
+        this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q[s * stride]);
+      }
+    }
+    this->FarK[p] = std::max(this->FarK[p], k + last);
+    if (!this->Opaque[p])
+    {
+      this->Total[p] += sum; // below kOpaque (RunStaysOpen), as the saturating sums are
+    }
   }
   // Pixel p takes no sample at or past t (nor past a stop it already has: a pass 1 bounded
   // by a predicted cut also stops where its own absorbance turns opaque, whichever is first).

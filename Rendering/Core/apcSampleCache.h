@@ -111,10 +111,28 @@ struct RecordedSample
 // pixel's count. Owned by the cache so that it keeps its memory from frame to frame. The
 // records are not value-initialised: a zeroed record (a store of bytes, which may alias any
 // object) made the marcher reload its visitor's and the depth warp's fields for every sample.
+// Recorded's size is the room: the tile's records are its first Used, so that a run of
+// samples (Moments::SampleRun) takes room for all of them with one test, and a tile starts
+// without writing the room it reuses.
 struct RecordBuffer
 {
   UninitializedVector<RecordedSample> Recorded;
+  size_t Used = 0;
   std::vector<uint32_t> Counts;
+
+  // Room for n records past the Used ones (grown, keeping those, where there is less).
+  RecordedSample* Room(size_t n)
+  {
+    if (this->Recorded.size() - this->Used < n)
+    {
+      this->Grow(n);
+    }
+    return this->Recorded.data() + this->Used;
+  }
+  [[gnu::noinline]] void Grow(size_t n)
+  {
+    this->Recorded.resize(std::max(2 * this->Recorded.size(), this->Used + n + 4096));
+  }
 };
 
 struct SampleCache

@@ -197,10 +197,12 @@ struct VolumeRayMarcher::Walker
       {
         return this->CellSamples<Sampling::Constant>(rays, hits, visitor, state, progress);
       }
-      if (state.Linear && AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples &&
-        this->SharedOrigin && this->Lanes)
+      if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
       {
-        return this->LaneSamples(rays, hits, visitor, state, progress);
+        if (state.Linear && this->SharedOrigin && this->Lanes)
+        {
+          return this->LaneSamples(rays, hits, visitor, state, progress);
+        }
       }
       if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
       {
@@ -305,10 +307,13 @@ struct VolumeRayMarcher::Walker
 
   // CellSamples<Sampling::Linear> or <LinearPyramid> with a shared origin, four
   // rays at a time: LaneSamplesAvx2 finds up to kLaneSteps samples of each (lane i holds ray
-  // i's k-th sample, so the rays' table look-ups overlap), then each ray's samples go to the
-  // visitor and the stop's bookkeeping in the scalar loop's order, ray after ray. A ray that
-  // turns opaque leaves the rest of its steps untaken, as its loop's lowered tout does. Each
-  // pixel sees the same samples in the same order as from the scalar loop.
+  // i's k-th sample, so the rays' table look-ups overlap), then each ray's steps go to the
+  // visitor (Moments::RunAdd) and the stop's bookkeeping (RayProgress::AddRun) as one run,
+  // ray after ray: a visitor's pixel state read once per run, not per sample. A run in which
+  // the pixel turns opaque goes sample by sample as in the scalar loop, and leaves the rest of
+  // its steps untaken, as that loop's lowered tout does. Each pixel sees the same samples in
+  // the same order, with the same sums, records and profile, as from the scalar loop.
+  static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
   template <class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, int hits,
     Visitor& visitor, CellState& state, RayProgress& progress) const
@@ -335,6 +340,9 @@ struct VolumeRayMarcher::Walker
     cell.Table = this->Table.GetLayout();
     cell.Spacing = this->Grid.Spacing;
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
+    static_assert(walk::kBinEnds == RayProgress::kBins - 1, "the lanes compare every bin end");
+    cell.BinEnds = own ? progress.BinEnds : nullptr;
+    cell.QuantaPerAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0;
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     int64_t samples = 0;
@@ -369,24 +377,58 @@ struct VolumeRayMarcher::Walker
           const int l = local[i];
           double tout = lanes.Tout[i];
           int64_t kk = k[i];
-          int bin = own ? progress.BinOf(kk) : 0;
-          int64_t binEnd = own ? progress.Ends[bin] : 0;
+          // The ray's steps inside its interval, handed over as one run in one loop: the
+          // pixel's sums in registers, no branch on a sample's visibility. A run in which the
+          // pixel turns opaque is dropped and taken again sample by sample below, so that
+          // the samples past the stop are not taken.
+          typename Visitor::Run run;
+          visitor.RunBegin(run, l, taken);
+          uint32_t sum = 0;
+          int last = -1;
           int s = 0;
-          for (; s < taken; ++s, ++kk)
+          for (; s < taken; ++s)
           {
             const double t = steps.T[s][i];
             if (!(t < tout))
             {
               break;
             }
-            ++samples;
             const float absorbance = steps.Absorbance[s][i];
-            if (absorbance > 0)
+            visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
+            if (own)
             {
-              const TransferSample sample{ { 0.f, 0.f, 0.f }, absorbance };
-              visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
-              if (own)
+              sum += steps.Quanta[s][i]; // at most kMaxRun times kOpaque: no overflow
+              last = absorbance > 0 ? s : last;
+            }
+          }
+          if (!own || progress.RunStaysOpen(l, sum))
+          {
+            visitor.RunEnd(run, l);
+            if (own)
+            {
+              progress.AddRun(
+                l, kk, static_cast<int>(steps.Bin[i]), &steps.Quanta[0][i], 4, sum, last);
+            }
+            samples += s;
+            kk += s;
+          }
+          else
+          {
+            int bin = static_cast<int>(steps.Bin[i]);
+            int64_t binEnd = progress.Ends[bin];
+            for (s = 0; s < taken; ++s, ++kk)
+            {
+              const double t = steps.T[s][i];
+              if (!(t < tout))
               {
+                break;
+              }
+              ++samples;
+              const float absorbance = steps.Absorbance[s][i];
+              if (absorbance > 0)
+              {
+                const TransferSample sample{ { 0.f, 0.f, 0.f }, absorbance };
+                visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
                 this->OwnStop(l, rays[l].Offset, kk, absorbance, bin, binEnd, tout, progress);
               }
             }

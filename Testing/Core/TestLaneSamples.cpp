@@ -1,9 +1,12 @@
 // Pass 1's samples of four rays at a time (LaneSamplesAvx2) against the walker's scalar
 // sample loop, written out here with the same calls (LinearRayOrigin, LinearRayDirection,
 // p0 + t dp, LinearScalarAt, the clamp, TransferTable::Lookup): every depth, scalar and absorbance
-// the same bit for bit, on random distorted cells, rays, lattice offsets and tables.
+// the same bit for bit, on random distorted cells, rays, lattice offsets and tables; and with
+// pass 1's own stop, each lane's opaque bin (RayProgress::BinOf) and each step's quanta
+// (OpaqueBins::Quanta).
 #include "apcCellInterpolation.h"
 #include "apcLaneSamples.h"
+#include "apcOpaqueBins.h"
 #include "apcRayClip.h"
 #include "apcRayWalk.h"
 #include "apcTestCells.h"
@@ -15,6 +18,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -61,6 +65,10 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
   const double inf = std::numeric_limits<double>::infinity();
   int compared = 0;
   int visible = 0;
+  int binsCompared = 0;
+  int binsAboveZero = 0;
+  int quantaSaturated = 0;
+  int quantaBetween = 0;
   for (int trial = 0; trial < 2000; ++trial)
   {
     const CellShape shape = shapes[trial % 4];
@@ -109,8 +117,37 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
         rays.D[trial % 3][i] = (trial % 2 ? 1 : -1) * 1e307;
       }
     }
+    // Pass 1's own stop on every other trial: bins around the rays' indices (a bin or two
+    // per call's steps, so that some lanes start past the last end and some before the
+    // first) and thresholds from far below a sample's absorbance (saturated quanta) to far
+    // above it.
+    auto progress = std::make_unique<apc::walk::RayProgress>();
+    apc::OpaqueBins bins;
+    if (trial % 2 == 0)
+    {
+      const double nearT = lattice.Spacing * std::floor(30.0 + 40.0 * unit(rng));
+      const double span = 2.0 + 150.0 * unit(rng);
+      // Now and then a threshold so small that the quanta's factor is infinite: a
+      // transparent sample's 0 times it is NaN, which Quanta makes 0.
+      const double threshold = trial % 10 == 0 ? 1e-320 : std::pow(10.0, -6.0 + 8.0 * unit(rng));
+      bins =
+        apc::OpaqueBins::Make(threshold, nearT, nearT + span * lattice.Spacing, lattice.Spacing);
+      progress->Begin(1, &bins);
+      cell.BinEnds = progress->BinEnds;
+      cell.QuantaPerAbsorbance = bins.QuantaPerAbsorbance;
+    }
     apc::walk::LaneSteps steps;
     const int n = apc::walk::LaneSamplesAvx2(cell, rays, steps);
+    if (cell.BinEnds)
+    {
+      for (int i = 0; i < 4; ++i)
+      {
+        const int64_t k = static_cast<int64_t>(rays.K[i]);
+        ASSERT_EQ(steps.Bin[i], progress->BinOf(k)) << "trial " << trial << " lane " << i;
+        binsCompared += 1;
+        binsAboveZero += steps.Bin[i] > 0 && steps.Bin[i] < apc::OpaqueBins::kBins - 1 ? 1 : 0;
+      }
+    }
 
     // The walker's scalar loop, lane by lane.
     int expected = 0;
@@ -156,6 +193,13 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
         ASSERT_TRUE(SameBits(steps.Absorbance[s][i], sample.Absorbance))
           << "trial " << trial << " lane " << i << ": " << steps.Absorbance[s][i] << " vs "
           << sample.Absorbance;
+        if (cell.BinEnds)
+        {
+          const uint32_t q = bins.Quanta(sample.Absorbance);
+          ASSERT_EQ(steps.Quanta[s][i], q) << "trial " << trial << " lane " << i;
+          quantaSaturated += q == apc::OpaqueBins::kOpaque ? 1 : 0;
+          quantaBetween += q > 0 && q < apc::OpaqueBins::kOpaque ? 1 : 0;
+        }
         ++compared;
         visible += sample.Absorbance > 0 ? 1 : 0;
       }
@@ -165,6 +209,12 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
   EXPECT_GT(compared, 5000);
   EXPECT_GT(visible, compared / 4);
   EXPECT_LT(visible, compared);
+  // The bins and quanta of pass 1's own stop (LaneSteps::Bin, Quanta): bins inside, before
+  // and past the ends, quanta saturated and not.
+  EXPECT_GT(binsCompared, 1000);
+  EXPECT_GT(binsAboveZero, binsCompared / 4);
+  EXPECT_GT(quantaSaturated, 100);
+  EXPECT_GT(quantaBetween, 100);
 }
 
 } // namespace
