@@ -1,0 +1,206 @@
+// Pass 1's runs (the walker's lanes hand a ray's steps over at once): RayProgress::AddRun
+// against RayProgress::Add per visible sample, and Moments' RunBegin/RunAdd/RunEnd against
+// Moments::Sample per visible sample; the same profiles, totals, farthest indices, moment sums,
+// records and counts, bit for bit, on random runs.
+#include "apcDepthWarp.h"
+#include "apcOpaqueBins.h"
+#include "apcRayVisitors.h"
+#include "apcRayWalk.h"
+#include "apcSampleCache.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <random>
+#include <vector>
+
+namespace
+{
+
+// A run's absorbances: transparent (0), tiny, moderate and large.
+float RandomAbsorbance(std::mt19937& rng)
+{
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double r = u(rng);
+  if (r < 0.25)
+  {
+    return 0.0f;
+  }
+  return static_cast<float>(std::pow(10.0, -6.0 + 6.5 * u(rng)));
+}
+
+}
+
+TEST(PassOneRuns, AddRunIsAddPerVisibleSample)
+{
+  std::mt19937 rng(38);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  auto runs = std::make_unique<apc::walk::RayProgress>();
+  auto single = std::make_unique<apc::walk::RayProgress>();
+  constexpr int kPixels = 4;
+  int added = 0;
+  int crossingBins = 0;
+  int turningOpaque = 0;
+  int afterOpaque = 0;
+  for (int frame = 0; frame < 300; ++frame)
+  {
+    const double spacing = 0.1;
+    const double nearT = spacing * std::floor(20.0 + 40.0 * u(rng));
+    const double span = 16.0 + 300.0 * u(rng);
+    // Thresholds a run reaches in one sample, in a few, or only over many runs.
+    const double threshold = std::pow(10.0, -2.0 + 3.0 * u(rng));
+    const apc::OpaqueBins bins =
+      apc::OpaqueBins::Make(threshold, nearT, nearT + span * spacing, spacing);
+    ASSERT_TRUE(bins.Active());
+    runs->Begin(kPixels, &bins);
+    single->Begin(kPixels, &bins);
+    for (int r = 0; r < 60; ++r)
+    {
+      const int p = static_cast<int>(u(rng) * kPixels);
+      const int n = 1 + static_cast<int>(u(rng) * apc::walk::RayProgress::kMaxRun);
+      const int64_t k = bins.Base - 5 + static_cast<int64_t>(u(rng) * (span + 10.0));
+      float absorbance[apc::walk::RayProgress::kMaxRun * 4];
+      uint32_t q[apc::walk::RayProgress::kMaxRun * 4];
+      uint32_t sum = 0;
+      int last = -1;
+      for (int s = 0; s < n; ++s)
+      {
+        // Every fourth value, as the lanes' steps hold them.
+        absorbance[4 * s] = RandomAbsorbance(rng);
+        q[4 * s] = bins.Quanta(absorbance[4 * s]);
+        sum += q[4 * s];
+        last = absorbance[4 * s] > 0 ? s : last;
+      }
+      const bool wasOpaque = single->Opaque[p];
+      bool opaque = false;
+      for (int s = 0; s < n; ++s)
+      {
+        if (absorbance[4 * s] > 0)
+        {
+          opaque = single->Add(p, k + s, single->BinOf(k + s), absorbance[4 * s]) || opaque;
+        }
+      }
+      // A run goes at once exactly where no sample of it turns the pixel opaque.
+      ASSERT_EQ(runs->RunStaysOpen(p, sum), !opaque) << "frame " << frame << " run " << r;
+      if (opaque)
+      {
+        ++turningOpaque;
+        for (int s = 0; s < n; ++s)
+        {
+          if (absorbance[4 * s] > 0)
+          {
+            runs->Add(p, k + s, runs->BinOf(k + s), absorbance[4 * s]);
+          }
+        }
+      }
+      else
+      {
+        runs->AddRun(p, k, runs->BinOf(k), q, 4, sum, last);
+        ++added;
+        crossingBins += last > 0 && runs->BinOf(k) != runs->BinOf(k + last) ? 1 : 0;
+        afterOpaque += wasOpaque && last >= 0 ? 1 : 0;
+      }
+      for (int b = 0; b < apc::OpaqueBins::kBins; ++b)
+      {
+        ASSERT_EQ(runs->Profile[p][b], single->Profile[p][b])
+          << "frame " << frame << " run " << r << " bin " << b;
+      }
+      ASSERT_EQ(runs->Total[p], single->Total[p]) << "frame " << frame << " run " << r;
+      ASSERT_EQ(runs->FarK[p], single->FarK[p]) << "frame " << frame << " run " << r;
+      ASSERT_EQ(runs->Opaque[p], single->Opaque[p]) << "frame " << frame << " run " << r;
+    }
+  }
+  // Runs within one bin and across bins, runs of pixels already opaque, and runs that turn
+  // a pixel opaque (taken sample by sample).
+  EXPECT_GT(added, 3000);
+  EXPECT_GT(crossingBins, 300);
+  EXPECT_GT(afterOpaque, 300);
+  EXPECT_GT(turningOpaque, 300);
+}
+
+TEST(PassOneRuns, MomentRunsAreSamplesOneAtATime)
+{
+  std::mt19937 rng(39);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double spacing = 0.05;
+  const apc::LatticeDepthWarp warp(apc::LogDepthWarp(2.0, 9.0), spacing);
+  const apc::TileRect tile{ 0, 0, 16, 16, 0 };
+  constexpr int kWidth = 16;
+  std::vector<double> imageRuns(5 * 256, 0.0);
+  std::vector<double> imageSingle(5 * 256, 0.0);
+  apc::SampleCache cacheRuns;
+  apc::SampleCache cacheSingle;
+  cacheRuns.Record = true;
+  cacheSingle.Record = true;
+  apc::visitors::Moments<4> runs(imageRuns.data(), kWidth, &warp, &cacheRuns);
+  apc::visitors::Moments<4> single(imageSingle.data(), kWidth, &warp, &cacheSingle);
+  int visible = 0;
+  int dropped = 0;
+  for (int t = 0; t < 20; ++t)
+  {
+    runs.BeginTile(tile);
+    single.BeginTile(tile);
+    for (int r = 0; r < 2000; ++r)
+    {
+      const int p = static_cast<int>(u(rng) * tile.Pixels());
+      const int n = 1 + static_cast<int>(u(rng) * 8);
+      // Depths on the lattice (the warp's table) and, now and then, off it (jittered rays).
+      const int64_t k = 30 + static_cast<int64_t>(u(rng) * 160);
+      const double offset = r % 5 == 0 ? u(rng) : 0.0;
+      double depth[32];
+      double scalar[32];
+      float absorbance[32];
+      for (int s = 0; s < n; ++s)
+      {
+        depth[4 * s] = (static_cast<double>(k + s) + offset) * spacing;
+        scalar[4 * s] = 10.0 * u(rng);
+        absorbance[4 * s] = RandomAbsorbance(rng);
+      }
+      // A run begun and dropped (the walker's run in which the pixel turns opaque) leaves
+      // nothing behind.
+      if (r % 7 == 0)
+      {
+        apc::visitors::Moments<4>::Run run;
+        runs.RunBegin(run, p, n);
+        for (int s = 0; s < n; ++s)
+        {
+          runs.RunAdd(run, p, k + s, 2.0 * depth[4 * s], scalar[4 * s], 1.0f);
+        }
+        ++dropped;
+      }
+      apc::visitors::Moments<4>::Run run;
+      runs.RunBegin(run, p, n);
+      for (int s = 0; s < n; ++s)
+      {
+        runs.RunAdd(run, p, k + s, depth[4 * s], scalar[4 * s], absorbance[4 * s]);
+        if (absorbance[4 * s] > 0)
+        {
+          single.Sample(p, k + s, depth[4 * s], scalar[4 * s],
+            apc::TransferSample{ { 0.f, 0.f, 0.f }, absorbance[4 * s] });
+          ++visible;
+        }
+      }
+      runs.RunEnd(run, p);
+    }
+    ASSERT_EQ(runs.Sums.size(), single.Sums.size());
+    ASSERT_EQ(
+      std::memcmp(runs.Sums.data(), single.Sums.data(), runs.Sums.size() * sizeof(double)), 0)
+      << "tile " << t;
+    ASSERT_EQ(runs.Buffer->Used, single.Buffer->Used) << "tile " << t;
+    for (size_t i = 0; i < single.Buffer->Used; ++i)
+    {
+      const apc::RecordedSample& a = runs.Buffer->Recorded[i];
+      const apc::RecordedSample& b = single.Buffer->Recorded[i];
+      ASSERT_TRUE(std::memcmp(&a.Z, &b.Z, sizeof a.Z) == 0 &&
+        std::memcmp(&a.Scalar, &b.Scalar, sizeof a.Scalar) == 0 && a.Pixel == b.Pixel &&
+        a.K16 == b.K16)
+        << "tile " << t << " record " << i;
+    }
+    ASSERT_EQ(runs.Buffer->Counts, single.Buffer->Counts) << "tile " << t;
+  }
+  EXPECT_GT(visible, 100000);
+  EXPECT_GT(dropped, 1000);
+}
