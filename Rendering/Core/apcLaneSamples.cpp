@@ -1,7 +1,5 @@
 #include "apcLaneSamples.h"
 
-#include "apcOpaqueBins.h"
-
 #include <immintrin.h>
 
 #include <limits>
@@ -70,9 +68,6 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
     }
     _mm256_store_si256(reinterpret_cast<__m256i*>(steps.Bin), bin);
   }
-  const bool quanta = cell.BinEnds != nullptr;
-  const __m256d perAbsorbance = _mm256_set1_pd(cell.QuantaPerAbsorbance);
-  const __m256d opaque = _mm256_set1_pd(OpaqueBins::kOpaque);
   int s = 0;
   for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
   {
@@ -133,17 +128,7 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
       _mm256_castps256_ps128(_mm256_permutevar8x32_ps(_mm256_castpd_ps(finite), lowHalves));
     _mm256_store_pd(steps.T[s], t);
     _mm256_store_pd(steps.Scalar[s], scalar);
-    const __m128 kept = _mm_and_ps(absorbance, keep);
-    _mm_store_ps(steps.Absorbance[s], kept);
-    if (quanta)
-    {
-      // OpaqueBins::Quanta: q >= kOpaque ? kOpaque : (q > 0 ? q truncated : 0), for the
-      // absorbance (finite, not negative) as a double. max_pd(q, 0) is 0 for a NaN q (0
-      // times an infinite factor), as Quanta's tests give; then min_pd(kOpaque, x).
-      const __m256d q = _mm256_mul_pd(_mm256_cvtps_pd(kept), perAbsorbance);
-      const __m256d clamped = _mm256_min_pd(opaque, _mm256_max_pd(q, zero));
-      _mm_store_si128(reinterpret_cast<__m128i*>(steps.Quanta[s]), _mm256_cvttpd_epi32(clamped));
-    }
+    _mm_store_ps(steps.Absorbance[s], _mm_and_ps(absorbance, keep));
   }
   return s;
 }

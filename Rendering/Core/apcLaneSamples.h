@@ -29,7 +29,6 @@ struct LaneCell
   // Pass 1's own stop: the first kBinEnds bin ends (RayProgress::BinEnds, exact as doubles),
   // or null (no bins to find).
   const double* BinEnds = nullptr;
-  double QuantaPerAbsorbance = 0; // with BinEnds: OpaqueBins::Quanta's factor
 };
 
 // The bin ends a lane compares with (the last bin reaches to the end of every ray).
@@ -59,8 +58,6 @@ struct LaneSteps
   // With BinEnds: the opaque bin of each lane's first index K (RayProgress::BinOf's value),
   // from compares side by side instead of BinOf's chain of dependent loads.
   alignas(32) int64_t Bin[4];
-  // With BinEnds: OpaqueBins::Quanta of each step's absorbance.
-  alignas(16) uint32_t Quanta[kLaneSteps][4];
 };
 
 // Fills steps 0 .. n - 1 for the four lanes and returns n: kLaneSteps, or fewer where no

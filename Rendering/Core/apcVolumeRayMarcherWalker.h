@@ -342,7 +342,6 @@ struct VolumeRayMarcher::Walker
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
     static_assert(walk::kBinEnds == RayProgress::kBins - 1, "the lanes compare every bin end");
     cell.BinEnds = own ? progress.BinEnds : nullptr;
-    cell.QuantaPerAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0;
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     int64_t samples = 0;
@@ -378,11 +377,12 @@ struct VolumeRayMarcher::Walker
           double tout = lanes.Tout[i];
           int64_t kk = k[i];
           // The ray's steps inside its interval, handed over as one run in one loop: the
-          // pixel's sums in registers, no branch on a sample's visibility. A run in which the
+          // pixel's sums in registers, its records' room taken once. A run in which the
           // pixel turns opaque is dropped and taken again sample by sample below, so that
           // the samples past the stop are not taken.
           typename Visitor::Run run;
           visitor.RunBegin(run, l, taken);
+          uint32_t q[RayProgress::kMaxRun];
           uint32_t sum = 0;
           int last = -1;
           int s = 0;
@@ -394,11 +394,16 @@ struct VolumeRayMarcher::Walker
               break;
             }
             const float absorbance = steps.Absorbance[s][i];
-            visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
-            if (own)
+            q[s] = 0;
+            if (absorbance > 0)
             {
-              sum += steps.Quanta[s][i]; // at most kMaxRun times kOpaque: no overflow
-              last = absorbance > 0 ? s : last;
+              visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
+              if (own)
+              {
+                q[s] = progress.Bins->Quanta(absorbance);
+                sum += q[s]; // at most kMaxRun times kOpaque: no overflow
+                last = s;
+              }
             }
           }
           if (!own || progress.RunStaysOpen(l, sum))
@@ -406,8 +411,7 @@ struct VolumeRayMarcher::Walker
             visitor.RunEnd(run, l);
             if (own)
             {
-              progress.AddRun(
-                l, kk, static_cast<int>(steps.Bin[i]), &steps.Quanta[0][i], 4, sum, last);
+              progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, 1, sum, last);
             }
             samples += s;
             kk += s;
