@@ -36,8 +36,10 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
   int n = 0;
   for (int row = 0; row < rect.Rows; ++row)
   {
-    const int begin = rect.First + row * rect.Stride;
-    for (int l = begin; l < begin + rect.Width; ++l)
+    const int first = rect.First + row * rect.Stride;
+    const int begin = first + (rect.Spans ? rect.Spans[2 * row] : 0);
+    const int end = first + (rect.Spans ? rect.Spans[2 * row + 1] : rect.Width);
+    for (int l = begin; l < end; ++l)
     {
       double& tin = out.Tin[l];
       double& tout = out.Tout[l];
@@ -228,8 +230,9 @@ __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const
   int n = 0;
   for (int row = 0; row < rect.Rows; ++row)
   {
-    const int begin = rect.First + row * rect.Stride;
-    const int end = begin + rect.Width;
+    const int first = rect.First + row * rect.Stride;
+    const int begin = first + (rect.Spans ? rect.Spans[2 * row] : 0);
+    const int end = first + (rect.Spans ? rect.Spans[2 * row + 1] : rect.Width);
     for (int l = begin; l < end; l += 4)
     {
       const __m256i valid =
