@@ -304,12 +304,14 @@ CellDiagonals DiagonalsOf(const double* px, const double* py, const double* z, i
   const double rx = ax * m * (1 + sx / ax) / (zmin - m) + kPixelPad;
   const double ry = ay * m * (1 + sy / ay) / (zmin - m) + kPixelPad;
   const double r = rx + ry;
-  // Rounded to float outwards: moved out by 2^-22 of their size first, more than float's
-  // rounding to nearest moves them back (the values are at most about 2e6, far from float's
-  // range and its subnormals).
-  auto down = [](double v) { return static_cast<float>(v - std::abs(v) * 0x1p-22 - 0x1p-100); };
-  auto up = [](double v) { return static_cast<float>(v + std::abs(v) * 0x1p-22 + 0x1p-100); };
-  return { down(u0 - r), up(u1 + r), down(w0 - r), up(w1 + r) };
+  // The pixel centres within: i + j >= u0 - r is i + j >= ceil(u0 - r), and so on (clamped
+  // first: r can be large where a cell nearly reaches the eye).
+  const double limit = kNoBound;
+  auto ceiling = [limit](double v) -> int32_t
+  { return static_cast<int32_t>(std::ceil(std::min(std::max(v, -limit), limit))); };
+  auto floor = [limit](double v) -> int32_t
+  { return static_cast<int32_t>(std::floor(std::min(std::max(v, -limit), limit))); };
+  return { ceiling(u0 - r), floor(u1 + r), ceiling(w0 - r), floor(w1 + r) };
 }
 
 } // namespace apc

@@ -31,6 +31,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace apc
@@ -58,17 +59,16 @@ PlaneReach PlaneReachOf(CellShape shape, const std::array<std::array<double, 3>,
 // (delta above: kPlaneError (|eye| + the mesh's largest absolute coordinate)).
 double PlaneErrorOf(const std::array<double, 3>& eye, const std::array<double, 6>& bounds);
 
-// A cell's rows as an octagon of pixel coordinates: every ray the clip can keep passes
-// through a pixel position (x, y) with U0 <= x + y <= U1 and W0 <= x - y <= W1 (and inside
-// the corners' bounding box, the cell's rectangle).
+// A cell's rows as an octagon of pixel centres: every ray the clip can keep is that of a pixel
+// (i, j) with U0 <= i + j <= U1 and W0 <= i - j <= W1 (and inside the corners' bounding box,
+// the cell's rectangle). Integers, so that each row's span is exact integer arithmetic.
 struct CellDiagonals
 {
-  float U0, U1, W0, W1;
+  int32_t U0, U1, W0, W1;
 };
 // No bound: every ray of each row.
-constexpr CellDiagonals kNoDiagonals = { -std::numeric_limits<float>::infinity(),
-  std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(),
-  std::numeric_limits<float>::infinity() };
+constexpr int32_t kNoBound = 1 << 30;
+constexpr CellDiagonals kNoDiagonals = { -kNoBound, kNoBound, -kNoBound, kNoBound };
 
 // The octagon of a cell whose n corners a perspective camera projects to (px, py) (pixel
 // centres at integers) at depths z along the view direction: ax and ay are the camera's
@@ -81,12 +81,8 @@ CellDiagonals DiagonalsOf(const double* px, const double* py, const double* z, i
 // caller clamps to the rectangle.
 inline void RowOf(const CellDiagonals& d, int j, int& lo, int& hi)
 {
-  const double y = j;
-  // Clamped before conversion: an unbounded octagon's edges are infinite.
-  const double left = std::max(static_cast<double>(d.U0) - y, static_cast<double>(d.W0) + y);
-  const double right = std::min(static_cast<double>(d.U1) - y, static_cast<double>(d.W1) + y);
-  lo = static_cast<int>(std::ceil(std::max(left, -1e9)));
-  hi = static_cast<int>(std::floor(std::min(right, 1e9)));
+  lo = std::max(d.U0 - j, d.W0 + j);
+  hi = std::min(d.U1 - j, d.W1 + j);
 }
 
 } // namespace apc

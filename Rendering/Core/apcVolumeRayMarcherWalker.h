@@ -185,7 +185,9 @@ struct VolumeRayMarcher::Walker
     const int width = tile.Width();
     walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1, width };
     uint8_t spans[2 * VolumeRayMarcher::kTileSize];
-    if (!this->Bins.Diagonals.empty() && this->RowSpans(cell, i0, i1, j0, j1, spans))
+    // A row of four rays or fewer is one packet whatever its span.
+    if (i1 - i0 >= 4 && !this->Bins.Diagonals.empty() &&
+      this->RowSpans(cell, i0, i1, j0, j1, spans))
     {
       rect.Spans = spans;
     }
@@ -271,7 +273,7 @@ struct VolumeRayMarcher::Walker
   bool RowSpans(int64_t cell, int i0, int i1, int j0, int j1, uint8_t* spans) const
   {
     const CellDiagonals& d = this->Bins.Diagonals[cell];
-    if (d.U0 == -std::numeric_limits<float>::infinity())
+    if (d.U0 == kNoDiagonals.U0)
     {
       return false;
     }

@@ -95,7 +95,7 @@ void CheckCell(CellShape shape, double distortion, std::mt19937& rng, int views,
     ASSERT_EQ(bins.Diagonals.size(), 1u);
     const auto& r = bins.Rects[0];
     const apc::CellDiagonals& diagonals = bins.Diagonals[0];
-    const bool bounded = diagonals.U0 != -std::numeric_limits<float>::infinity();
+    const bool bounded = diagonals.U0 != apc::kNoDiagonals.U0;
     ++(bounded ? counts.Bounded : counts.Unbounded);
     apc::walk::CellPlanes clip;
     for (int j = r[1]; j <= r[3]; ++j)
