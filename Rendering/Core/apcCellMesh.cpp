@@ -164,7 +164,6 @@ bool CellMesh::Finalize(std::string* error)
   this->Planes.resize(static_cast<size_t>(this->PlaneOffsets[numCells]));
   this->PlaneCounts.resize(numCells);
   this->ScalarRanges.resize(numCells);
-  this->Reaches.resize(numCells);
   // Cells are independent: fixed blocks of them derived in parallel, each block summed on
   // its own, the sums joined in block order (counts and min / max: the same whatever the
   // threads).
@@ -208,7 +207,6 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
   const double inf = std::numeric_limits<double>::infinity();
   this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
   this->PlaneCounts[cell] = 0;
-  this->Reaches[cell] = PlaneReach();
   std::array<double, 6> b = { inf, -inf, inf, -inf, inf, -inf };
   double centroid[3] = { 0, 0, 0 };
   bool finite = true;
@@ -266,7 +264,6 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
     return CellFate::Flat;
   }
   this->PlaneCounts[cell] = static_cast<uint8_t>(count);
-  this->Reaches[cell] = PlaneReachOf(this->Shapes[cell], x, planes, count);
   summary.Volume.Add(measure.Volume);
   summary.NonFiniteScalars += std::isnan(this->ScalarRanges[cell][0]) ? 1 : 0;
   for (int d = 0; d < 3; ++d)

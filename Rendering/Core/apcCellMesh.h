@@ -15,7 +15,6 @@
 #define apcCellMesh_h
 
 #include "apcCellInterpolation.h"
-#include "apcCellSpan.h"
 #include "apcExactSum.h"
 #include "apcUninitialized.h"
 
@@ -115,10 +114,6 @@ public:
     return this->ScalarRanges[cell];
   }
 
-  // How far the cell's planes' polytope reaches beyond its corners (apcCellSpan.h; Reach =
-  // inf where that is not bounded): derived by Finalize with the planes.
-  const PlaneReach& GetPlaneReach(int64_t cell) const { return this->Reaches[cell]; }
-
   // Cells Finalize left out: non-finite corners, or no volume to render (collapsed or flat
   // cells: too few faces with area to enclose anything, or too thin, see apcCellShapeCheck.h).
   // They have no planes and empty bounds.
@@ -160,7 +155,6 @@ private:
   UninitializedVector<int64_t> PlaneOffsets;
   UninitializedVector<uint8_t> PlaneCounts;
   UninitializedVector<std::array<float, 2>> ScalarRanges;
-  UninitializedVector<PlaneReach> Reaches;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
   int64_t SkippedCells = 0;
   int64_t NonFiniteCornerCells = 0;

@@ -112,15 +112,6 @@ bool RayCamera::Project(const Vec& x, double& px, double& py) const
 }
 
 //------------------------------------------------------------------------------
-void RayCamera::GetPixelScale(double& ax, double& bx, double& ay, double& by) const
-{
-  ax = 0.5 * this->FullWidth / (this->HalfHeight * this->Aspect);
-  bx = (1.0 - this->Center[0]) * 0.5 * this->FullWidth - 0.5 - this->CropI0;
-  ay = 0.5 * this->FullHeight / this->HalfHeight;
-  by = (1.0 - this->Center[1]) * 0.5 * this->FullHeight - 0.5 - this->CropJ0;
-}
-
-//------------------------------------------------------------------------------
 double RayCamera::DistanceFromDepth(int i, int j, double depth) const
 {
   if (!(depth < 1.0))

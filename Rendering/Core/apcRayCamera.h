@@ -56,12 +56,6 @@ public:
   bool IsParallel() const { return this->Parallel; }
   const std::array<double, 3>& GetPosition() const { return this->Position; }
   const std::array<double, 3>& GetViewDirection() const { return this->Forward; }
-  const std::array<double, 3>& GetRight() const { return this->Right; }
-  const std::array<double, 3>& GetUp() const { return this->Up; }
-  // Project's pixel coordinates of a point in front of a perspective camera are
-  // px = ax (v . Right) / (v . Forward) + bx and py = ay (v . Up) / (v . Forward) + by for
-  // v = x - position (to rounding).
-  void GetPixelScale(double& ax, double& bx, double& ay, double& by) const;
 
   // The ray through the centre of pixel (i, j).
   Ray PixelRay(int i, int j) const;

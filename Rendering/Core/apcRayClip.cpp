@@ -36,10 +36,8 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
   int n = 0;
   for (int row = 0; row < rect.Rows; ++row)
   {
-    const int first = rect.First + row * rect.Stride;
-    const int begin = first + (rect.Spans ? rect.Spans[2 * row] : 0);
-    const int end = first + (rect.Spans ? rect.Spans[2 * row + 1] : rect.Width);
-    for (int l = begin; l < end; ++l)
+    const int begin = rect.First + row * rect.Stride;
+    for (int l = begin; l < begin + rect.Width; ++l)
     {
       double& tin = out.Tin[l];
       double& tout = out.Tout[l];
@@ -230,9 +228,8 @@ __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const
   int n = 0;
   for (int row = 0; row < rect.Rows; ++row)
   {
-    const int first = rect.First + row * rect.Stride;
-    const int begin = first + (rect.Spans ? rect.Spans[2 * row] : 0);
-    const int end = first + (rect.Spans ? rect.Spans[2 * row + 1] : rect.Width);
+    const int begin = rect.First + row * rect.Stride;
+    const int end = begin + rect.Width;
     for (int l = begin; l < end; l += 4)
     {
       const __m256i valid =

@@ -47,20 +47,17 @@ struct TileRays
   }
 };
 
-// Rows x Width rays of a tile: ray First, then a row every Stride rays. With Spans, row r's
-// rays from Spans[2 r] to before Spans[2 r + 1] (offsets in the row, at most Width) are the
-// only ones that can be kept (apcCellSpan.h), and the others are not clipped.
+// Rows x Width rays of a tile: ray First, then a row every Stride rays.
 struct RayRect
 {
   int First;
   int Width;
   int Rows;
   int Stride;
-  const uint8_t* Spans = nullptr;
 };
 
 // What ClipRays finds, by the ray's index in the tile (Tin, Tout, Lattice: kSize entries,
-// written for the rectangle's rays in its spans and possibly a few beyond).
+// written for the rectangle's rays and possibly a few beyond).
 struct ClippedRays
 {
   double Tin[TileRays::kSize];

@@ -100,10 +100,8 @@ std::vector<int64_t> FrontToBackOrder(const TileBins& bins)
   return order;
 }
 
-// The pixel centres a cell's projected corners cover; with diagonals (a perspective camera),
-// the octagon its rows are cut to (apcCellSpan.h).
-std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, int64_t cell,
-  const double* scale, double planeError, CellDiagonals* diagonals)
+// The pixel centres a cell's projected corners cover.
+std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, int64_t cell)
 {
   const double w = camera.GetWidth();
   const double h = camera.GetHeight();
@@ -114,16 +112,15 @@ std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, 
   double x1 = -x0;
   double y1 = -x0;
   int behind = 0;
-  double px[8];
-  double py[8];
   for (int c = 0; c < corners; ++c)
   {
-    if (camera.Project(mesh.Points[ids[c]], px[c], py[c]))
+    double px, py;
+    if (camera.Project(mesh.Points[ids[c]], px, py))
     {
-      x0 = std::min(x0, px[c]);
-      x1 = std::max(x1, px[c]);
-      y0 = std::min(y0, py[c]);
-      y1 = std::max(y1, py[c]);
+      x0 = std::min(x0, px);
+      x1 = std::max(x1, px);
+      y0 = std::min(y0, py);
+      y1 = std::max(y1, py);
     }
     else
     {
@@ -140,20 +137,6 @@ std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, 
     x1 = w;
     y1 = h;
   }
-  else if (diagonals)
-  {
-    const auto& eye = camera.GetPosition();
-    const auto& forward = camera.GetViewDirection();
-    double z[8];
-    for (int c = 0; c < corners; ++c)
-    {
-      const auto& x = mesh.Points[ids[c]];
-      z[c] =
-        (x[0] - eye[0]) * forward[0] + (x[1] - eye[1]) * forward[1] + (x[2] - eye[2]) * forward[2];
-    }
-    *diagonals = DiagonalsOf(px, py, z, corners, scale[0], scale[1], scale[2], scale[3],
-      mesh.GetPlaneReach(cell), planeError);
-  }
   // Pixel centres sit at integers: the covered ones are ceil(x0) .. floor(x1).
   return { static_cast<int>(std::max(0.0, std::ceil(x0))),
     static_cast<int>(std::max(0.0, std::ceil(y0))),
@@ -169,22 +152,12 @@ void BinCells(
   const int64_t numCells = mesh ? mesh->GetNumberOfCells() : 0;
   bins.Rects.resize(numCells);
   bins.Near.resize(numCells);
-  const bool diagonals = mesh && !camera.IsParallel();
-  bins.Diagonals.resize(diagonals ? numCells : 0);
-  const double planeError = diagonals ? PlaneErrorOf(camera.GetPosition(), mesh->GetBounds()) : 0.0;
-  double scale[4];
-  camera.GetPixelScale(scale[0], scale[1], scale[2], scale[3]);
   ParallelFor(threads, numCells, 4096,
     [&](int64_t begin, int64_t end)
     {
       for (int64_t cell = begin; cell < end; ++cell)
       {
-        CellDiagonals* d = diagonals ? &bins.Diagonals[cell] : nullptr;
-        if (d)
-        {
-          *d = kNoDiagonals;
-        }
-        bins.Rects[cell] = CoveredPixels(*mesh, camera, cell, scale, planeError, d);
+        bins.Rects[cell] = CoveredPixels(*mesh, camera, cell);
         bins.Near[cell] = NearDepth(*mesh, camera, cell);
       }
     });

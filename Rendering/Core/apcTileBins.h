@@ -6,7 +6,6 @@
 #ifndef apcTileBins_h
 #define apcTileBins_h
 
-#include "apcCellSpan.h"
 #include "apcUninitialized.h"
 
 #include <array>
@@ -63,9 +62,6 @@ struct TileBins
   // and at most t for a perspective one), so that a ray already opaque before it can skip it
   // without clipping.
   UninitializedVector<double> Near;
-  // Per cell, with a perspective camera (else empty): the octagon every ray of its rectangle
-  // that can meet its planes passes through (apcCellSpan.h).
-  UninitializedVector<CellDiagonals> Diagonals;
   // Compressed rows: tile t's cells are Cells[Start[t] .. Start[t + 1]), nearest first (by
   // Near, binned to a few thousand depths): a ray meets its front cells first and is opaque
   // sooner.

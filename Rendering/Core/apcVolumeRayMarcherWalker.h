@@ -7,7 +7,6 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
-#include "apcCellSpan.h"
 #include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
 #include "apcRayClip.h"
@@ -183,14 +182,8 @@ struct VolumeRayMarcher::Walker
     // All the rays first, then those with a sample: the clipping runs several rays at a
     // time, and a ray's interval does not depend on the samples of other rays.
     const int width = tile.Width();
-    walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1, width };
-    uint8_t spans[2 * VolumeRayMarcher::kTileSize];
-    // A row of four rays or fewer is one packet whatever its span.
-    if (i1 - i0 >= 4 && !this->Bins.Diagonals.empty() &&
-      this->RowSpans(cell, i0, i1, j0, j1, spans))
-    {
-      rect.Spans = spans;
-    }
+    const walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1,
+      width };
     // A visitor of segments sees every ray inside, with a sample or not.
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
     walk::ClippedRays& c = state.Clipped;
@@ -266,29 +259,6 @@ struct VolumeRayMarcher::Walker
       return this->Samples<Sampling::Pyramid>(local, ray, k, tout, visitor, state, progress);
     }
     return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
-  }
-
-  // The rays of rows j0 .. j1 from column i0 to i1 that can meet the cell's planes, as
-  // offsets from i0 (RayRect::Spans); false where the cell has no such bound.
-  bool RowSpans(int64_t cell, int i0, int i1, int j0, int j1, uint8_t* spans) const
-  {
-    const CellDiagonals& d = this->Bins.Diagonals[cell];
-    if (d.U0 == kNoDiagonals.U0)
-    {
-      return false;
-    }
-    const int width = i1 - i0 + 1;
-    for (int j = j0; j <= j1; ++j)
-    {
-      int lo = 0;
-      int hi = 0;
-      RowOf(d, j, lo, hi);
-      const int begin = std::min(std::max(lo - i0, 0), width);
-      const int end = std::max(std::min(hi - i0 + 1, width), begin);
-      spans[2 * (j - j0)] = static_cast<uint8_t>(begin);
-      spans[2 * (j - j0) + 1] = static_cast<uint8_t>(end);
-    }
-    return true;
   }
 
   // Sets the cell's interpolation up once one of its rays (ray) has a sample: lazily, since
@@ -602,10 +572,6 @@ struct VolumeRayMarcher::Walker
       __builtin_prefetch(&this->Bins.Near[cell]);
       __builtin_prefetch(&this->Bins.Rects[cell]);
       __builtin_prefetch(&this->Mesh.GetScalarRange(cell));
-      if (!this->Bins.Diagonals.empty())
-      {
-        __builtin_prefetch(&this->Bins.Diagonals[cell]);
-      }
       this->Mesh.PrefetchIds(cell);
     }
     if (b + kAhead / 2 < end)
