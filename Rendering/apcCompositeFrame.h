@@ -179,8 +179,13 @@ struct MomentBuffers
   std::vector<double> Moments;    // the band's moments, then the global ones
   std::vector<double> ColourSums; // the band's colour sums
   std::vector<double> Packed;     // a chunk of moments packed, before and after the wire
-  std::vector<int32_t> Codes;     // the packed moments in fixed point, and their sums
-  std::vector<int32_t> Sums;
+  // The wire's two buffers, send and received, shared by every sum of the band in turn: the
+  // moments in fixed point (int32), then the colour sums (float), or both in double
+  // (CompositeInDouble). Each sum makes its values in them (bytes: any type may live there), so
+  // a first frame pages in the largest sum's, not each one's (at 1024^2 the colour sums' 32 MB
+  // a process fit in the moments' 40 MB).
+  std::vector<unsigned char> WireSend;
+  std::vector<unsigned char> WireReceived;
   std::vector<unsigned char> Exponents; // each pixel's exponent byte, and the agreed one
   std::vector<unsigned char> Agreed;
   std::vector<uint16_t> Profile; // the opaque profiles, over the band
@@ -196,10 +201,6 @@ struct MomentBuffers
   OpaqueCutMemory Cuts;
   std::vector<uint8_t> Bound;
   std::vector<uint8_t> Unresolved;
-  std::vector<float> ColourSend; // the colour sums' wire (CompositeInDouble: the double pair)
-  std::vector<float> ColourReceived;
-  std::vector<double> DoubleSend;
-  std::vector<double> DoubleReceived;
 };
 
 // Rect's rows cut into bands of at most maxPixels pixels (at least one marcher tile row each),

@@ -28,6 +28,7 @@
 namespace apc
 {
 using wire::Hold;
+using wire::HoldAs;
 using wire::InMessages;
 
 namespace
@@ -42,7 +43,7 @@ constexpr size_t kChunkPixels = size_t(1) << 20;
 template <class T>
 double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
   const std::vector<unsigned char>& mask, double* image, int components, bool everywhere,
-  size_t maxBytes, std::vector<T>& sendBuffer, std::vector<T>& receivedBuffer, FrameRecord& record)
+  size_t maxBytes, MomentBuffers& buffers, FrameRecord& record)
 {
   const std::vector<size_t> chunks = tiles.Chunks(mask, kChunkPixels);
   double bytes = 0;
@@ -55,8 +56,8 @@ double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
     {
       continue;
     }
-    T* send = Hold(sendBuffer, count);
-    T* received = Hold(receivedBuffer, count);
+    T* send = HoldAs<T>(buffers.WireSend, count);
+    T* received = HoldAs<T>(buffers.WireReceived, count);
     tiles.Pack(mask, image, components, send, first, last);
     group.Collective(everywhere ? "allreduce" : "reduce",
       [&]
@@ -131,8 +132,8 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
     }
     const size_t values = count * stride;
     double* packed = Hold(buffers.Packed, values);
-    int32_t* codes = Hold(buffers.Codes, values);
-    int32_t* sums = Hold(buffers.Sums, values);
+    int32_t* codes = HoldAs<int32_t>(buffers.WireSend, values);
+    int32_t* sums = HoldAs<int32_t>(buffers.WireReceived, values);
     tiles.Pack(mask, moments, stride, packed, first, last);
     for (size_t p = 0; p < count; ++p)
     {
@@ -258,10 +259,10 @@ void SumImage(const ProcessGroup& group, const CompositeFrame& frame, const Tile
   }
   const size_t maxBytes = static_cast<size_t>(frame.Settings.MaxMessageBytes);
   record.BytesSent += frame.Settings.CompositeInDouble
-    ? SumTiles(group, tiles, covered, image, components, everywhere, maxBytes, buffers.DoubleSend,
-        buffers.DoubleReceived, record)
-    : SumTiles(group, tiles, covered, image, components, everywhere, maxBytes, buffers.ColourSend,
-        buffers.ColourReceived, record);
+    ? SumTiles<double>(
+        group, tiles, covered, image, components, everywhere, maxBytes, buffers, record)
+    : SumTiles<float>(
+        group, tiles, covered, image, components, everywhere, maxBytes, buffers, record);
 }
 
 // A band's pass 1 into moments (pixels * stride values, zeroed here), the tiles' agreement

@@ -28,6 +28,14 @@ T* Hold(std::vector<T>& v, size_t n)
   return v.data();
 }
 
+// Room for n values of T at the start of bytes (see Hold), for a buffer the band's sums share
+// in turn (MomentBuffers::WireSend): the values are made there by whoever writes them first.
+template <class T>
+T* HoldAs(std::vector<unsigned char>& bytes, size_t n)
+{
+  return reinterpret_cast<T*>(Hold(bytes, n * sizeof(T)));
+}
+
 // Calls message(offset, count) over [0, total) values of T, at most maxBytes at a time
 // (Settings.MaxMessageBytes: Open MPI maps a fresh temporary for an allreduce of 32 MB or
 // more on every call, see vtkAPCCompositePass.h). Every process cuts the same total the same

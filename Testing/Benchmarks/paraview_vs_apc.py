@@ -12,6 +12,9 @@ Scotch pieces, field U_mag) at 1024x1024 with the same camera and transfer funct
                view of the data costs once the process holds memory (its cells are converted
                again, as after a data change); run it after apc-default to tell the process's
                first-touched memory from the per-data set-up;
+  apc-nostop-again  apc-nostop (Stop Where Opaque off) in that place: with apc-again after
+               it, the stop's first frame against the stop-off one with neither paying the
+               process's first APC view (which falls on whichever case runs first);
   auto         the APC Volume representation in its "Auto" mode, default sample distance;
   segments     the APC Volume representation in its "Exact (segments)" mode (sort-last
                compositing of ray segments, the exact distributed baseline), default spacing;
@@ -66,7 +69,8 @@ parser.add_argument("--sample-distance", type=float, default=1.0,
                     help="APC sample distance in metres (the cells are ~1-10 m)")
 parser.add_argument("--cases", default="apc,apc-default,pt,bunyk",
                     help="comma-separated: apc, apc-default, apc-again, apc-stop (defaults with Stop Where Opaque "
-                    "on), apc-nostop (defaults with it off), segments, auto, pt, bunyk")
+                    "on), apc-nostop (defaults with it off), apc-nostop-again, segments, auto, pt, "
+                    "bunyk")
 parser.add_argument("--distances", default="1",
                     help="comma-separated camera distance factors (1 = the default view)")
 parser.add_argument("--no-float-images", action="store_true",
@@ -285,6 +289,7 @@ def main(args):
         # APC's defaults with Stop Where Opaque set on or off whatever its default.
         "apc-stop": ("APC Volume", "APC", 0.0),
         "apc-nostop": ("APC Volume", "APC", 0.0),
+        "apc-nostop-again": ("APC Volume", "APC", 0.0),
         "segments": ("APC Volume", "Exact (segments)", 0.0),
         "auto": ("APC Volume", "Auto", 0.0),
         "pt": ("Volume", "Projected tetra", None),
@@ -334,7 +339,7 @@ def main(args):
                 name, value = setting.split("=", 1)
                 setattr(display, name, type(getattr(display, name))(value)
                         if not isinstance(getattr(display, name), str) else value)
-            if key in ("apc-stop", "apc-nostop"):
+            if key in ("apc-stop", "apc-nostop", "apc-nostop-again"):
                 display.APCStopWhereOpaque = 1 if key == "apc-stop" else 0
         if not apc:
             display.SelectMapper = mapper

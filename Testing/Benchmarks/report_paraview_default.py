@@ -57,14 +57,17 @@ def main(out, docs):
         "of the range transparent. **APC again**: APC's first frame in a second view of the "
         "same data, run last in the process: its cells are converted again (as after a data "
         "change) but the process already holds memory, so it leaves out what first-touched "
-        "memory costs the process's first APC frame; **sys**: that first frame's system CPU "
+        "memory costs the process's first APC frame; **No stop again**: the same with Stop Where "
+        "Opaque off, run after APC again (parts run before it have none): the stop's first frame "
+        "against the stop-off one, neither the process's first; **sys**: that first frame's system CPU "
         "seconds (mostly memory first touched; this machine is a virtual machine).",
         "",
         "| opacity | ranks | size | camera | APC first s | APC later s | No stop first s | No stop later s "
         "| Auto first s | Auto later s | PT first s | PT later s | APC/PT first | APC/PT later "
         "| No stop/PT first | No stop/PT later | Auto/PT later "
-        "| APC first sys s | APC again first s | APC first/later | APC again/later | load |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| APC first sys s | APC again first s | APC first/later | APC again/later "
+        "| No stop again first s | No stop again/later | load |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
 
     def cell(row, column):
@@ -81,9 +84,9 @@ def main(out, docs):
         return "%.2f" % (float(row[a]) / float(row[b]))
 
     for k in keys:
-        apc, stop, auto, pt, again = (by.get(k + (c,)) for c in (
-            "apc-default", "apc-nostop", "auto", "pt", "apc-again"))
-        load = "/".join(r["load_average"] for r in (apc, stop, auto, pt, again) if r)
+        apc, stop, auto, pt, again, stop_again = (by.get(k + (c,)) for c in (
+            "apc-default", "apc-nostop", "auto", "pt", "apc-again", "apc-nostop-again"))
+        load = "/".join(r["load_average"] for r in (apc, stop, auto, pt, again, stop_again) if r)
         lines.append("| " + " | ".join([
             k[4], k[0], "%s×%s" % (k[1], k[2]), k[3], cell(apc, "first_frame_s"),
             cell(apc, "frame_s"), cell(stop, "first_frame_s"), cell(stop, "frame_s"),
@@ -92,6 +95,7 @@ def main(out, docs):
             ratio(stop, pt, "first_frame_s"), ratio(stop, pt, "frame_s"),
             ratio(auto, pt, "frame_s"), (apc or {}).get("first_frame_sys_s") or "–",
             cell(again, "first_frame_s"), ratio_of(apc, "first_frame_s", "frame_s"), ratio_of(again, "first_frame_s", "frame_s"),
+            cell(stop_again, "first_frame_s"), ratio_of(stop_again, "first_frame_s", "frame_s"),
             load]) + " |")
     missing = [(r, s) for r in ("1", "2", "4") for s in ("1024x1024", "1920x1080")
                if not any(k[0] == r and k[4] == "ramp" and "%sx%s" % (k[1], k[2]) == s

@@ -16,7 +16,8 @@
 #   run-paraview-comparison.sh --default-setup --opacity lower60 [...]
 # runs paraview_vs_apc.py --setup paraview (ParaView's colour map and linear opacity ramp,
 # every APC property at its default) for cases apc-default, apc-nostop (Stop Where Opaque off), auto,
-# pt and apc-again (APC's first frame again, once the process holds memory), cameras fill and
+# pt, apc-again and apc-nostop-again (APC's first frame again, stop on and off, once the process
+# holds memory: only these two first frames compare the stop's first frame fairly), cameras fill and
 # overview, first frame and later frames after small camera moves, once per rank count and
 # image size, into $APC_COMPARE_OUT (default out/benchmark/paraview-default), one CSV per part
 # (np<N>_<W>x<H>.csv; np<N>_<W>x<H>_lower60.csv with --opacity lower60, ParaView's ramp with the
@@ -47,7 +48,8 @@ if [ "${1:-}" = "--default-setup" ]; then
   APC_COMPARE_OUT=${APC_COMPARE_OUT:-$top/out/benchmark/paraview-default}
 fi
 [ -n "${APC_NO_BUILD:-}" ] || bash "$top/.ci/build"
-plugin="$top/build/lib/paraview-5.11/plugins/APC/APC.so"
+# $APC_COMPARE_PLUGIN: another build's plugin (with APC_NO_BUILD=1), e.g. to run two builds in turn.
+plugin="${APC_COMPARE_PLUGIN:-$top/build/lib/paraview-5.11/plugins/APC/APC.so}"
 [ -f "$plugin" ] || { echo "error: $plugin was not built" >&2; exit 1; }
 out=${APC_COMPARE_OUT:-$top/out/benchmark}
 mkdir -p "$out"
@@ -64,7 +66,7 @@ for size in ${sizes:-default}; do
   if [ -n "$default_setup" ]; then
     part="$out/np${n}_$size${opacity:+_$opacity}.csv"
     log="$out/np${n}_$size${opacity:+_$opacity}.log"
-    extra=(--setup paraview ${opacity:+--opacity "$opacity"} --size "${size%x*}" "${size#*x}" --cases apc-default,apc-nostop,auto,pt,apc-again
+    extra=(--setup paraview ${opacity:+--opacity "$opacity"} --size "${size%x*}" "${size#*x}" --cases apc-default,apc-nostop,auto,pt,apc-again,apc-nostop-again
       --frames 3 --no-float-images --only-rendered-array)
   fi
   rm -f "$part"
