@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <type_traits>
 #include <vector>
 
 namespace apc
@@ -30,9 +31,13 @@ T* Hold(std::vector<T>& v, size_t n)
 
 // Room for n values of T at the start of bytes (see Hold), for a buffer the band's sums share
 // in turn (MomentBuffers::WireSend): the values are made there by whoever writes them first.
+// T is an arithmetic type (implicit-lifetime, so writing it creates it), and the vector's
+// storage comes from operator new, aligned for any of them.
 template <class T>
 T* HoldAs(std::vector<unsigned char>& bytes, size_t n)
 {
+  static_assert(std::is_arithmetic<T>::value && alignof(T) <= alignof(std::max_align_t),
+    "a wire value made in place in a byte buffer");
   return reinterpret_cast<T*>(Hold(bytes, n * sizeof(T)));
 }
 
