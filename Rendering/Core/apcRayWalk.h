@@ -292,9 +292,9 @@ struct RayProgress
   {
     return this->Opaque[p] || this->Total[p] + sum < OpaqueBins::kOpaque;
   }
-  // bin: BinOf(k); sample s's quanta q[s * stride].
+  // bin: BinOf(k); sample s's quanta q[s].
   [[gnu::always_inline]] void AddRun(
-    int p, int64_t k, int bin, const uint32_t* q, int stride, uint32_t sum, int last)
+    int p, int64_t k, int bin, const uint32_t* q, uint32_t sum, int last)
   {
     if (last < 0)
     {
@@ -310,10 +310,11 @@ struct RayProgress
     {
       for (int s = 0; s <= last; ++s)
       {
-        for (; k + s >= this->Ends[bin]; ++bin)
+        while (k + s >= this->Ends[bin])
         {
+          ++bin;
         }
-        this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q[s * stride]);
+        this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q[s]);
       }
     }
     this->FarK[p] = std::max(this->FarK[p], k + last);

@@ -112,7 +112,7 @@ struct RecordedSample
 // records are not value-initialised: a zeroed record (a store of bytes, which may alias any
 // object) made the marcher reload its visitor's and the depth warp's fields for every sample.
 // Recorded's size is the room: the tile's records are its first Used, so that a run of
-// samples (Moments::SampleRun) takes room for all of them with one test, and a tile starts
+// samples (Moments::RunBegin) takes room for all of them with one test, and a tile starts
 // without writing the room it reuses.
 struct RecordBuffer
 {

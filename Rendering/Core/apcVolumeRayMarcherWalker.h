@@ -411,7 +411,7 @@ struct VolumeRayMarcher::Walker
             visitor.RunEnd(run, l);
             if (own)
             {
-              progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, 1, sum, last);
+              progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, sum, last);
             }
             samples += s;
             kk += s;

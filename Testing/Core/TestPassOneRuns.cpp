@@ -62,25 +62,24 @@ TEST(PassOneRuns, AddRunIsAddPerVisibleSample)
       const int p = static_cast<int>(u(rng) * kPixels);
       const int n = 1 + static_cast<int>(u(rng) * apc::walk::RayProgress::kMaxRun);
       const int64_t k = bins.Base - 5 + static_cast<int64_t>(u(rng) * (span + 10.0));
-      float absorbance[apc::walk::RayProgress::kMaxRun * 4];
-      uint32_t q[apc::walk::RayProgress::kMaxRun * 4];
+      float absorbance[apc::walk::RayProgress::kMaxRun];
+      uint32_t q[apc::walk::RayProgress::kMaxRun];
       uint32_t sum = 0;
       int last = -1;
       for (int s = 0; s < n; ++s)
       {
-        // Every fourth value, as the lanes' steps hold them.
-        absorbance[4 * s] = RandomAbsorbance(rng);
-        q[4 * s] = bins.Quanta(absorbance[4 * s]);
-        sum += q[4 * s];
-        last = absorbance[4 * s] > 0 ? s : last;
+        absorbance[s] = RandomAbsorbance(rng);
+        q[s] = bins.Quanta(absorbance[s]);
+        sum += q[s];
+        last = absorbance[s] > 0 ? s : last;
       }
       const bool wasOpaque = single->Opaque[p];
       bool opaque = false;
       for (int s = 0; s < n; ++s)
       {
-        if (absorbance[4 * s] > 0)
+        if (absorbance[s] > 0)
         {
-          opaque = single->Add(p, k + s, single->BinOf(k + s), absorbance[4 * s]) || opaque;
+          opaque = single->Add(p, k + s, single->BinOf(k + s), absorbance[s]) || opaque;
         }
       }
       // A run goes at once exactly where no sample of it turns the pixel opaque.
@@ -90,15 +89,15 @@ TEST(PassOneRuns, AddRunIsAddPerVisibleSample)
         ++turningOpaque;
         for (int s = 0; s < n; ++s)
         {
-          if (absorbance[4 * s] > 0)
+          if (absorbance[s] > 0)
           {
-            runs->Add(p, k + s, runs->BinOf(k + s), absorbance[4 * s]);
+            runs->Add(p, k + s, runs->BinOf(k + s), absorbance[s]);
           }
         }
       }
       else
       {
-        runs->AddRun(p, k, runs->BinOf(k), q, 4, sum, last);
+        runs->AddRun(p, k, runs->BinOf(k), q, sum, last);
         ++added;
         crossingBins += last > 0 && runs->BinOf(k) != runs->BinOf(k + last) ? 1 : 0;
         afterOpaque += wasOpaque && last >= 0 ? 1 : 0;
@@ -150,14 +149,14 @@ TEST(PassOneRuns, MomentRunsAreSamplesOneAtATime)
       // Depths on the lattice (the warp's table) and, now and then, off it (jittered rays).
       const int64_t k = 30 + static_cast<int64_t>(u(rng) * 160);
       const double offset = r % 5 == 0 ? u(rng) : 0.0;
-      double depth[32];
-      double scalar[32];
-      float absorbance[32];
+      double depth[8];
+      double scalar[8];
+      float absorbance[8];
       for (int s = 0; s < n; ++s)
       {
-        depth[4 * s] = (static_cast<double>(k + s) + offset) * spacing;
-        scalar[4 * s] = 10.0 * u(rng);
-        absorbance[4 * s] = RandomAbsorbance(rng);
+        depth[s] = (static_cast<double>(k + s) + offset) * spacing;
+        scalar[s] = 10.0 * u(rng);
+        absorbance[s] = RandomAbsorbance(rng);
       }
       // A run begun and dropped (the walker's run in which the pixel turns opaque) leaves
       // nothing behind.
@@ -167,7 +166,7 @@ TEST(PassOneRuns, MomentRunsAreSamplesOneAtATime)
         runs.RunBegin(run, p, n);
         for (int s = 0; s < n; ++s)
         {
-          runs.RunAdd(run, p, k + s, 2.0 * depth[4 * s], scalar[4 * s], 1.0f);
+          runs.RunAdd(run, p, k + s, 2.0 * depth[s], scalar[s], 1.0f);
         }
         ++dropped;
       }
@@ -175,11 +174,11 @@ TEST(PassOneRuns, MomentRunsAreSamplesOneAtATime)
       runs.RunBegin(run, p, n);
       for (int s = 0; s < n; ++s)
       {
-        runs.RunAdd(run, p, k + s, depth[4 * s], scalar[4 * s], absorbance[4 * s]);
-        if (absorbance[4 * s] > 0)
+        runs.RunAdd(run, p, k + s, depth[s], scalar[s], absorbance[s]);
+        if (absorbance[s] > 0)
         {
-          single.Sample(p, k + s, depth[4 * s], scalar[4 * s],
-            apc::TransferSample{ { 0.f, 0.f, 0.f }, absorbance[4 * s] });
+          single.Sample(
+            p, k + s, depth[s], scalar[s], apc::TransferSample{ { 0.f, 0.f, 0.f }, absorbance[s] });
           ++visible;
         }
       }
