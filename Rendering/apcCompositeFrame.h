@@ -178,7 +178,6 @@ struct MomentBuffers
 {
   std::vector<double> Moments;    // the band's moments, then the global ones
   std::vector<double> ColourSums; // the band's colour sums
-  std::vector<double> Packed;     // a chunk of moments packed, before and after the wire
   // The wire's two buffers, send and received, shared by every sum of the band in turn: the
   // moments in fixed point (int32), then the colour sums (float), or both in double
   // (CompositeInDouble). Each sum makes its values in them (bytes: any type may live there), so

@@ -422,6 +422,12 @@ const std::vector<uint16_t>& FrameEngine::GetOpaqueProfile() const
   return this->Ready ? this->Marcher.GetOpaqueProfile() : none;
 }
 
+uint16_t* FrameEngine::GetOpaqueProfileToSum(size_t values)
+{
+  std::vector<uint16_t>& profile = this->Marcher.GetOpaqueProfileToSum();
+  return this->Ready && profile.size() == values ? profile.data() : nullptr;
+}
+
 void FrameEngine::ApplyOpaqueCut(
   const MomentParameters& parameters, const uint16_t* profile, double* moments, const RowBand& band)
 {

@@ -96,8 +96,9 @@ void AllReduceInMessages(const ProcessGroup& group, const CompositeFrame& frame,
 // bytes a pixel), then each pixel's bins up to the earliest own cut alone, none where the
 // totals stay below the threshold (apcOpaqueSummary.h), and with a predicted bound (bound:
 // band pixels, the same on every process) none past it, where every process's profile is
-// zero. The marked tiles of summed get their sums, zero past the bins sent. Every process
-// makes the same calls: a process without volumes sends zeros.
+// zero. The marked tiles of summed get their sums, zero past the bins sent (summed may be
+// mine: each is read before it is written). Every process makes the same calls: a process
+// without volumes sends zeros.
 void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
   const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
   uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
@@ -221,12 +222,31 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
 {
   constexpr int bins = OpaqueBins::kBins;
   const size_t values = pixels * bins;
-  const uint16_t* mine = LocalProfile(frame, values, buffers);
+  // One volume's profile is summed in place (at 1024^2 32 MB a process that a first frame
+  // would page in afresh, and a later one write and read); several volumes' local sum is
+  // read again for the tiles ResolvePredictedCut marches again, so theirs is summed apart.
+  uint16_t* inPlace = group.Parallel && frame.Engines.size() == 1
+    ? frame.Engines.front()->GetOpaqueProfileToSum(values)
+    : nullptr;
+  const uint16_t* mine = inPlace ? inPlace : LocalProfile(frame, values, buffers);
   uint16_t* summed = nullptr;
-  if (group.Parallel)
+  if (inPlace)
+  {
+    summed = inPlace;
+    std::vector<unsigned char> uncovered(covered.size());
+    std::transform(
+      covered.begin(), covered.end(), uncovered.begin(), [](unsigned char c) { return c ? 0 : 1; });
+    // the uncovered tiles have no samples anywhere
+    tiles.ForEachPacked(
+      uncovered, [&](size_t p) { std::fill_n(summed + p * bins, bins, uint16_t(0)); });
+  }
+  else if (group.Parallel)
   {
     summed = Hold(buffers.Profile, values);
     std::fill_n(summed, values, uint16_t(0)); // the uncovered tiles have no samples anywhere
+  }
+  if (summed)
+  {
     SumProfiles(group, frame, tiles, covered, mine, bounded ? buffers.Bound.data() : nullptr,
       summed, buffers, record);
     mine = summed;

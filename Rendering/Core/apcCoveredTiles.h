@@ -43,10 +43,12 @@ public:
   void Unpack(const std::vector<unsigned char>& mask, const Packed* packed, int components,
     Full* full, size_t first = 0, size_t last = static_cast<size_t>(-1)) const;
 
-  // Calls visit(pixel index in the image) for each pixel of the marked tiles, in the order
-  // Pack packs them: for packed buffers whose pixels hold different numbers of values.
+  // Calls visit(pixel index in the image) for each pixel of the marked tiles among tiles
+  // [first, last), in the order Pack packs them: for packed buffers whose pixels hold
+  // different numbers of values, or values made from the image's as they are packed.
   template <class Visit>
-  void ForEachPacked(const std::vector<unsigned char>& mask, Visit visit) const;
+  void ForEachPacked(const std::vector<unsigned char>& mask, Visit visit, size_t first = 0,
+    size_t last = static_cast<size_t>(-1)) const;
 
   // The tiles cut into consecutive ranges [bounds[c], bounds[c + 1]) whose marked tiles hold
   // at most maxPixels pixels (at least one marked tile each): the chunks a large image is
@@ -99,16 +101,17 @@ std::vector<unsigned char> TileGrid::Mark(Predicate pixelIsCovered) const
 }
 
 template <class Visit>
-void TileGrid::ForEachPacked(const std::vector<unsigned char>& mask, Visit visit) const
+void TileGrid::ForEachPacked(
+  const std::vector<unsigned char>& mask, Visit visit, size_t first, size_t last) const
 {
-  for (size_t t = 0; t < mask.size(); ++t)
+  for (size_t t = first; t < mask.size() && t < last; ++t)
   {
     if (mask[t])
     {
       this->ForEachRow(t,
-        [&](size_t first, size_t count)
+        [&](size_t start, size_t count)
         {
-          for (size_t p = first; p < first + count; ++p)
+          for (size_t p = start; p < start + count; ++p)
           {
             visit(p);
           }

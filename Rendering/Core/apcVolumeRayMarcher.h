@@ -109,6 +109,10 @@ public:
   // pixel of the pass's rows (empty without a stop), to be summed (AddProfiles) over every
   // mesh and process into the profile ApplyOpaqueCut takes.
   const std::vector<uint16_t>& GetOpaqueProfile() const { return this->Profile; }
+  // The same, for the processes' profiles to be summed into in place: after pass 1 the marcher
+  // reads it no more (ApplyOpaqueCut is given the profile to cut at; RedoOpaqueTiles rewrites
+  // the tiles it marches), so no second band-sized profile need be paged in.
+  std::vector<uint16_t>& GetOpaqueProfileToSum() { return this->Profile; }
   // Cuts every pixel's samples at the end of the first bin where the summed profile reaches
   // the threshold (CutBin): the moments of this pass 1 (moments: this mesh's alone, as pass 1
   // wrote them) lose the samples past it, and pass 2 takes none of them. Nothing without a
