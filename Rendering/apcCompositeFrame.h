@@ -179,7 +179,8 @@ struct MomentBuffers
   std::vector<double> Moments;    // the band's moments, then the global ones
   std::vector<double> ColourSums; // the band's colour sums
   // The wire's two buffers, send and received, shared by every sum of the band in turn: the
-  // moments in fixed point (int32), then the colour sums (float), or both in double
+  // opaque profiles' bins (uint16, Stop Where Opaque on several processes), the moments in
+  // fixed point (int32), then the colour sums (float), or both in double
   // (CompositeInDouble). Each sum makes its values in them (bytes: any type may live there), so
   // a first frame pages in the largest sum's, not each one's (at 1024^2 the colour sums' 32 MB
   // a process fit in the moments' 40 MB).
@@ -187,9 +188,7 @@ struct MomentBuffers
   std::vector<unsigned char> WireReceived;
   std::vector<unsigned char> Exponents; // each pixel's exponent byte, and the agreed one
   std::vector<unsigned char> Agreed;
-  std::vector<uint16_t> Profile; // the opaque profiles, over the band
-  std::vector<uint16_t> ProfileSend;
-  std::vector<uint16_t> ProfileSum;
+  std::vector<uint16_t> Profile;     // several volumes: the opaque profiles summed, over the band
   std::vector<uint16_t> SummarySend; // without a bound: each covered pixel's OpaqueSummary
   std::vector<uint16_t> SummarySum;
   std::vector<uint16_t> ProfileLocal; // several volumes' profiles summed

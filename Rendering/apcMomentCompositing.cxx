@@ -183,6 +183,18 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
   return bytes;
 }
 
+// The most pixels of the marked tiles one chunk of SumTiles or SumMomentsInFixedPoint holds.
+size_t LargestChunkPixels(const TileGrid& tiles, const std::vector<unsigned char>& mask)
+{
+  const std::vector<size_t> chunks = tiles.Chunks(mask, kChunkPixels);
+  size_t largest = 0;
+  for (size_t c = 0; c + 1 < chunks.size(); ++c)
+  {
+    largest = std::max(largest, tiles.PixelsIn(mask, chunks[c], chunks[c + 1]));
+  }
+  return largest;
+}
+
 // The union of every process's covered tiles, on every process.
 std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGrid& tiles,
   const double* moments, int stride, FrameRecord& record)
@@ -303,6 +315,16 @@ void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   // the moments' allreduce after it is nearly all transfer.
   covered = AgreeOnTiles(group, tiles, moments, stride, record);
   record.Clock.Lap("tiles");
+  if (stops && group.Parallel)
+  {
+    // The profiles are summed in the wire's buffers before the moments are: held at the
+    // moments' size first, a first frame pages them in once instead of growing them (a copy
+    // into fresh memory) from the profiles' smaller size.
+    const size_t bytes = LargestChunkPixels(tiles, covered) * stride *
+      (frame.Settings.CompositeInDouble ? sizeof(double) : sizeof(int32_t));
+    Hold(buffers.WireSend, bytes);
+    Hold(buffers.WireReceived, bytes);
+  }
   if (stops)
   {
     CutWhereOpaque(

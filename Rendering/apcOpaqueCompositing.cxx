@@ -135,8 +135,9 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
     tiles.ForEachPacked(mask, [&](size_t p) { std::fill_n(summed + p * bins, bins, uint16_t(0)); });
     return;
   }
-  uint16_t* send = Hold(buffers.ProfileSend, count);
-  uint16_t* received = Hold(buffers.ProfileSum, count);
+  // The wire's buffers are free until the moments' sum (which held them at its size first).
+  uint16_t* send = wire::HoldAs<uint16_t>(buffers.WireSend, count);
+  uint16_t* received = wire::HoldAs<uint16_t>(buffers.WireReceived, count);
   i = 0;
   size_t at = 0;
   tiles.ForEachPacked(mask,

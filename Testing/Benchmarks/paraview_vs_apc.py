@@ -122,7 +122,8 @@ FIRST_COUNTS = ["bytes_display_rank", "profile_bytes_per_covered_pixel", "pass1_
                 "opaque_unstopped_tiles"]
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s",
-            "first_frame_sys_s", "frame_sys_s", "first_frame_faults", "setup", "opacity",
+            "first_frame_sys_s", "frame_sys_s", "first_frame_faults", "first_frame_peak_mb", "setup",
+            "opacity",
             "camera", "width", "height", "load_average"] +
            [s + "_s" for s in STAGES] + ["tiles_s", "profile_s", "cut_s"] + [s + "_s" for s in SEGMENT_STAGES] +
            [c + p + "_s" for c in COLLECTIVES for p in ("_wait", "_transfer")] +
@@ -355,6 +356,9 @@ def main(args):
         # (on a virtual machine whose host backs fresh memory lazily, at a high price).
         system = []
         faults = []
+        # How far the process's peak resident memory rose in the frame (MB): in the process's
+        # first view nearly all the memory the frame touched afresh, whatever its page size.
+        peak = []
 
         def frame(move=False):
             if move:
@@ -364,11 +368,13 @@ def main(args):
             start_cpu = time.process_time()
             start_sys = os.times().system
             start_faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+            start_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
             Render(view)
             seconds = time.perf_counter() - start
             cpu.append(time.process_time() - start_cpu)
             system.append(os.times().system - start_sys)
             faults.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - start_faults)
+            peak.append((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - start_peak) / 1024.0)
             if apc:
                 timings.append(apcparaview.last_timings(display))
             return seconds
@@ -387,6 +393,7 @@ def main(args):
                    first_frame_sys_s="%.3f" % system[0],
                    frame_sys_s="%.3f" % statistics.median(system[1:]),
                    first_frame_faults="%d" % faults[0],
+                   first_frame_peak_mb="%.0f" % peak[0],
                    camera=distance if default_setup else "", width=args.size[0],
                    height=args.size[1], load_average=open("/proc/loadavg").read().split()[0])
         if apc and not args.no_float_images:
