@@ -176,8 +176,10 @@ struct FrameResult
 // frames.)
 struct MomentBuffers
 {
-  std::vector<double> Moments;    // the band's moments, then the global ones
-  std::vector<double> ColourSums; // the band's colour sums
+  std::vector<double> Moments; // the band's moments, then the global ones
+  // The band's colour sums (double), and before pass 2 one volume's opaque profile (uint16,
+  // VolumeRayMarcher::LendOpaqueProfileMemory: the same 32 bytes a pixel, idle until then).
+  std::vector<unsigned char> ColourSums;
   // The wire's two buffers, send and received, shared by every sum of the band in turn: the
   // opaque profiles' bins (uint16, Stop Where Opaque on several processes), the moments in
   // fixed point (int32), then the colour sums (float), or both in double

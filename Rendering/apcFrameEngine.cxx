@@ -416,16 +416,16 @@ void FrameEngine::SetOpaqueStopActive(bool active)
       : std::numeric_limits<double>::infinity());
 }
 
-const std::vector<uint16_t>& FrameEngine::GetOpaqueProfile() const
+VolumeRayMarcher::OpaqueProfile FrameEngine::GetOpaqueProfile() const
 {
-  static const std::vector<uint16_t> none;
-  return this->Ready ? this->Marcher.GetOpaqueProfile() : none;
+  return this->Ready ? this->Marcher.GetOpaqueProfile() : VolumeRayMarcher::OpaqueProfile{};
 }
 
 uint16_t* FrameEngine::GetOpaqueProfileToSum(size_t values)
 {
-  std::vector<uint16_t>& profile = this->Marcher.GetOpaqueProfileToSum();
-  return this->Ready && profile.size() == values ? profile.data() : nullptr;
+  return this->Ready && this->Marcher.GetOpaqueProfile().size() == values
+    ? this->Marcher.GetOpaqueProfileToSum()
+    : nullptr;
 }
 
 void FrameEngine::ApplyOpaqueCut(

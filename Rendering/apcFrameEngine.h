@@ -165,10 +165,16 @@ public:
   /// volume): pass 1 then keeps tiles marched without the stop where no ray came near it
   /// (VolumeRayMarcher::SetOpaqueStopAlone).
   void SetOpaqueStopAlone(bool alone) { this->Marcher.SetOpaqueStopAlone(alone); }
-  const std::vector<uint16_t>& GetOpaqueProfile() const;
+  VolumeRayMarcher::OpaqueProfile GetOpaqueProfile() const;
   /// The opaque profile of values values to sum the processes' profiles into in place
   /// (VolumeRayMarcher::GetOpaqueProfileToSum), or null if it has not that size.
   uint16_t* GetOpaqueProfileToSum(size_t values);
+  /// Memory for pass 1's opaque profile until withdrawn with null
+  /// (VolumeRayMarcher::LendOpaqueProfileMemory).
+  void LendOpaqueProfileMemory(unsigned char* bytes, size_t size)
+  {
+    this->Marcher.LendOpaqueProfileMemory(bytes, size);
+  }
   /// The cut agreed from the profiles of every volume and process (ApplyOpaqueCut): moments
   /// holds this volume's own pass-1 moments of band, which lose the samples past it.
   void ApplyOpaqueCut(const MomentParameters& parameters, const uint16_t* profile, double* moments,

@@ -13,6 +13,7 @@
 #include "apcCompositeFrame.h"
 #include "apcFixedPointMoments.h"
 #include "apcFrameEngine.h"
+#include "apcOpaqueBins.h"
 #include "apcResolve.h"
 #include "apcWireMessages.h"
 
@@ -342,6 +343,35 @@ void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   record.Clock.Lap("allreduce");
 }
 
+// Lends one volume's pass 1 the colour sums' memory for its opaque profile, and takes it back
+// once the band's cut is made, or when the band is left early: the engine outlives the buffers.
+class ProfileInColourSums
+{
+public:
+  ProfileInColourSums(FrameEngine* engine, std::vector<unsigned char>& colourSums, size_t bytes)
+    : Engine(engine)
+  {
+    if (engine)
+    {
+      engine->LendOpaqueProfileMemory(Hold(colourSums, bytes), bytes);
+    }
+  }
+  ~ProfileInColourSums() { this->Withdraw(); }
+  ProfileInColourSums(const ProfileInColourSums&) = delete;
+  ProfileInColourSums& operator=(const ProfileInColourSums&) = delete;
+  void Withdraw()
+  {
+    if (this->Engine)
+    {
+      this->Engine->LendOpaqueProfileMemory(nullptr, 0);
+      this->Engine = nullptr;
+    }
+  }
+
+private:
+  FrameEngine* Engine;
+};
+
 // One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
 // agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
 // display process resolves the band into result at its rows.
@@ -364,6 +394,13 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   // Without the stop, a pixel whose global absorbance reaches the threshold (less a margin
   // for the wire's rounding) may be one the stop cuts.
   const double opaque = VolumeRayMarcher::kRecommendedOpaqueAbsorbance * (1 - 1e-6);
+  // One volume's pass 1 makes its opaque profile in the colour sums' memory, idle until pass
+  // 2 (after the cut): a first frame pages in one band-sized buffer less (32 MB a process at
+  // 1024^2, the profile's 16 bins of 2 bytes as the colour sums' 4 doubles).
+  const size_t sharedBytes =
+    pixels * std::max(4 * sizeof(double), OpaqueBins::kBins * sizeof(uint16_t));
+  ProfileInColourSums lent(stopping && frame.Engines.size() == 1 ? frame.Engines.front() : nullptr,
+    buffers.ColourSums, sharedBytes);
   for (;;)
   {
     for (FrameEngine* engine : frame.Engines)
@@ -383,6 +420,7 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     stops = true;
     ++record.OpaqueStopRedone;
   }
+  lent.Withdraw(); // the cut is made: the colour sums' now
   record.OpaqueStopSkipped += stopping && !stops ? 1 : 0;
   record.OwnCoveredPixels += ownCovered;
   record.Pixels += static_cast<vtkIdType>(tiles.PixelsIn(covered));
@@ -392,7 +430,7 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     record.OpaquePixels += moments[p * stride] >= opaque ? 1 : 0;
   }
 
-  double* colourSums = Hold(buffers.ColourSums, pixels * 4);
+  double* colourSums = HoldAs<double>(buffers.ColourSums, pixels * 4);
   std::fill_n(colourSums, pixels * 4, 0.0);
   for (FrameEngine* engine : frame.Engines)
   {

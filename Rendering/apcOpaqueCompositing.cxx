@@ -65,7 +65,7 @@ const uint16_t* LocalProfile(const CompositeFrame& frame, size_t values, MomentB
   std::fill_n(profile, values, uint16_t(0));
   for (const FrameEngine* engine : frame.Engines)
   {
-    const std::vector<uint16_t>& volume = engine->GetOpaqueProfile();
+    const VolumeRayMarcher::OpaqueProfile volume = engine->GetOpaqueProfile();
     AddProfiles(profile, volume.data(), std::min(volume.size(), values));
   }
   return profile;

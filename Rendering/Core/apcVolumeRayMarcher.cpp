@@ -139,7 +139,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   }
   else if (walker.Opaque && this->RecordProfile)
   {
-    walker.ProfileOut = this->Profile.data();
+    walker.ProfileOut = this->Profile;
     walker.LastBinOut = this->LastBin.data();
     walker.Bound = this->Bound;
   }
@@ -233,6 +233,18 @@ bool VolumeRayMarcher::KeepUnstoppedTile(
 }
 
 //------------------------------------------------------------------------------
+void VolumeRayMarcher::LendOpaqueProfileMemory(unsigned char* bytes, size_t size)
+{
+  if (this->Profile && this->Profile != this->OwnProfile.data())
+  {
+    this->Profile = nullptr; // in the memory lent before, which its owner takes back
+    this->ProfileValues = 0;
+  }
+  this->LentProfile = bytes;
+  this->LentProfileBytes = bytes ? size : 0;
+}
+
+//------------------------------------------------------------------------------
 void VolumeRayMarcher::RenderExact(const TransferTable& table, float* rgba)
 {
   visitors::Exact visitor(rgba, this->Width());
@@ -262,8 +274,19 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
       static_cast<size_t>(std::max(0, std::min(rows.J1, this->Camera->GetHeight()) - rows.J0))
                                          : 0;
   const size_t profiled = this->Opaque.Active() ? bandPixels : 0;
-  ReserveInHugePages(this->Profile, profiled * OpaqueBins::kBins);
-  this->Profile.assign(profiled * OpaqueBins::kBins, 0);
+  this->ProfileValues = profiled * OpaqueBins::kBins;
+  if (this->LentProfile && this->LentProfileBytes >= this->ProfileValues * sizeof(uint16_t))
+  {
+    // Made there by writing them (uint16_t is implicit-lifetime; operator new aligns for it).
+    this->Profile = reinterpret_cast<uint16_t*>(this->LentProfile);
+  }
+  else
+  {
+    ReserveInHugePages(this->OwnProfile, this->ProfileValues);
+    this->OwnProfile.resize(this->ProfileValues);
+    this->Profile = this->OwnProfile.data();
+  }
+  std::fill_n(this->Profile, this->ProfileValues, uint16_t(0));
   ReserveInHugePages(this->LastBin, profiled);
   this->LastBin.assign(profiled, 0);
   this->Cut.clear();
@@ -394,6 +417,13 @@ void VolumeRayMarcher::RedoOpaqueTiles(const TransferTable& table, const LogDept
     for (int p = 0; p < inBand.Pixels(); ++p)
     {
       std::fill_n(moments + (N + 1) * inBand.ImagePixel(p, width), N + 1, 0.0);
+      // Its profile too: the processes' sum may have been made in it (GetOpaqueProfileToSum),
+      // and a tile without cells is not marched to write its zeros again.
+      if (this->Profile)
+      {
+        std::fill_n(this->Profile + OpaqueBins::kBins * inBand.ImagePixel(p, width),
+          OpaqueBins::kBins, uint16_t(0));
+      }
     }
     if (static_cast<size_t>(t) < cache.Tiles.size())
     {

@@ -105,14 +105,27 @@ public:
   // far below one step of an 8-bit colour (1/255).
   static constexpr double kRecommendedOpaqueAbsorbance = 9.210340371976184;
 
+  // A band's opaque profile where it lies: Count values, OpaqueBins::kBins per pixel.
+  struct OpaqueProfile
+  {
+    uint16_t* Values = nullptr;
+    size_t Count = 0;
+    const uint16_t* data() const { return this->Values; }
+    size_t size() const { return this->Count; }
+  };
   // After pass 1 with a stop: this mesh's profile, OpaqueBins::kBins saturating quanta per
   // pixel of the pass's rows (empty without a stop), to be summed (AddProfiles) over every
   // mesh and process into the profile ApplyOpaqueCut takes.
-  const std::vector<uint16_t>& GetOpaqueProfile() const { return this->Profile; }
+  OpaqueProfile GetOpaqueProfile() const { return { this->Profile, this->ProfileValues }; }
   // The same, for the processes' profiles to be summed into in place: after pass 1 the marcher
-  // reads it no more (ApplyOpaqueCut is given the profile to cut at; RedoOpaqueTiles rewrites
-  // the tiles it marches), so no second band-sized profile need be paged in.
-  std::vector<uint16_t>& GetOpaqueProfileToSum() { return this->Profile; }
+  // reads it no more (ApplyOpaqueCut is given the profile to cut at; RedoOpaqueTiles zeroes and
+  // rewrites the tiles it marches), so no second band-sized profile need be paged in.
+  uint16_t* GetOpaqueProfileToSum() { return this->Profile; }
+  // Lends pass 1 bytes (size of them, from operator new) to make its profile in instead of
+  // the marcher's own memory, if they hold it, until lent again or withdrawn (null; the profile
+  // in them is then forgotten). For a caller whose buffer is idle from pass 1 to the cut, so
+  // that a first frame pages in one buffer less (vtkAPCCompositePass: the colour sums').
+  void LendOpaqueProfileMemory(unsigned char* bytes, size_t size);
   // Cuts every pixel's samples at the end of the first bin where the summed profile reaches
   // the threshold (CutBin): the moments of this pass 1 (moments: this mesh's alone, as pass 1
   // wrote them) lose the samples past it, and pass 2 takes none of them. Nothing without a
@@ -245,7 +258,11 @@ private:
   // The opaque stop's bins of the last pass 1 (inactive without a stop), its own profile
   // and last bin per pixel, and once agreed, each pixel's cut, which pass 2 uses too.
   OpaqueBins Opaque;
-  std::vector<uint16_t> Profile;
+  std::vector<uint16_t> OwnProfile; // the profile's memory unless some is lent
+  unsigned char* LentProfile = nullptr;
+  size_t LentProfileBytes = 0;
+  uint16_t* Profile = nullptr; // the last pass 1's, in OwnProfile or the lent memory
+  size_t ProfileValues = 0;
   std::vector<uint8_t> LastBin;
   std::vector<uint8_t> Cut;
   bool CutSet = false;

@@ -106,7 +106,8 @@ Frame Render(const apc::CellMesh& mesh, const apc::TransferTable& table, bool al
   marcher.AccumulateMoments<4>(table, warp, frame.Moments.data());
   frame.Pass1Samples = marcher.GetLastSampleCount();
   frame.Unstopped = marcher.GetLastUnstoppedTileCount();
-  const std::vector<uint16_t> profile = marcher.GetOpaqueProfile();
+  const apc::VolumeRayMarcher::OpaqueProfile view = marcher.GetOpaqueProfile();
+  const std::vector<uint16_t> profile(view.data(), view.data() + view.size());
   EXPECT_EQ(profile.size(), kPixels * apc::OpaqueBins::kBins);
   marcher.ApplyOpaqueCut<4>(table, warp, profile.data(), frame.Moments.data());
   frame.Pass1Samples += marcher.GetLastCutSampleCount();

@@ -162,7 +162,7 @@ Frame RenderPredicted(const Scene& scene, std::vector<apc::VolumeRayMarcher*> ma
     std::vector<uint16_t> profile(kPixels * bins, 0);
     for (auto* marcher : marchers)
     {
-      const std::vector<uint16_t>& mine = marcher->GetOpaqueProfile();
+      const apc::VolumeRayMarcher::OpaqueProfile mine = marcher->GetOpaqueProfile();
       EXPECT_EQ(mine.size(), profile.size());
       apc::AddProfiles(profile.data(), mine.data(), std::min(mine.size(), profile.size()));
     }
