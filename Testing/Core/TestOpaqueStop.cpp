@@ -599,3 +599,66 @@ TEST(OpaqueStop, APredictedBoundKeepsTheCut)
     }
   }
 }
+
+// On several processes the pass sums the processes' profiles in a mesh's own
+// (GetOpaqueProfileToSum), which pass 1 may make in memory the caller lends: a pixel whose
+// cut a predicted bound left unknown has its tile marched again, and that tile's profile must
+// be this mesh's alone again, zero where the tile has no cells to march.
+TEST(OpaqueStop, TilesMarchedAgainStartTheirProfilesAfresh)
+{
+  constexpr int bins = apc::OpaqueBins::kBins;
+  constexpr int tile = apc::VolumeRayMarcher::kTileSize;
+  const Scene scene;
+  const apc::CellMesh mesh = BlockMesh(0, 64, 3); // a few scattered cells: tiles without any
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+  marcher.SetView(scene.View, nullptr);
+  std::vector<double> moments(kPixels * 5, 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data());
+  const apc::VolumeRayMarcher::OpaqueProfile own = marcher.GetOpaqueProfile();
+  const std::vector<uint16_t> fresh(own.data(), own.data() + own.size());
+  ASSERT_EQ(fresh.size(), kPixels * bins);
+  int emptyTiles = 0;
+  for (int tj = 0; tj < kSize; tj += tile)
+  {
+    for (int ti = 0; ti < kSize; ti += tile)
+    {
+      bool empty = true;
+      for (int j = tj; j < std::min(kSize, tj + tile); ++j)
+      {
+        for (int i = ti; i < std::min(kSize, ti + tile); ++i)
+        {
+          const uint16_t* p = fresh.data() + (static_cast<size_t>(j) * kSize + i) * bins;
+          empty = empty && std::all_of(p, p + bins, [](uint16_t q) { return q == 0; });
+        }
+      }
+      emptyTiles += empty ? 1 : 0;
+    }
+  }
+  ASSERT_GT(emptyTiles, 0) << "the scene should leave a tile without samples";
+  ASSERT_LT(emptyTiles, (kSize / tile) * (kSize / tile)) << "and some with samples";
+
+  // In memory lent by the caller (not zeroed by it): the same profile.
+  std::vector<unsigned char> lent(fresh.size() * sizeof(uint16_t), 0xff);
+  marcher.LendOpaqueProfileMemory(lent.data(), lent.size());
+  std::fill(moments.begin(), moments.end(), 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data());
+  ASSERT_EQ(marcher.GetOpaqueProfile().data(), reinterpret_cast<const uint16_t*>(lent.data()));
+  EXPECT_TRUE(std::equal(fresh.begin(), fresh.end(), marcher.GetOpaqueProfile().data()));
+
+  // The processes' sums written over it, then every tile marched again.
+  std::fill_n(marcher.GetOpaqueProfileToSum(), fresh.size(), uint16_t(1234));
+  std::vector<uint8_t> open(kPixels, 1);
+  marcher.RedoOpaqueTiles<4>(scene.TF, scene.Warp, open.data(), moments.data());
+  EXPECT_TRUE(std::equal(fresh.begin(), fresh.end(), marcher.GetOpaqueProfile().data()))
+    << "a tile marched again kept the sums written in its profile";
+
+  marcher.LendOpaqueProfileMemory(nullptr, 0);
+  EXPECT_EQ(marcher.GetOpaqueProfile().size(), 0u) << "withdrawn, the profile in it is forgotten";
+  std::fill(moments.begin(), moments.end(), 0.0);
+  marcher.AccumulateMoments<4>(scene.TF, scene.Warp, moments.data());
+  EXPECT_TRUE(std::equal(fresh.begin(), fresh.end(), marcher.GetOpaqueProfile().data()))
+    << "and the marcher's own memory used again";
+  EXPECT_NE(marcher.GetOpaqueProfile().data(), reinterpret_cast<const uint16_t*>(lent.data()));
+}
