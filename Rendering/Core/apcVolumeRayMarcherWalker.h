@@ -68,8 +68,8 @@ struct VolumeRayMarcher::Walker
   // predicted cut, the same on every process; kBins - 1 bounds nothing), or null.
   const uint8_t* Bound = nullptr;
   int BandWidth = 0;
-  // Nearly affine cells' samples four rays at a time (LaneSamplesAvx2) where the processor
-  // has AVX2 and the visitor reads only absorbance.
+  // Nearly affine cells' and twisted pyramids' samples four rays at a time (LaneSamplesAvx2)
+  // where the processor has AVX2 and the visitor reads only absorbance.
   bool Lanes = walk::HasAvx2();
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
@@ -199,7 +199,8 @@ struct VolumeRayMarcher::Walker
       }
       if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
       {
-        if (state.Linear && this->SharedOrigin && this->Lanes)
+        if ((state.Linear || state.Interpolator.HasPyramidInverse()) && this->SharedOrigin &&
+          this->Lanes)
         {
           return this->LaneSamples(rays, hits, visitor, state, progress);
         }
@@ -305,7 +306,7 @@ struct VolumeRayMarcher::Walker
     return samples;
   }
 
-  // CellSamples<Sampling::Linear> or <LinearPyramid> with a shared origin, four
+  // CellSamples<Sampling::Linear>, <LinearPyramid> or <Pyramid> with a shared origin, four
   // rays at a time: LaneSamplesAvx2 finds up to kLaneSteps samples of each (lane i holds ray
   // i's k-th sample, so the rays' table look-ups overlap), then each ray's steps go to the
   // visitor (Moments::RunAdd) and the stop's bookkeeping (RayProgress::AddRun) as one run,
@@ -321,6 +322,15 @@ struct VolumeRayMarcher::Walker
     const walk::ClippedRays& c = state.Clipped;
     walk::LaneCell cell;
     cell.Pyramid = state.Interpolator.Shape() == CellShape::Pyramid;
+    // Cell takes a pyramid's linear inverse where it is close enough, else its closed form.
+    cell.Twisted = !state.Linear;
+    if (cell.Twisted)
+    {
+      const auto& g = state.Interpolator.GetPyramidG();
+      cell.G[0] = g[0];
+      cell.G[1] = g[1];
+      cell.G[2] = g[2];
+    }
     const auto& inverse = state.Interpolator.GetLinearInverse();
     for (int i = 0; i < 3; ++i)
     {
