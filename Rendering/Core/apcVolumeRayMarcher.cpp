@@ -133,6 +133,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
     Lattice(table.GetSampleSpacing()),
     this->LinearTolerance > 0 ? this->LinearTolerance * table.GetBinWidth() : 0.0 };
   walker.BandWidth = this->Width();
+  walker.EndWeights = this->SampleEndWeights;
   if (walker.Opaque && this->CutSet)
   {
     walker.Cut = this->Cut.data();
@@ -250,8 +251,11 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   this->TilesOf(rows, first, last);
   cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()), static_cast<size_t>(first),
     static_cast<size_t>(last));
+  // A cached sample holds no end weight: with them, pass 2 marches again.
+  cache.Record = cache.Record && !this->SampleEndWeights;
   const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
-  visitors::Moments<N> visitor(moments, this->Width(), &latticeWarp, &cache);
+  visitors::Moments<N> visitor(
+    moments, this->Width(), &latticeWarp, this->SampleEndWeights ? nullptr : &cache);
   this->OwnMomentsOrder = 0;
   // Hybrid (keepOwn) promises the exact ordered blend of a rank's own samples: every sample
   // is marched. Pass 2 stops where this pass did, or at the cut ApplyOpaqueCut agreed.
@@ -286,7 +290,7 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   this->OpaqueAlone = false;
   this->RecordProfile = false;
   this->OwnMomentsOrder = visitor.Own ? N : 0;
-  cache.Valid = cache.MaxBytes > 0;
+  cache.Valid = cache.MaxBytes > 0 && !this->SampleEndWeights;
   cache.Table = &table;
   cache.WarpNear = warp.Near();
   cache.WarpFar = warp.Far();

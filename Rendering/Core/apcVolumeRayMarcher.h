@@ -80,6 +80,14 @@ public:
   // Set it before a frame's passes: pass 2 replays pass 1's samples.
   void SetLatticeJitter(bool jitter) { this->LatticeJitter = jitter; }
 
+  // Weight the end samples of each (cell, ray) pair so that a pair's samples sum to its exact
+  // length, and sample a pair without a lattice point once at its middle (apcEndWeights.h):
+  // no lattice staircase along grazing silhouettes. Every pass and mode takes the same
+  // weighted samples, on every partition. Pass 1 then keeps no samples for pass 2 (the cache
+  // holds no weights), which marches again. Off by default. Set it before a frame's passes.
+  void SetSampleEndWeights(bool weights) { this->SampleEndWeights = weights; }
+  bool GetSampleEndWeights() const { return this->SampleEndWeights; }
+
   // The MBOIT passes may stop a ray once the absorbance of its samples on this mesh reaches
   // this (the tiles' cells are visited nearest first, so that happens early): a later sample
   // behind all the samples summed so far has a transmittance below exp(-absorbance) whatever
@@ -236,6 +244,7 @@ private:
   double HiddenSampleWeight = kDefaultHiddenSampleWeight;
   int Threads = 0;
   bool LatticeJitter = false;
+  bool SampleEndWeights = false;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
   double LinearTolerance = kDefaultLinearTolerance;
   // The opaque stop's bins of the last pass 1 (inactive without a stop), its own profile

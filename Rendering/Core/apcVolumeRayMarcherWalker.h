@@ -7,6 +7,7 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
+#include "apcEndWeights.h"
 #include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
 #include "apcRayClip.h"
@@ -71,6 +72,10 @@ struct VolumeRayMarcher::Walker
   // Nearly affine cells' samples four rays at a time (LaneSamplesAvx2) where the processor
   // has AVX2 and the visitor reads only absorbance.
   bool Lanes = walk::HasAvx2();
+  // Weight each (cell, ray) pair's end samples so that they sum to its exact length, and give
+  // a pair without a lattice point one sample at its middle (apcEndWeights.h). Such pairs go
+  // through the scalar loop (WeightedRay), not the lanes.
+  bool EndWeights = false;
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
   // in its own coordinates, LinearPyramid), a twisted pyramid's closed-form inverse, or by
@@ -184,12 +189,24 @@ struct VolumeRayMarcher::Walker
     const int width = tile.Width();
     const walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1,
       width };
-    // A visitor of segments sees every ray inside, with a sample or not.
+    // A visitor of segments sees every ray inside, with a sample or not; so do the end
+    // weights, which sample a pair without a lattice point too.
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
+    const bool weighted = this->EndWeights && !allInside;
     walk::ClippedRays& c = state.Clipped;
     const int hits =
       walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
-        state.Near, allInside ? nullptr : &this->Grid, c);
+        state.Near, allInside || weighted ? nullptr : &this->Grid, c);
+    if (weighted)
+    {
+      int64_t samples = 0;
+      for (int h = 0; h < hits; ++h)
+      {
+        const int l = c.Hits[h];
+        samples += this->WeightedRay(l, rays[l], c.Tin[l], c.Tout[l], visitor, state, progress);
+      }
+      return samples;
+    }
     if (!Visitor::WantsSegments && Visitor::WantsSamples && hits > 0)
     {
       this->Prepare(rays[c.Hits[0]], state);
@@ -261,6 +278,49 @@ struct VolumeRayMarcher::Walker
       return this->Samples<Sampling::Pyramid>(local, ray, k, tout, visitor, state, progress);
     }
     return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
+  }
+
+  // Ray's samples with end weights (EndWeights): the ray local inside the cell over
+  // [tin, tout), the pair's interval up to the ray's stop, if any; returns the samples taken.
+  template <class Visitor>
+  int64_t WeightedRay(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
+  {
+    visitor.Segment(local, tin, tout);
+    // The weights are the whole pair's: where ClipRays cut it at the stop, its end is found
+    // again, with ClipRays' own arithmetic (CellPlanes::Clip from [0, min(End, far))).
+    double end = tout;
+    if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
+    {
+      double start = 0;
+      end = std::min(ray.End, this->FarLimit);
+      state.Planes.Clip(ray, start, end);
+    }
+    const walk::EndWeights w = walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
+    this->Prepare(ray, state);
+    const TransferTable::Layout table = this->Table.GetLayout();
+    if (!state.Interpolate)
+    {
+      return this->SampleLoop<Sampling::Constant, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
+    {
+      return this->SampleLoop<Sampling::LinearPyramid, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Linear)
+    {
+      return this->SampleLoop<Sampling::Linear, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Interpolator.HasPyramidInverse())
+    {
+      return this->SampleLoop<Sampling::Pyramid, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    return this->SampleLoop<Sampling::Follow, true>(
+      local, ray, w.First, tout, table, visitor, state, progress, &w);
   }
 
   // Sets the cell's interpolation up once one of its rays (ray) has a sample: lazily, since
@@ -479,10 +539,12 @@ struct VolumeRayMarcher::Walker
     return this->SampleLoop<How>(
       local, ray, k, tout, this->Table.GetLayout(), visitor, state, progress);
   }
-  template <Sampling How, class Visitor>
+  // Weighted: each sample's absorbance times its weights' (apcEndWeights.h; weights->First
+  // is k), before the visitor and the stop see it.
+  template <Sampling How, bool Weighted = false, class Visitor>
   [[gnu::always_inline]] int64_t SampleLoop(int local, const RaySetup& ray, int64_t k, double tout,
-    const TransferTable::Layout& table, Visitor& visitor, CellState& state,
-    RayProgress& progress) const
+    const TransferTable::Layout& table, Visitor& visitor, CellState& state, RayProgress& progress,
+    const walk::EndWeights* weights = nullptr) const
   {
     double p0[3] = { 0, 0, 0 };
     double dp[3] = { 0, 0, 0 };
@@ -514,7 +576,10 @@ struct VolumeRayMarcher::Walker
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
     int bin = own ? progress.BinOf(k) : 0;
     int64_t binEnd = own ? progress.Ends[bin] : 0;
-    for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
+    // A pair without a lattice point: its one sample at the middle.
+    const bool mid = Weighted && weights->Mid;
+    for (double t = mid ? weights->MidT : this->Grid.At(k, ray.Offset); t < tout;
+         ++k, t = this->Grid.At(k, ray.Offset))
     {
       TransferSample s = state.CellSample;
       double scalar = state.CellScalar;
@@ -549,6 +614,11 @@ struct VolumeRayMarcher::Walker
         scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
         s = TransferTable::Lookup(table, scalar);
       }
+      if (Weighted)
+      {
+        s.Absorbance =
+          static_cast<float>(s.Absorbance * (mid ? weights->MidWeight : weights->Of(k)));
+      }
       ++samples;
       if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
       {
@@ -557,6 +627,10 @@ struct VolumeRayMarcher::Walker
         {
           this->OwnStop(local, ray.Offset, k, s.Absorbance, bin, binEnd, tout, progress);
         }
+      }
+      if (mid)
+      {
+        break;
       }
     }
     return samples;
