@@ -185,6 +185,7 @@ struct Moments : NoSegments
   RecordBuffer* Buffer = nullptr;
   bool Recording = false;
   bool KeepOrder = false; // the cache keeps the lattice bits (the opaque cut reads them)
+  bool Weighted = false;  // the samples come with end weights (WeightedSample), kept too
 
   Moments(double* output, int width, const LatticeDepthWarp* warp, SampleCache* cache)
     : Output(output)
@@ -223,6 +224,17 @@ struct Moments : NoSegments
       record.K16 = static_cast<uint16_t>(k);
       ++this->Buffer->Counts[pixel];
     }
+  }
+  // A sample with end weights (apcEndWeights.h): s's absorbance is already weight times the
+  // table's; the cache keeps the weight, so that pass 2 takes the same product.
+  void WeightedSample(
+    int pixel, int64_t k, double t, double scalar, const TransferSample& s, float weight)
+  {
+    if (this->Recording)
+    {
+      this->Buffer->Weigh(weight);
+    }
+    this->Sample(pixel, k, t, scalar, s);
   }
   // A run of one pixel's samples at once (the walker's lanes): RunBegin, RunAdd for each
   // sample in lattice order, visible or not (absorbance 0: it adds nothing), and RunEnd to
@@ -284,7 +296,8 @@ struct Moments : NoSegments
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
         this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Used,
-          this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder);
+          this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder,
+          this->Weighted ? this->Buffer->Weights.data() : nullptr);
       }
       else
       {

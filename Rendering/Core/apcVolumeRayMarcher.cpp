@@ -251,11 +251,9 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   this->TilesOf(rows, first, last);
   cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()), static_cast<size_t>(first),
     static_cast<size_t>(last));
-  // A cached sample holds no end weight: with them, pass 2 marches again.
-  cache.Record = cache.Record && !this->SampleEndWeights;
   const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
-  visitors::Moments<N> visitor(
-    moments, this->Width(), &latticeWarp, this->SampleEndWeights ? nullptr : &cache);
+  visitors::Moments<N> visitor(moments, this->Width(), &latticeWarp, &cache);
+  visitor.Weighted = this->SampleEndWeights; // the cache keeps the weights
   this->OwnMomentsOrder = 0;
   // Hybrid (keepOwn) promises the exact ordered blend of a rank's own samples: every sample
   // is marched. Pass 2 stops where this pass did, or at the cut ApplyOpaqueCut agreed.
@@ -290,7 +288,7 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   this->OpaqueAlone = false;
   this->RecordProfile = false;
   this->OwnMomentsOrder = visitor.Own ? N : 0;
-  cache.Valid = cache.MaxBytes > 0 && !this->SampleEndWeights;
+  cache.Valid = cache.MaxBytes > 0;
   cache.Table = &table;
   cache.WarpNear = warp.Near();
   cache.WarpFar = warp.Far();
@@ -355,6 +353,7 @@ void VolumeRayMarcher::ApplyOpaqueCut(const TransferTable& table, const LogDepth
   {
     const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
     visitors::Moments<N> visitor(moments, width, &latticeWarp, nullptr);
+    visitor.Weighted = this->SampleEndWeights;
     this->March(visitor, table, &skip, rows);
     this->LastCutSamples = this->LastSamples;
   }
@@ -417,6 +416,7 @@ void VolumeRayMarcher::RedoOpaqueTiles(const TransferTable& table, const LogDept
   cache.Record = caching && cache.Arena.Capacity() > 0;
   const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
   visitors::Moments<N> visitor(moments, width, &latticeWarp, caching ? &cache : nullptr);
+  visitor.Weighted = this->SampleEndWeights;
   visitor.KeepOrder = true;
   const uint8_t* bound = this->Bound;
   this->Bound = nullptr;

@@ -83,8 +83,8 @@ public:
   // Weight the end samples of each (cell, ray) pair so that a pair's samples sum to its exact
   // length, and sample a pair without a lattice point once at its middle (apcEndWeights.h):
   // no lattice staircase along grazing silhouettes. Every pass and mode takes the same
-  // weighted samples, on every partition. Pass 1 then keeps no samples for pass 2 (the cache
-  // holds no weights), which marches again. Off by default. Set it before a frame's passes.
+  // weighted samples, on every partition; the sample cache keeps each one's weight for pass 2.
+  // Off by default. Set it before a frame's passes.
   void SetSampleEndWeights(bool weights) { this->SampleEndWeights = weights; }
   bool GetSampleEndWeights() const { return this->SampleEndWeights; }
 

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <limits>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace apc
@@ -43,6 +44,19 @@ struct AbsorbanceOnly : std::false_type
 template <class Visitor>
 struct AbsorbanceOnly<Visitor, std::void_t<decltype(Visitor::SamplesAbsorbanceOnly)>>
   : std::bool_constant<Visitor::SamplesAbsorbanceOnly>
+{
+};
+
+// Visitors that keep each sample's end weight (the sample cache) take weighted samples with
+// WeightedSample; the others see the weighted absorbance in Sample.
+template <class Visitor, class = void>
+struct TakesWeights : std::false_type
+{
+};
+template <class Visitor>
+struct TakesWeights<Visitor,
+  std::void_t<decltype(std::declval<Visitor&>().WeightedSample(
+    0, int64_t(0), 0.0, 0.0, std::declval<const TransferSample&>(), 1.0f))>> : std::true_type
 {
 };
 
@@ -614,15 +628,24 @@ struct VolumeRayMarcher::Walker
         scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
         s = TransferTable::Lookup(table, scalar);
       }
+      // A float weight and a float product: what pass 2 takes again from the cache.
+      float weight = 1;
       if (Weighted)
       {
-        s.Absorbance =
-          static_cast<float>(s.Absorbance * (mid ? weights->MidWeight : weights->Of(k)));
+        weight = static_cast<float>(mid ? weights->MidWeight : weights->Of(k));
+        s.Absorbance *= weight;
       }
       ++samples;
       if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
       {
-        visitor.Sample(local, k, t, scalar, s);
+        if constexpr (Weighted && TakesWeights<Visitor>::value)
+        {
+          visitor.WeightedSample(local, k, t, scalar, s, weight);
+        }
+        else
+        {
+          visitor.Sample(local, k, t, scalar, s);
+        }
         if (own)
         {
           this->OwnStop(local, ray.Offset, k, s.Absorbance, bin, binEnd, tout, progress);

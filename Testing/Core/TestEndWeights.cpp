@@ -164,11 +164,15 @@ struct Depths
   std::vector<double> ExactDepths; // -ln(1 - alpha) of the exact blend per pixel
   std::vector<double> Expected;    // sigma times the length inside
   double SampleAbsorbance = 0;     // of one unweighted sample: sigma times the spacing
+  std::vector<double> Colour;      // pass 2's colour sums (4 per pixel)
+  int64_t Pass2Samples = 0;
+  double CacheShare = 0; // of pass 2's samples replayed from the cache (the last mesh's)
 };
 
 // stop: the opaque stop at a denser slab, with the cut agreed from every mesh's profile
-// (as vtkAPCCompositePass does); the moments are then those left after the cut.
-Depths Render(bool weights, int parts, bool stop = false)
+// (as vtkAPCCompositePass does); the moments are then those left after the cut. cache: pass 2
+// replays pass 1's cached samples (else it marches again).
+Depths Render(bool weights, int parts, bool stop = false, bool cache = true)
 {
   const apc::TransferTable table(
     0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.4, 0.4 }, kSpacing, stop ? 0.03 : 1.0);
@@ -196,6 +200,7 @@ Depths Render(bool weights, int parts, bool stop = false)
     marcher.SetMesh(&mesh);
     marcher.SetView(camera, nullptr);
     marcher.SetSampleEndWeights(weights);
+    marcher.SetMaxSampleCacheBytes(cache ? size_t(1) << 30 : 0);
     if (stop)
     {
       marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
@@ -222,6 +227,14 @@ Depths Render(bool weights, int parts, bool stop = false)
     {
       moments[v] += own[m][v];
     }
+  }
+  out.Colour.assign(pixels * 4, 0.0);
+  for (auto& marcher : marchers)
+  {
+    marcher->AccumulateColour<4>(
+      table, warp, moments.data(), apc::MomentSettings<4>(), out.Colour.data());
+    out.Pass2Samples += marcher->GetLastSampleCount();
+    out.CacheShare = marcher->GetLastColourCacheShare();
   }
   for (size_t p = 0; p < pixels; ++p)
   {
@@ -282,6 +295,28 @@ TEST(EndWeights, TwoMeshesKeepWhatOneKeepsAtTheOpaqueCut)
     }
   }
   EXPECT_GT(cut, 100); // the stop cut rays
+}
+
+TEST(EndWeights, PassTwoReplaysWhatItWouldMarch)
+{
+  // The cache keeps each sample's weight: pass 2 from the cache takes the samples and
+  // weighted absorbances a pass 2 marching again takes, with and without the opaque cut
+  // (which drops cached samples and their weights). The sums differ by the cache's float
+  // depths (about 1e-9 here), by their order and FMA rounding; an unweighted replay would
+  // differ by the weights themselves (up to a half of a sample's opacity).
+  for (bool stop : { false, true })
+  {
+    const Depths replayed = Render(true, 2, stop, true);
+    const Depths marched = Render(true, 2, stop, false);
+    EXPECT_EQ(replayed.CacheShare, 1.0);
+    EXPECT_EQ(marched.CacheShare, 0.0);
+    EXPECT_EQ(replayed.Pass2Samples, marched.Pass2Samples);
+    for (size_t v = 0; v < replayed.Colour.size(); ++v)
+    {
+      EXPECT_NEAR(replayed.Colour[v], marched.Colour[v], 1e-9 + 1e-6 * marched.Colour[v])
+        << "value " << v << (stop ? " with the stop" : "");
+    }
+  }
 }
 
 TEST(EndWeights, WithoutThemTheLatticeMissesUpToASample)
