@@ -47,6 +47,8 @@ struct NoSegments
   // The MBOIT passes leave out what lies behind an opaque ray (VolumeRayMarcher::
   // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
   static constexpr bool StopsWhenOpaque = false;
+  // With end weights (apcEndWeights.h) the walker weights this visitor's samples.
+  static constexpr bool TakesEndWeights = true;
   void Segment(int, double, double) {}
 };
 
@@ -91,9 +93,14 @@ inline bool SampleBefore(const SampleRecord& a, const SampleRecord& b)
 }
 
 // Each pixel's samples of one tile, in arrival order; the base of the visitors that need
-// whole rays in depth order.
+// whole rays in depth order. These take the plain lattice, end weights or not: sort-last
+// segments are runs of consecutive lattice points, and the middle sample of a pair without a
+// lattice point, of a cell on another process, would have to go inside another process's run
+// (end weights without those samples lose the slivers' length inside the mesh too); the exact
+// blend takes what the segments take, so that the segments still equal it on every partition.
 struct PixelSampleLists : NoSegments
 {
+  static constexpr bool TakesEndWeights = false;
   std::vector<std::vector<SampleRecord>> Pixels;
 
   void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
@@ -322,6 +329,7 @@ struct SegmentCounts
 {
   static constexpr bool StopsWhenOpaque = false;
   static constexpr bool WantsSegments = true;
+  static constexpr bool TakesEndWeights = false; // no samples
   static constexpr bool WantsSamples = false;
   static constexpr bool WantsTransparentSamples = false;
   int32_t* Output;

@@ -82,9 +82,10 @@ public:
 
   // Weight the end samples of each (cell, ray) pair so that a pair's samples sum to its exact
   // length, and sample a pair without a lattice point once at its middle (apcEndWeights.h):
-  // no lattice staircase along grazing silhouettes. Every pass and mode takes the same
-  // weighted samples, on every partition; the sample cache keeps each one's weight for pass 2.
-  // Off by default. Set it before a frame's passes.
+  // no lattice staircase along grazing silhouettes. Both MBOIT passes and the opaque stop take
+  // the same weighted samples, on every partition; the sample cache keeps each one's weight
+  // for pass 2. The exact blend and the segments keep the plain lattice
+  // (visitors::PixelSampleLists says why). Off by default. Set it before a frame's passes.
   void SetSampleEndWeights(bool weights) { this->SampleEndWeights = weights; }
   bool GetSampleEndWeights() const { return this->SampleEndWeights; }
 

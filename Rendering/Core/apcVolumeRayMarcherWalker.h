@@ -87,7 +87,8 @@ struct VolumeRayMarcher::Walker
   // has AVX2 and the visitor reads only absorbance.
   bool Lanes = walk::HasAvx2();
   // Weight each (cell, ray) pair's end samples so that they sum to its exact length, and give
-  // a pair without a lattice point one sample at its middle (apcEndWeights.h). Such pairs go
+  // a pair without a lattice point one sample at its middle (apcEndWeights.h), for the
+  // visitors that take them (the MBOIT passes; Visitor::TakesEndWeights). Such pairs go
   // through the scalar loop (WeightedRay), not the lanes.
   bool EndWeights = false;
 
@@ -206,20 +207,23 @@ struct VolumeRayMarcher::Walker
     // A visitor of segments sees every ray inside, with a sample or not; so do the end
     // weights, which sample a pair without a lattice point too.
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
-    const bool weighted = this->EndWeights && !allInside;
+    const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights;
     walk::ClippedRays& c = state.Clipped;
     const int hits =
       walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
         state.Near, allInside || weighted ? nullptr : &this->Grid, c);
-    if (weighted)
+    if constexpr (!allInside)
     {
-      int64_t samples = 0;
-      for (int h = 0; h < hits; ++h)
+      if (weighted)
       {
-        const int l = c.Hits[h];
-        samples += this->WeightedRay(l, rays[l], c.Tin[l], c.Tout[l], visitor, state, progress);
+        int64_t samples = 0;
+        for (int h = 0; h < hits; ++h)
+        {
+          const int l = c.Hits[h];
+          samples += this->WeightedRay(l, rays[l], c.Tin[l], c.Tout[l], visitor, state, progress);
+        }
+        return samples;
       }
-      return samples;
     }
     if (!Visitor::WantsSegments && Visitor::WantsSamples && hits > 0)
     {
