@@ -164,8 +164,9 @@ public:
    * point once at the middle of its piece of ray (apcEndWeights.h): a ray's sampled length no
    * longer jumps by a whole SampleDistance where a boundary face crosses a lattice point, so
    * grazing silhouettes show no lattice staircase. The weights depend only on the cell and
-   * the ray: N processes still render what one renders. Every mode takes the same weighted
-   * samples; pass 2 then marches again instead of replaying cached samples. Off by default.
+   * the ray: N processes still render what one renders. MBOIT (APC) mode only: the EXACT and
+   * segment modes keep the plain lattice, whose sort-last runs need every sample at a lattice
+   * point (docs/sampler.md). Off by default.
    */
   void SetSampleEndWeights(bool weights);
   bool GetSampleEndWeights() const;
