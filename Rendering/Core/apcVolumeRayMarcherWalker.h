@@ -557,8 +557,8 @@ struct VolumeRayMarcher::Walker
     return this->SampleLoop<How>(
       local, ray, k, tout, this->Table.GetLayout(), visitor, state, progress);
   }
-  // Weighted: each sample's absorbance times its weights' (apcEndWeights.h; weights->First
-  // is k), before the visitor and the stop see it.
+  // Weighted: each sample's absorbance times its end weight (apcEndWeights.h; k is
+  // weights->First), before the visitor and the stop see it.
   template <Sampling How, bool Weighted = false, class Visitor>
   [[gnu::always_inline]] int64_t SampleLoop(int local, const RaySetup& ray, int64_t k, double tout,
     const TransferTable::Layout& table, Visitor& visitor, CellState& state, RayProgress& progress,
