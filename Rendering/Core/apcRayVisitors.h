@@ -47,6 +47,8 @@ struct NoSegments
   // The MBOIT passes leave out what lies behind an opaque ray (VolumeRayMarcher::
   // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
   static constexpr bool StopsWhenOpaque = false;
+  // With end weights (apcEndWeights.h) the walker weights this visitor's samples.
+  static constexpr bool TakesEndWeights = true;
   void Segment(int, double, double) {}
 };
 
@@ -91,9 +93,14 @@ inline bool SampleBefore(const SampleRecord& a, const SampleRecord& b)
 }
 
 // Each pixel's samples of one tile, in arrival order; the base of the visitors that need
-// whole rays in depth order.
+// whole rays in depth order. These take the plain lattice, end weights or not: sort-last
+// segments are runs of consecutive lattice points, and the middle sample of a pair without a
+// lattice point, of a cell on another process, would have to go inside another process's run
+// (end weights without those samples lose the slivers' length inside the mesh too); the exact
+// blend takes what the segments take, so that the segments still equal it on every partition.
 struct PixelSampleLists : NoSegments
 {
+  static constexpr bool TakesEndWeights = false;
   std::vector<std::vector<SampleRecord>> Pixels;
 
   void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
@@ -185,6 +192,7 @@ struct Moments : NoSegments
   RecordBuffer* Buffer = nullptr;
   bool Recording = false;
   bool KeepOrder = false; // the cache keeps the lattice bits (the opaque cut reads them)
+  bool Weighted = false;  // the samples come with end weights (WeightedSample), kept too
 
   Moments(double* output, int width, const LatticeDepthWarp* warp, SampleCache* cache)
     : Output(output)
@@ -223,6 +231,17 @@ struct Moments : NoSegments
       record.K16 = static_cast<uint16_t>(k);
       ++this->Buffer->Counts[pixel];
     }
+  }
+  // A sample with end weights (apcEndWeights.h): s's absorbance is already weight times the
+  // table's; the cache keeps the weight, so that pass 2 takes the same product.
+  void WeightedSample(
+    int pixel, int64_t k, double t, double scalar, const TransferSample& s, float weight)
+  {
+    if (this->Recording)
+    {
+      this->Buffer->Weigh(weight);
+    }
+    this->Sample(pixel, k, t, scalar, s);
   }
   // A run of one pixel's samples at once (the walker's lanes): RunBegin, RunAdd for each
   // sample in lattice order, visible or not (absorbance 0: it adds nothing), and RunEnd to
@@ -284,7 +303,8 @@ struct Moments : NoSegments
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
         this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Used,
-          this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder);
+          this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder,
+          this->Weighted ? this->Buffer->Weights.data() : nullptr);
       }
       else
       {
@@ -309,6 +329,7 @@ struct SegmentCounts
 {
   static constexpr bool StopsWhenOpaque = false;
   static constexpr bool WantsSegments = true;
+  static constexpr bool TakesEndWeights = false; // no samples
   static constexpr bool WantsSamples = false;
   static constexpr bool WantsTransparentSamples = false;
   int32_t* Output;

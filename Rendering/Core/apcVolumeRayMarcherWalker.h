@@ -7,6 +7,7 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
+#include "apcEndWeights.h"
 #include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
 #include "apcRayClip.h"
@@ -19,6 +20,7 @@
 #include <cstdint>
 #include <limits>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace apc
@@ -42,6 +44,19 @@ struct AbsorbanceOnly : std::false_type
 template <class Visitor>
 struct AbsorbanceOnly<Visitor, std::void_t<decltype(Visitor::SamplesAbsorbanceOnly)>>
   : std::bool_constant<Visitor::SamplesAbsorbanceOnly>
+{
+};
+
+// Visitors that keep each sample's end weight (the sample cache) take weighted samples with
+// WeightedSample; the others see the weighted absorbance in Sample.
+template <class Visitor, class = void>
+struct TakesWeights : std::false_type
+{
+};
+template <class Visitor>
+struct TakesWeights<Visitor,
+  std::void_t<decltype(std::declval<Visitor&>().WeightedSample(
+    0, int64_t(0), 0.0, 0.0, std::declval<const TransferSample&>(), 1.0f))>> : std::true_type
 {
 };
 
@@ -71,6 +86,11 @@ struct VolumeRayMarcher::Walker
   // Nearly affine cells' and twisted pyramids' samples four rays at a time (LaneSamplesAvx2)
   // where the processor has AVX2 and the visitor reads only absorbance.
   bool Lanes = walk::HasAvx2();
+  // Weight each (cell, ray) pair's end samples so that they sum to its exact length, and give
+  // a pair without a lattice point one sample at its middle (apcEndWeights.h), for the
+  // visitors that take them (the MBOIT passes; Visitor::TakesEndWeights). Such pairs go
+  // through the scalar loop (WeightedRay), not the lanes.
+  bool EndWeights = false;
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
   // in its own coordinates, LinearPyramid), a twisted pyramid's closed-form inverse, or by
@@ -184,12 +204,27 @@ struct VolumeRayMarcher::Walker
     const int width = tile.Width();
     const walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1,
       width };
-    // A visitor of segments sees every ray inside, with a sample or not.
+    // A visitor of segments sees every ray inside, with a sample or not; so do the end
+    // weights, which sample a pair without a lattice point too.
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
+    const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights;
     walk::ClippedRays& c = state.Clipped;
     const int hits =
       walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
-        state.Near, allInside ? nullptr : &this->Grid, c);
+        state.Near, allInside || weighted ? nullptr : &this->Grid, c);
+    if constexpr (!allInside)
+    {
+      if (weighted)
+      {
+        int64_t samples = 0;
+        for (int h = 0; h < hits; ++h)
+        {
+          const int l = c.Hits[h];
+          samples += this->WeightedRay(l, rays[l], c.Tin[l], c.Tout[l], visitor, state, progress);
+        }
+        return samples;
+      }
+    }
     if (!Visitor::WantsSegments && Visitor::WantsSamples && hits > 0)
     {
       this->Prepare(rays[c.Hits[0]], state);
@@ -262,6 +297,49 @@ struct VolumeRayMarcher::Walker
       return this->Samples<Sampling::Pyramid>(local, ray, k, tout, visitor, state, progress);
     }
     return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
+  }
+
+  // Ray's samples with end weights (EndWeights): the ray local inside the cell over
+  // [tin, tout), the pair's interval up to the ray's stop, if any; returns the samples taken.
+  template <class Visitor>
+  int64_t WeightedRay(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
+  {
+    visitor.Segment(local, tin, tout);
+    // The weights are the whole pair's: where ClipRays cut it at the stop, its end is found
+    // again, with ClipRays' own arithmetic (CellPlanes::Clip from [0, min(End, far))).
+    double end = tout;
+    if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
+    {
+      double start = 0;
+      end = std::min(ray.End, this->FarLimit);
+      state.Planes.Clip(ray, start, end);
+    }
+    const walk::EndWeights w = walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
+    this->Prepare(ray, state);
+    const TransferTable::Layout table = this->Table.GetLayout();
+    if (!state.Interpolate)
+    {
+      return this->SampleLoop<Sampling::Constant, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
+    {
+      return this->SampleLoop<Sampling::LinearPyramid, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Linear)
+    {
+      return this->SampleLoop<Sampling::Linear, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Interpolator.HasPyramidInverse())
+    {
+      return this->SampleLoop<Sampling::Pyramid, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    return this->SampleLoop<Sampling::Follow, true>(
+      local, ray, w.First, tout, table, visitor, state, progress, &w);
   }
 
   // Sets the cell's interpolation up once one of its rays (ray) has a sample: lazily, since
@@ -489,10 +567,12 @@ struct VolumeRayMarcher::Walker
     return this->SampleLoop<How>(
       local, ray, k, tout, this->Table.GetLayout(), visitor, state, progress);
   }
-  template <Sampling How, class Visitor>
+  // Weighted: each sample's absorbance times its end weight (apcEndWeights.h; k is
+  // weights->First), before the visitor and the stop see it.
+  template <Sampling How, bool Weighted = false, class Visitor>
   [[gnu::always_inline]] int64_t SampleLoop(int local, const RaySetup& ray, int64_t k, double tout,
-    const TransferTable::Layout& table, Visitor& visitor, CellState& state,
-    RayProgress& progress) const
+    const TransferTable::Layout& table, Visitor& visitor, CellState& state, RayProgress& progress,
+    const walk::EndWeights* weights = nullptr) const
   {
     double p0[3] = { 0, 0, 0 };
     double dp[3] = { 0, 0, 0 };
@@ -524,7 +604,10 @@ struct VolumeRayMarcher::Walker
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
     int bin = own ? progress.BinOf(k) : 0;
     int64_t binEnd = own ? progress.Ends[bin] : 0;
-    for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
+    // A pair without a lattice point: its one sample at the middle.
+    const bool mid = Weighted && weights->Mid;
+    for (double t = mid ? weights->MidT : this->Grid.At(k, ray.Offset); t < tout;
+         ++k, t = this->Grid.At(k, ray.Offset))
     {
       TransferSample s = state.CellSample;
       double scalar = state.CellScalar;
@@ -559,14 +642,32 @@ struct VolumeRayMarcher::Walker
         scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
         s = TransferTable::Lookup(table, scalar);
       }
+      // A float weight and a float product: what pass 2 takes again from the cache.
+      float weight = 1;
+      if (Weighted)
+      {
+        weight = static_cast<float>(mid ? weights->MidWeight : weights->Of(k));
+        s.Absorbance *= weight;
+      }
       ++samples;
       if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
       {
-        visitor.Sample(local, k, t, scalar, s);
+        if constexpr (Weighted && TakesWeights<Visitor>::value)
+        {
+          visitor.WeightedSample(local, k, t, scalar, s, weight);
+        }
+        else
+        {
+          visitor.Sample(local, k, t, scalar, s);
+        }
         if (own)
         {
           this->OwnStop(local, ray.Offset, k, s.Absorbance, bin, binEnd, tout, progress);
         }
+      }
+      if (mid)
+      {
+        break;
       }
     }
     return samples;
