@@ -42,7 +42,8 @@ struct EndWeights
 };
 
 // The weights of the pair [tin, tout) (tin < tout) of a ray with this lattice offset.
-inline EndWeights EndWeightsOf(const Lattice& lattice, double tin, double tout, double offset)
+[[gnu::always_inline]] inline EndWeights EndWeightsOf(
+  const Lattice& lattice, double tin, double tout, double offset)
 {
   EndWeights w;
   w.First = lattice.First(tin, offset);

@@ -215,7 +215,8 @@ struct Moments : NoSegments
   // The walker passes only visible samples (absorbance > 0; StopsWhenOpaque visitors take
   // no transparent ones), a table's absorbance is finite and the warp's depth lies in
   // [-1, 1]: AccumulatePowerMoments' checks would change nothing.
-  void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
+  [[gnu::always_inline]] void Sample(
+    int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
     const double z = (*this->Warp)(k, t);
     AccumulateCheckedPowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
@@ -234,7 +235,7 @@ struct Moments : NoSegments
   }
   // A sample with end weights (apcEndWeights.h): s's absorbance is already weight times the
   // table's; the cache keeps the weight, so that pass 2 takes the same product.
-  void WeightedSample(
+  [[gnu::always_inline]] void WeightedSample(
     int pixel, int64_t k, double t, double scalar, const TransferSample& s, float weight)
   {
     if (this->Recording)
@@ -254,10 +255,11 @@ struct Moments : NoSegments
   {
     double B[N + 1];
     RecordedSample* Record;
+    float* Weight; // with end weights (RunAddWeighted), each record's weight
     uint32_t Kept;
   };
-  // A run of at most n samples of pixel.
-  [[gnu::always_inline]] void RunBegin(Run& run, int pixel, int n)
+  // A run of at most n samples of pixel; weighted: of end-weighted samples (RunAddWeighted).
+  [[gnu::always_inline]] void RunBegin(Run& run, int pixel, int n, bool weighted = false)
   {
     const double* sums = this->Sums.data() + pixel * (N + 1);
     for (int m = 0; m <= N; ++m)
@@ -265,7 +267,29 @@ struct Moments : NoSegments
       run.B[m] = sums[m];
     }
     run.Record = this->Recording ? this->Buffer->Room(static_cast<size_t>(n)) : nullptr;
+    run.Weight = nullptr;
+    if (weighted && run.Record)
+    {
+      // The weights' room follows the records' (RecordBuffer::Weigh).
+      RecordBuffer& buffer = *this->Buffer;
+      if (buffer.Weights.size() < buffer.Recorded.size())
+      {
+        buffer.Weights.resize(buffer.Recorded.size());
+      }
+      run.Weight = buffer.Weights.data() + buffer.Used;
+    }
     run.Kept = 0;
+  }
+  // RunAdd of a sample with end weights (as WeightedSample): absorbance is already weight
+  // times the table's; the record's weight is kept.
+  [[gnu::always_inline]] void RunAddWeighted(
+    Run& run, int pixel, int64_t k, double t, double scalar, float absorbance, float weight) const
+  {
+    if (run.Weight)
+    {
+      run.Weight[run.Kept] = weight;
+    }
+    this->RunAdd(run, pixel, k, t, scalar, absorbance);
   }
   [[gnu::always_inline]] void RunAdd(
     Run& run, int pixel, int64_t k, double t, double scalar, float absorbance) const

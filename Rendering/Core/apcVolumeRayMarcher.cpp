@@ -134,6 +134,7 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
     this->LinearTolerance > 0 ? this->LinearTolerance * table.GetBinWidth() : 0.0 };
   walker.BandWidth = this->Width();
   walker.EndWeights = this->SampleEndWeights;
+  walker.Lanes = walker.Lanes && this->SampleLanes;
   if (walker.Opaque && this->CutSet)
   {
     walker.Cut = this->Cut.data();

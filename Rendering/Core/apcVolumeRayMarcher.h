@@ -89,6 +89,12 @@ public:
   void SetSampleEndWeights(bool weights) { this->SampleEndWeights = weights; }
   bool GetSampleEndWeights() const { return this->SampleEndWeights; }
 
+  // Take nearly affine cells' and twisted pyramids' samples four rays at a time where the
+  // processor has AVX2 (on by default); off, every pair goes through the scalar loop, with
+  // the same samples (tests compare the two).
+  void SetSampleLanes(bool lanes) { this->SampleLanes = lanes; }
+  bool GetSampleLanes() const { return this->SampleLanes; }
+
   // The MBOIT passes may stop a ray once the absorbance of its samples on this mesh reaches
   // this (the tiles' cells are visited nearest first, so that happens early): a later sample
   // behind all the samples summed so far has a transmittance below exp(-absorbance) whatever
@@ -246,6 +252,7 @@ private:
   int Threads = 0;
   bool LatticeJitter = false;
   bool SampleEndWeights = false;
+  bool SampleLanes = true;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
   double LinearTolerance = kDefaultLinearTolerance;
   // The opaque stop's bins of the last pass 1 (inactive without a stop), its own profile

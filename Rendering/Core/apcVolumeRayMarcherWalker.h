@@ -88,8 +88,10 @@ struct VolumeRayMarcher::Walker
   bool Lanes = walk::HasAvx2();
   // Weight each (cell, ray) pair's end samples so that they sum to its exact length, and give
   // a pair without a lattice point one sample at its middle (apcEndWeights.h), for the
-  // visitors that take them (the MBOIT passes; Visitor::TakesEndWeights). Such pairs go
-  // through the scalar loop (WeightedRay), not the lanes.
+  // visitors that take them (the MBOIT passes; Visitor::TakesEndWeights). The lanes take
+  // such pairs too (their hand-over weights a run's first and last step); a pair without a
+  // lattice point, and every pair of a cell the lanes do not take, goes through the scalar
+  // loop (WeightedRay).
   bool EndWeights = false;
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
@@ -132,6 +134,10 @@ struct VolumeRayMarcher::Walker
     double LinearOrigin[3] = { 0, 0, 0 };
     // The tile's rays clipped against the cell.
     walk::ClippedRays Clipped;
+    // With end weights in the lanes: the weights of the pairs with a lattice point, and their
+    // rays (kept from cell to cell, so that their room is not allocated per cell).
+    std::vector<walk::EndWeights> Weights;
+    std::vector<uint16_t> Weighted;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -216,6 +222,17 @@ struct VolumeRayMarcher::Walker
     {
       if (weighted)
       {
+        if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
+        {
+          if (hits > 0 && this->SharedOrigin && this->Lanes)
+          {
+            this->Prepare(rays[c.Hits[0]], state);
+            if (state.Interpolate && (state.Linear || state.Interpolator.HasPyramidInverse()))
+            {
+              return this->LaneSamples<true>(rays, hits, visitor, state, progress);
+            }
+          }
+        }
         int64_t samples = 0;
         for (int h = 0; h < hits; ++h)
         {
@@ -237,7 +254,7 @@ struct VolumeRayMarcher::Walker
         if ((state.Linear || state.Interpolator.HasPyramidInverse()) && this->SharedOrigin &&
           this->Lanes)
         {
-          return this->LaneSamples(rays, hits, visitor, state, progress);
+          return this->LaneSamples<false>(rays, hits, visitor, state, progress);
         }
       }
       if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
@@ -306,6 +323,15 @@ struct VolumeRayMarcher::Walker
     CellState& state, RayProgress& progress) const
   {
     visitor.Segment(local, tin, tout);
+    const walk::EndWeights w = this->PairWeights<Visitor>(local, ray, tin, tout, state, progress);
+    return this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
+  }
+
+  // The end weights of the pair of ray local over [tin, tout) (tout: up to the ray's stop).
+  template <class Visitor>
+  [[gnu::always_inline]] walk::EndWeights PairWeights(int local, const RaySetup& ray, double tin,
+    double tout, CellState& state, const RayProgress& progress) const
+  {
     // The weights are the whole pair's: where ClipRays cut it at the stop, its end is found
     // again, with ClipRays' own arithmetic (CellPlanes::Clip from [0, min(End, far))).
     double end = tout;
@@ -315,7 +341,14 @@ struct VolumeRayMarcher::Walker
       end = std::min(ray.End, this->FarLimit);
       state.Planes.Clip(ray, start, end);
     }
-    const walk::EndWeights w = walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
+    return walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
+  }
+
+  // WeightedRay's samples once the pair's weights w are known.
+  template <class Visitor>
+  int64_t WeightedSamples(int local, const RaySetup& ray, double tout, const walk::EndWeights& w,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
     this->Prepare(ray, state);
     const TransferTable::Layout table = this->Table.GetLayout();
     if (!state.Interpolate)
@@ -392,8 +425,15 @@ struct VolumeRayMarcher::Walker
   // the pixel turns opaque goes sample by sample as in the scalar loop, and leaves the rest of
   // its steps untaken, as that loop's lowered tout does. Each pixel sees the same samples in
   // the same order, with the same sums, records and profile, as from the scalar loop.
+  // Weighted (end weights): each pair's weights are found first; a pair without a lattice
+  // point takes its middle sample in the scalar loop (WeightedSamples) at once, the others go
+  // to the lanes from their first index, and the hand-over multiplies each step's absorbance
+  // by its weight (1 but at the pair's first and last index) as the scalar loop does, before
+  // the visitor and the stop see it: the same weighted samples, sums, records, weights and
+  // cut as WeightedRay's. A pixel holds one pair of a cell, so taking the middle samples
+  // first changes no pixel's order.
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
-  template <class Visitor>
+  template <bool Weighted, class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, int hits,
     Visitor& visitor, CellState& state, RayProgress& progress) const
   {
@@ -433,24 +473,63 @@ struct VolumeRayMarcher::Walker
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     int64_t samples = 0;
-    for (int h = 0; h < hits; h += 4)
+    // The rays the lanes take (with their weights, Weighted), in the rectangle's order.
+    const uint16_t* list = c.Hits;
+    int count = hits;
+    if constexpr (Weighted)
     {
-      const int n = std::min(4, hits - h);
+      if (state.Weights.size() < static_cast<size_t>(hits))
+      {
+        state.Weights.resize(walk::kTilePixels);
+        state.Weighted.resize(walk::kTilePixels);
+      }
+      count = 0;
+      for (int h = 0; h < hits; ++h)
+      {
+        const int l = c.Hits[h];
+        visitor.Segment(l, c.Tin[l], c.Tout[l]);
+        const walk::EndWeights w =
+          this->PairWeights<Visitor>(l, rays[l], c.Tin[l], c.Tout[l], state, progress);
+        if (w.Mid)
+        {
+          samples += this->WeightedSamples(l, rays[l], c.Tout[l], w, visitor, state, progress);
+          continue;
+        }
+        state.Weights[count] = w;
+        state.Weighted[count] = static_cast<uint16_t>(l);
+        ++count;
+      }
+      list = state.Weighted.data();
+    }
+    for (int h = 0; h < count; h += 4)
+    {
+      const int n = std::min(4, count - h);
       int local[4] = { 0, 0, 0, 0 };
       int64_t k[4] = { 0, 0, 0, 0 };
+      const walk::EndWeights* weights[4] = { nullptr, nullptr, nullptr, nullptr };
       for (int i = 0; i < 4; ++i)
       {
-        const int l = c.Hits[h + (i < n ? i : 0)];
+        const int at = h + (i < n ? i : 0);
+        const int l = list[at];
         local[i] = l;
-        k[i] = static_cast<int64_t>(c.Lattice[l]);
-        lanes.K[i] = c.Lattice[l];
+        if constexpr (Weighted)
+        {
+          weights[i] = &state.Weights[at];
+          k[i] = weights[i]->First;
+          lanes.K[i] = static_cast<double>(k[i]);
+        }
+        else
+        {
+          k[i] = static_cast<int64_t>(c.Lattice[l]);
+          lanes.K[i] = c.Lattice[l];
+        }
         lanes.Offset[i] = rays[l].Offset;
         lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
         for (int d = 0; d < 3; ++d)
         {
           lanes.D[d][i] = rays[l].D[d];
         }
-        if (i < n)
+        if (!Weighted && i < n)
         {
           visitor.Segment(l, c.Tin[l], c.Tout[l]);
         }
@@ -469,7 +548,7 @@ struct VolumeRayMarcher::Walker
           // pixel turns opaque is dropped and taken again sample by sample below, so that
           // the samples past the stop are not taken.
           typename Visitor::Run run;
-          visitor.RunBegin(run, l, taken);
+          visitor.RunBegin(run, l, taken, Weighted);
           uint32_t q[RayProgress::kMaxRun];
           uint32_t sum = 0;
           int last = -1;
@@ -481,11 +560,25 @@ struct VolumeRayMarcher::Walker
             {
               break;
             }
-            const float absorbance = steps.Absorbance[s][i];
+            float absorbance = steps.Absorbance[s][i];
+            // A float weight and a float product, as in the scalar loop.
+            float weight = 1;
+            if constexpr (Weighted)
+            {
+              weight = static_cast<float>(weights[i]->Of(kk + s));
+              absorbance *= weight;
+            }
             q[s] = 0;
             if (absorbance > 0)
             {
-              visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
+              if constexpr (Weighted)
+              {
+                visitor.RunAddWeighted(run, l, kk + s, t, steps.Scalar[s][i], absorbance, weight);
+              }
+              else
+              {
+                visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
+              }
               if (own)
               {
                 q[s] = progress.Bins->Quanta(absorbance);
@@ -516,11 +609,24 @@ struct VolumeRayMarcher::Walker
                 break;
               }
               ++samples;
-              const float absorbance = steps.Absorbance[s][i];
+              float absorbance = steps.Absorbance[s][i];
+              float weight = 1;
+              if constexpr (Weighted)
+              {
+                weight = static_cast<float>(weights[i]->Of(kk));
+                absorbance *= weight;
+              }
               if (absorbance > 0)
               {
                 const TransferSample sample{ { 0.f, 0.f, 0.f }, absorbance };
-                visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
+                if constexpr (Weighted && TakesWeights<Visitor>::value)
+                {
+                  visitor.WeightedSample(l, kk, t, steps.Scalar[s][i], sample, weight);
+                }
+                else
+                {
+                  visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
+                }
                 this->OwnStop(l, rays[l].Offset, kk, absorbance, bin, binEnd, tout, progress);
               }
             }

@@ -336,4 +336,157 @@ TEST(EndWeights, WithoutThemTheLatticeMissesUpToASample)
   EXPECT_GT(worst, 0.5 * d.SampleAbsorbance);
 }
 
+// A distorted block of hexahedra and, in every other cell, six pyramids about the cell's
+// centre (their bases the hexahedron's faces, some twisted), random point scalars.
+apc::CellMesh DistortedBlock(std::mt19937& rng)
+{
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> value(0.0, 1.0);
+  apc::CellMesh mesh;
+  for (int k = 0; k <= kNz; ++k)
+  {
+    for (int j = 0; j <= kNy; ++j)
+    {
+      for (int i = 0; i <= kNx; ++i)
+      {
+        mesh.Points.push_back({ kLo[0] + i * kH + 0.15 * kH * u(rng),
+          kLo[1] + j * kH + 0.15 * kH * u(rng), kLo[2] + k * kH + 0.15 * kH * u(rng) });
+        mesh.PointScalars.push_back(static_cast<float>(value(rng)));
+      }
+    }
+  }
+  auto id = [](int i, int j, int k)
+  { return static_cast<int64_t>((k * (kNy + 1) + j) * (kNx + 1) + i); };
+  constexpr int kFaces[6][4] = { { 0, 1, 2, 3 }, { 4, 5, 6, 7 }, { 0, 1, 5, 4 }, { 1, 2, 6, 5 },
+    { 2, 3, 7, 6 }, { 3, 0, 4, 7 } };
+  for (int k = 0; k < kNz; ++k)
+  {
+    for (int j = 0; j < kNy; ++j)
+    {
+      for (int i = 0; i < kNx; ++i)
+      {
+        const int64_t ids[8] = { id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k),
+          id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1) };
+        if ((i + j + k) % 2 == 0)
+        {
+          mesh.AddCell(apc::CellShape::Hexahedron, ids);
+          continue;
+        }
+        std::array<double, 3> centre = { 0, 0, 0 };
+        for (int64_t p : ids)
+        {
+          for (int d = 0; d < 3; ++d)
+          {
+            centre[d] += mesh.Points[p][d] / 8;
+          }
+        }
+        const int64_t apex = static_cast<int64_t>(mesh.Points.size());
+        mesh.Points.push_back(centre);
+        mesh.PointScalars.push_back(static_cast<float>(value(rng)));
+        for (const auto& face : kFaces)
+        {
+          // The base's normal (right-handed) towards the apex, as VTK's pyramid has it.
+          const auto& p0 = mesh.Points[ids[face[0]]];
+          const auto& p1 = mesh.Points[ids[face[1]]];
+          const auto& p3 = mesh.Points[ids[face[3]]];
+          const double a[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+          const double b[3] = { p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2] };
+          const double n[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0] };
+          const double towards =
+            n[0] * (centre[0] - p0[0]) + n[1] * (centre[1] - p0[1]) + n[2] * (centre[2] - p0[2]);
+          int64_t pyramid[5];
+          for (int c = 0; c < 4; ++c)
+          {
+            pyramid[c] = ids[face[towards > 0 ? c : 3 - c]];
+          }
+          pyramid[4] = apex;
+          mesh.AddCell(apc::CellShape::Pyramid, pyramid);
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(mesh.Finalize());
+  return mesh;
+}
+
+struct Frame
+{
+  std::vector<double> Moments; // pass 1's, after the cut with the stop
+  std::vector<uint16_t> Profile;
+  std::vector<double> Colour; // pass 2 from the cache
+  int64_t Pass1Samples = 0;
+  int64_t Pass2Samples = 0;
+};
+
+Frame RenderBlock(const apc::CellMesh& mesh, bool lanes, bool weights, bool stop)
+{
+  const apc::TransferTable table(0.0, 1.0,
+    { { 1.f, 0.f, 0.f }, { 0.f, 1.f, 0.f }, { 0.f, 0.f, 1.f }, { 1.f, 1.f, 0.f } },
+    { 0.05, 0.6, 0.0, 0.9 }, kSpacing, stop ? 0.02 : 1.0);
+  const apc::RayCamera camera = Camera();
+  const apc::LogDepthWarp warp(2.0, 7.0);
+  const size_t pixels = static_cast<size_t>(kSize) * kSize;
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  marcher.SetView(camera, nullptr);
+  marcher.SetSampleEndWeights(weights);
+  marcher.SetSampleLanes(lanes);
+  marcher.SetMaxSampleCacheBytes(size_t(1) << 30);
+  if (stop)
+  {
+    marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+  }
+  Frame out;
+  out.Moments.assign(pixels * 5, 0.0);
+  marcher.AccumulateMoments<4>(table, warp, out.Moments.data());
+  out.Pass1Samples = marcher.GetLastSampleCount();
+  if (stop)
+  {
+    out.Profile = marcher.GetOpaqueProfile();
+    std::vector<double> own = out.Moments;
+    marcher.ApplyOpaqueCut<4>(table, warp, out.Profile.data(), own.data());
+    out.Moments = own;
+  }
+  out.Colour.assign(pixels * 4, 0.0);
+  marcher.AccumulateColour<4>(
+    table, warp, out.Moments.data(), apc::MomentSettings<4>(), out.Colour.data());
+  out.Pass2Samples = marcher.GetLastSampleCount();
+  EXPECT_EQ(marcher.GetLastColourCacheShare(), 1.0);
+  return out;
+}
+
+TEST(EndWeights, LanesTakeTheScalarLoopsWeightedSamples)
+{
+  // The lanes' hand-over weights each pair's first and last step and sends pairs without a
+  // lattice point to the scalar loop: pass 1's moments, the opaque profile and cut, and
+  // pass 2 from the cache (its records and weights) equal the scalar loop's bit for bit.
+  std::mt19937 rng(11);
+  for (int mesh = 0; mesh < 3; ++mesh)
+  {
+    const apc::CellMesh block = DistortedBlock(rng);
+    for (bool stop : { false, true })
+    {
+      const Frame lanes = RenderBlock(block, true, true, stop);
+      const Frame scalar = RenderBlock(block, false, true, stop);
+      const Frame plain = RenderBlock(block, true, false, stop);
+      EXPECT_GT(lanes.Pass1Samples, plain.Pass1Samples); // middle samples were taken
+      EXPECT_EQ(lanes.Pass1Samples, scalar.Pass1Samples);
+      EXPECT_EQ(lanes.Pass2Samples, scalar.Pass2Samples);
+      EXPECT_TRUE(lanes.Profile == scalar.Profile);
+      int differ = 0;
+      for (size_t v = 0; v < lanes.Moments.size(); ++v)
+      {
+        differ += lanes.Moments[v] != scalar.Moments[v] ? 1 : 0;
+      }
+      for (size_t v = 0; v < lanes.Colour.size(); ++v)
+      {
+        differ += lanes.Colour[v] != scalar.Colour[v] ? 1 : 0;
+      }
+      EXPECT_EQ(differ, 0) << "mesh " << mesh << (stop ? " with the stop" : "");
+      EXPECT_GT(lanes.Moments[5 * (kSize * kSize / 2 + kSize / 2)], 0.0);
+    }
+  }
+}
+
 } // namespace
