@@ -168,9 +168,8 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
   int s = 0;
   for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
   {
-    // Lattice::At, or the given first depth.
-    const __m256d t = s == 0 && cell.FirstDepths ? _mm256_load_pd(rays.T0)
-                                                 : _mm256_mul_pd(_mm256_add_pd(k, offset), spacing);
+    // Lattice::At.
+    const __m256d t = _mm256_mul_pd(_mm256_add_pd(k, offset), spacing);
     if (_mm256_movemask_pd(_mm256_cmp_pd(t, tout, _CMP_LT_OQ)) == 0)
     {
       break;

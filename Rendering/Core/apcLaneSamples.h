@@ -32,21 +32,15 @@ struct LaneCell
   // Pass 1's own stop: the first kBinEnds bin ends (RayProgress::BinEnds, exact as doubles),
   // or null (no bins to find).
   const double* BinEnds = nullptr;
-  // Each lane's first step at LaneRays::T0 instead of Lattice::At(K) (the end weights' middle
-  // sample of a pair without a lattice point, apcEndWeights.h).
-  bool FirstDepths = false;
 };
 
 // The bin ends a lane compares with (the last bin reaches to the end of every ray).
 constexpr int kBinEnds = 15;
 
 // Four rays, one per lane: each one's next lattice index (an integer, as a double), its
-// lattice offset, the end of its interval (-inf for an unused lane) and its direction; with
-// LaneCell::FirstDepths, the depth of each one's first step (Lattice::At(K) but for a middle
-// sample; the later steps are K + 1, K + 2, ...).
+// lattice offset, the end of its interval (-inf for an unused lane) and its direction.
 struct LaneRays
 {
-  alignas(32) double T0[4];
   alignas(32) double K[4];
   alignas(32) double Offset[4];
   alignas(32) double Tout[4];

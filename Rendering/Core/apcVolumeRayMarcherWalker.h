@@ -89,8 +89,8 @@ struct VolumeRayMarcher::Walker
   // Weight each (cell, ray) pair's end samples so that they sum to its exact length, and give
   // a pair without a lattice point one sample at its middle (apcEndWeights.h), for the
   // visitors that take them (the MBOIT passes; Visitor::TakesEndWeights). The lanes take
-  // such pairs too (their hand-over weights a run's first and last step, a middle sample is
-  // a lane's first step); the pairs of cells the lanes do not take go through the scalar
+  // such pairs too (their hand-over weights a run's first and last step); a pair without a
+  // lattice point, and every pair of a cell the lanes do not take, goes through the scalar
   // loop (WeightedRay).
   bool EndWeights = false;
 
@@ -134,9 +134,10 @@ struct VolumeRayMarcher::Walker
     double LinearOrigin[3] = { 0, 0, 0 };
     // The tile's rays clipped against the cell.
     walk::ClippedRays Clipped;
-    // With end weights in the lanes: each kept ray's pair's weights, in ClippedRays::Hits'
-    // order (kept from cell to cell, so that their room is not allocated per cell).
+    // With end weights in the lanes: the weights of the pairs with a lattice point, and their
+    // rays (kept from cell to cell, so that their room is not allocated per cell).
     std::vector<walk::EndWeights> Weights;
+    std::vector<uint16_t> Weighted;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -424,12 +425,13 @@ struct VolumeRayMarcher::Walker
   // the pixel turns opaque goes sample by sample as in the scalar loop, and leaves the rest of
   // its steps untaken, as that loop's lowered tout does. Each pixel sees the same samples in
   // the same order, with the same sums, records and profile, as from the scalar loop.
-  // Weighted (end weights): each pair's weights are found first; each pair goes to the lanes
-  // from its first index, a pair without a lattice point with its middle sample as its first
-  // step (LaneCell::FirstDepths), and the hand-over multiplies each step's absorbance by its
-  // weight (1 but at the pair's first and last index) as the scalar loop does, before the
-  // visitor and the stop see it: the same weighted samples, sums, records, weights and cut as
-  // WeightedRay's.
+  // Weighted (end weights): each pair's weights are found first; a pair without a lattice
+  // point takes its middle sample in the scalar loop (WeightedSamples) at once, the others go
+  // to the lanes from their first index, and the hand-over multiplies each step's absorbance
+  // by its weight (1 but at the pair's first and last index) as the scalar loop does, before
+  // the visitor and the stop see it: the same weighted samples, sums, records, weights and
+  // cut as WeightedRay's. A pixel holds one pair of a cell, so taking the middle samples
+  // first changes no pixel's order.
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
   template <bool Weighted, class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, int hits,
@@ -471,53 +473,50 @@ struct VolumeRayMarcher::Walker
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     int64_t samples = 0;
+    // The rays the lanes take (with their weights, Weighted), in the rectangle's order.
+    const uint16_t* list = c.Hits;
+    int count = hits;
     if constexpr (Weighted)
     {
       if (state.Weights.size() < static_cast<size_t>(hits))
       {
         state.Weights.resize(walk::kTilePixels);
+        state.Weighted.resize(walk::kTilePixels);
       }
+      count = 0;
       for (int h = 0; h < hits; ++h)
       {
         const int l = c.Hits[h];
-        walk::EndWeights& w = state.Weights[h];
-        w = this->PairWeights<Visitor>(l, rays[l], c.Tin[l], c.Tout[l], state, progress);
+        visitor.Segment(l, c.Tin[l], c.Tout[l]);
+        const walk::EndWeights w =
+          this->PairWeights<Visitor>(l, rays[l], c.Tin[l], c.Tout[l], state, progress);
         if (w.Mid)
         {
-          // The middle sample as the lanes' first step, of index First (LaneRays::T0): its
-          // weight is that index's, and its next step (First + 1, at or past the pair's end)
-          // is not taken.
-          w.Last = w.First;
-          w.FirstWeight = w.LastWeight = w.MidWeight;
+          samples += this->WeightedSamples(l, rays[l], c.Tout[l], w, visitor, state, progress);
+          continue;
         }
+        state.Weights[count] = w;
+        state.Weighted[count] = static_cast<uint16_t>(l);
+        ++count;
       }
-      cell.FirstDepths = true;
+      list = state.Weighted.data();
     }
-    for (int h = 0; h < hits; h += 4)
+    for (int h = 0; h < count; h += 4)
     {
-      const int n = std::min(4, hits - h);
+      const int n = std::min(4, count - h);
       int local[4] = { 0, 0, 0, 0 };
       int64_t k[4] = { 0, 0, 0, 0 };
-      // Weighted: each lane's pair's first and last index and their float weights
-      // (EndWeights::Of, as the scalar loop rounds it), in locals the stores do not alias.
-      int64_t firstK[4] = { 0, 0, 0, 0 };
-      int64_t lastK[4] = { 0, 0, 0, 0 };
-      float firstWeight[4] = { 1, 1, 1, 1 };
-      float lastWeight[4] = { 1, 1, 1, 1 };
+      const walk::EndWeights* weights[4] = { nullptr, nullptr, nullptr, nullptr };
       for (int i = 0; i < 4; ++i)
       {
         const int at = h + (i < n ? i : 0);
-        const int l = c.Hits[at];
+        const int l = list[at];
         local[i] = l;
         if constexpr (Weighted)
         {
-          const walk::EndWeights& w = state.Weights[at];
-          k[i] = firstK[i] = w.First;
-          lastK[i] = w.Last;
-          firstWeight[i] = static_cast<float>(w.FirstWeight);
-          lastWeight[i] = static_cast<float>(w.LastWeight);
+          weights[i] = &state.Weights[at];
+          k[i] = weights[i]->First;
           lanes.K[i] = static_cast<double>(k[i]);
-          lanes.T0[i] = w.Mid ? w.MidT : this->Grid.At(w.First, rays[l].Offset);
         }
         else
         {
@@ -530,7 +529,7 @@ struct VolumeRayMarcher::Walker
         {
           lanes.D[d][i] = rays[l].D[d];
         }
-        if (i < n)
+        if (!Weighted && i < n)
         {
           visitor.Segment(l, c.Tin[l], c.Tout[l]);
         }
@@ -566,8 +565,7 @@ struct VolumeRayMarcher::Walker
             float weight = 1;
             if constexpr (Weighted)
             {
-              const int64_t at = kk + s;
-              weight = at == firstK[i] ? firstWeight[i] : (at == lastK[i] ? lastWeight[i] : 1.f);
+              weight = static_cast<float>(weights[i]->Of(kk + s));
               absorbance *= weight;
             }
             q[s] = 0;
@@ -615,7 +613,7 @@ struct VolumeRayMarcher::Walker
               float weight = 1;
               if constexpr (Weighted)
               {
-                weight = kk == firstK[i] ? firstWeight[i] : (kk == lastK[i] ? lastWeight[i] : 1.f);
+                weight = static_cast<float>(weights[i]->Of(kk));
                 absorbance *= weight;
               }
               if (absorbance > 0)
@@ -635,10 +633,6 @@ struct VolumeRayMarcher::Walker
           }
           k[i] = kk;
           lanes.K[i] = static_cast<double>(kk);
-          if constexpr (Weighted)
-          {
-            lanes.T0[i] = this->Grid.At(kk, rays[l].Offset); // Lattice::At, as the lanes
-          }
           // A ray that left the chunk before its end is done.
           lanes.Tout[i] = s == walk::kLaneSteps ? tout : -std::numeric_limits<double>::infinity();
           more = more || s == walk::kLaneSteps;
