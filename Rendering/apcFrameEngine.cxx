@@ -325,6 +325,7 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
   this->Marcher.SetLatticeJitter(this->Settings.LatticeJitter);
+  this->Marcher.SetSampleEndWeights(this->Settings.SampleEndWeights);
   this->SetOpaqueStopActive(this->OpaqueStopActive);
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
   this->Marcher.SetMesh(&this->Mesh);

@@ -137,6 +137,16 @@ bool vtkAPCVolumeMapper::GetLatticeJitter() const
   return this->Internal->Settings.LatticeJitter;
 }
 
+void vtkAPCVolumeMapper::SetSampleEndWeights(bool weights)
+{
+  apc::Assign(this, this->Internal->Settings.SampleEndWeights, weights);
+}
+
+bool vtkAPCVolumeMapper::GetSampleEndWeights() const
+{
+  return this->Internal->Settings.SampleEndWeights;
+}
+
 void vtkAPCVolumeMapper::SetStopWhereOpaque(bool stop)
 {
   apc::Assign(this, this->Internal->Settings.StopWhereOpaque, stop);
@@ -335,6 +345,7 @@ void vtkAPCVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
      << "\n";
   os << indent << "SampleDistance: " << settings.SampleDistance << "\n";
   os << indent << "LatticeJitter: " << settings.LatticeJitter << "\n";
+  os << indent << "SampleEndWeights: " << settings.SampleEndWeights << "\n";
   os << indent << "StopWhereOpaque: " << settings.StopWhereOpaque << "\n";
   os << indent << "SampleCacheSize: " << settings.SampleCacheMiB << " MiB\n";
   os << indent << "NumberOfThreads: " << settings.NumberOfThreads << "\n";

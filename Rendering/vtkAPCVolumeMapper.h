@@ -159,6 +159,22 @@ public:
 
   ///@{
   /**
+   * Weight the first and last sample of each cell along each ray so that the cell's samples
+   * sum to the exact length of the ray inside it, and sample a cell that holds no lattice
+   * point once at the middle of its piece of ray (apcEndWeights.h): a ray's sampled length no
+   * longer jumps by a whole SampleDistance where a boundary face crosses a lattice point, so
+   * grazing silhouettes show no lattice staircase. The weights depend only on the cell and
+   * the ray: N processes still render what one renders. MBOIT (APC) mode only: the EXACT and
+   * segment modes keep the plain lattice, whose sort-last runs need every sample at a lattice
+   * point (docs/sampler.md). Off by default.
+   */
+  void SetSampleEndWeights(bool weights);
+  bool GetSampleEndWeights() const;
+  vtkBooleanMacro(SampleEndWeights, bool);
+  ///@}
+
+  ///@{
+  /**
    * MBOIT only: stop a ray once the absorbance of its samples along it reaches ln 10^4 (a
    * transmittance of 1e-4), leaving out samples nobody can see; a pixel's opacity changes by
    * less than 1e-4 against marching every sample. The processes agree on where each ray

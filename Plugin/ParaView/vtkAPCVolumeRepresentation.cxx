@@ -256,6 +256,12 @@ void vtkAPCVolumeRepresentation::SetLatticeJitter(bool jitter)
   this->MarkModified();
 }
 
+void vtkAPCVolumeRepresentation::SetSampleEndWeights(bool weights)
+{
+  this->Mapper->SetSampleEndWeights(weights);
+  this->MarkModified();
+}
+
 void vtkAPCVolumeRepresentation::SetStopWhereOpaque(bool stop)
 {
   this->Mapper->SetStopWhereOpaque(stop);

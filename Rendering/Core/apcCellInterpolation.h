@@ -277,6 +277,11 @@ public:
   // that repeats their arithmetic (apcLaneSamples.h).
   const double (&GetLinearInverse() const)[3][3] { return this->Inverse; }
   const double (&GetScalarCoefficients() const)[8] { return this->SC; }
+  // PyramidCoordinates' g = M^-1 C4, for the same vectorised loop's closed form.
+  const double (&GetPyramidG() const)[3] { return this->PyramidG; }
+
+  // Below this distance outside the pyramid (in (u, v, t)) a root is taken as the one inside.
+  static constexpr double kPyramidInside = 1e-9;
 
   // Reference -> world.
   void WorldPosition(const double pcoords[3], double x[3]) const;
@@ -325,8 +330,6 @@ private:
   double PyramidG[3] = {};
   bool PyramidInverse = false;
 
-  // Below this distance outside the pyramid (in (u, v, t)) a root is taken as the one inside.
-  static constexpr double kPyramidInside = 1e-9;
   static void PyramidPoint(const double a[3], const double g[3], double w, double q[3])
   {
     q[0] = a[0] - g[0] * w;

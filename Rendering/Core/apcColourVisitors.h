@@ -134,6 +134,8 @@ struct Colour : NoSegments
   {
     this->TileHidden = 0;
     const uint32_t* starts = recorded.Starts.data();
+    // End weights (apcEndWeights.h): each looked-up absorbance times its sample's weight.
+    const float* weights = recorded.Weights.empty() ? nullptr : recorded.Weights.data();
     for (int p = 0; p < tile.Pixels(); ++p)
     {
       const uint32_t begin = starts[p];
@@ -150,7 +152,7 @@ struct Colour : NoSegments
         ColourSums sums;
         if (ReplayFourMomentPixel(transmittance, hiddenFrom, table.GetLayout(),
               recorded.Samples.data() + begin, static_cast<int>(end - begin), sums.Data(),
-              this->TileHidden))
+              this->TileHidden, weights ? weights + begin : nullptr))
         {
           this->Write(tile, p, sums);
           continue;
@@ -174,7 +176,11 @@ struct Colour : NoSegments
         {
           continue;
         }
-        const TransferSample s = table.Lookup(sample->Scalar);
+        TransferSample s = table.Lookup(sample->Scalar);
+        if (weights)
+        {
+          s.Absorbance *= weights[sample - recorded.Samples.data()];
+        }
         this->Depths[count] = sample->Z;
         this->Absorbances[count] = s.Absorbance;
         this->Colours[count] = s.Colour;
@@ -258,7 +264,11 @@ struct HybridColour : NoSegments
       for (uint32_t i = recorded.Starts[p]; i < recorded.Starts[p + 1]; ++i)
       {
         const CachedSample& sample = recorded.Samples[i];
-        const TransferSample s = table.Lookup(sample.Scalar);
+        TransferSample s = table.Lookup(sample.Scalar);
+        if (!recorded.Weights.empty())
+        {
+          s.Absorbance *= recorded.Weights[i]; // end weights, as pass 1 took them
+        }
         this->Pixels[p].push_back({ ReplayOrder(sample.Z, ordered ? recorded.K16[i] : 0), sample.Z,
           s.Absorbance, s.Colour });
       }

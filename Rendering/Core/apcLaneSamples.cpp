@@ -1,5 +1,7 @@
 #include "apcLaneSamples.h"
 
+#include "apcCellInterpolation.h"
+
 #include <immintrin.h>
 
 #include <limits>
@@ -12,9 +14,91 @@ namespace walk
 namespace
 {
 
+// The scalar forms a cell's lanes take (CellInterpolator's).
+enum class Form
+{
+  ScalarAt,       // LinearScalarAt of any shape but a pyramid
+  LinearPyramid,  // LinearScalarAt of a pyramid
+  PyramidScalarAt // a twisted pyramid's closed-form inverse
+};
+
+// std::max(a, b) is (a < b ? b : a); _mm256_max_pd(x, y) is (x > y ? x : y): with the
+// arguments swapped the same value, NaN and signed zeros included.
+__attribute__((target("avx2"), always_inline)) inline __m256d StdMax(__m256d a, __m256d b)
+{
+  return _mm256_max_pd(b, a);
+}
+
+// What a twisted pyramid's closed form needs per cell (CellInterpolator::PyramidCoordinates'
+// constants), formed once per call.
+struct Twist
+{
+  __m256d G[3];
+  __m256d FourA; // 4.0 * A, as B * B + 4.0 * A * C groups it
+  __m256d TwoA;
+  bool Other; // A != 0: the second root may be tried
+};
+
+// CellInterpolator::PyramidOutside of (q0, q1, q2); sign holds -0.0 (unary minus flips it).
+__attribute__((target("avx2"), always_inline)) inline __m256d Outside(
+  __m256d q0, __m256d q1, __m256d q2, __m256d one, __m256d zero, __m256d sign)
+{
+  const __m256d below = _mm256_sub_pd(one, q2);
+  return StdMax(StdMax(StdMax(_mm256_xor_pd(q0, sign), _mm256_sub_pd(q0, below)),
+                  StdMax(_mm256_xor_pd(q1, sign), _mm256_sub_pd(q1, below))),
+    StdMax(_mm256_xor_pd(q2, sign), zero));
+}
+
+// CellInterpolator::PyramidScalarAt at a = (a0, a1, a2), lane by lane: the same operations
+// in the same order (PyramidCoordinates, PyramidPoint, PyramidOutside, the sum), the choice
+// of root by blends; the other root only where some lane's first lies outside.
+__attribute__((target("avx2"), always_inline)) inline __m256d PyramidScalar(const Twist& twist,
+  const __m256d* c, __m256d a0, __m256d a1, __m256d a2, __m256d one, __m256d zero)
+{
+  const __m256d sign = _mm256_set1_pd(-0.0);
+  const __m256d* g = twist.G;
+  const __m256d b = _mm256_add_pd(
+    _mm256_add_pd(_mm256_sub_pd(one, a2), _mm256_mul_pd(a0, g[1])), _mm256_mul_pd(a1, g[0]));
+  const __m256d cc = _mm256_mul_pd(a0, a1);
+  const __m256d root = _mm256_sqrt_pd(
+    StdMax(_mm256_add_pd(_mm256_mul_pd(b, b), _mm256_mul_pd(twist.FourA, cc)), zero));
+  const __m256d denom = _mm256_blendv_pd(
+    _mm256_sub_pd(b, root), _mm256_add_pd(b, root), _mm256_cmp_pd(b, zero, _CMP_GE_OQ));
+  // denom != 0 (true for NaN) ? 2.0 * C / denom : 0.0
+  __m256d w = _mm256_and_pd(_mm256_cmp_pd(denom, zero, _CMP_NEQ_UQ),
+    _mm256_div_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), cc), denom));
+  __m256d q0 = _mm256_sub_pd(a0, _mm256_mul_pd(g[0], w));
+  __m256d q1 = _mm256_sub_pd(a1, _mm256_mul_pd(g[1], w));
+  __m256d q2 = _mm256_sub_pd(a2, _mm256_mul_pd(g[2], w));
+  if (twist.Other)
+  {
+    const __m256d outside = Outside(q0, q1, q2, one, zero, sign);
+    const __m256d far =
+      _mm256_cmp_pd(outside, _mm256_set1_pd(apc::CellInterpolator::kPyramidInside), _CMP_GT_OQ);
+    if (_mm256_movemask_pd(far) != 0)
+    {
+      // A strongly twisted pyramid: the other root where its point lies nearer.
+      const __m256d other = _mm256_div_pd(_mm256_xor_pd(denom, sign), twist.TwoA);
+      const __m256d r0 = _mm256_sub_pd(a0, _mm256_mul_pd(g[0], other));
+      const __m256d r1 = _mm256_sub_pd(a1, _mm256_mul_pd(g[1], other));
+      const __m256d r2 = _mm256_sub_pd(a2, _mm256_mul_pd(g[2], other));
+      const __m256d take = _mm256_and_pd(
+        far, _mm256_cmp_pd(Outside(r0, r1, r2, one, zero, sign), outside, _CMP_LT_OQ));
+      w = _mm256_blendv_pd(w, other, take);
+      q0 = _mm256_blendv_pd(q0, r0, take);
+      q1 = _mm256_blendv_pd(q1, r1, take);
+      q2 = _mm256_blendv_pd(q2, r2, take);
+    }
+  }
+  __m256d v = _mm256_add_pd(c[0], _mm256_mul_pd(q0, c[1]));
+  v = _mm256_add_pd(v, _mm256_mul_pd(q1, c[2]));
+  v = _mm256_add_pd(v, _mm256_mul_pd(q2, c[3]));
+  return _mm256_add_pd(v, _mm256_mul_pd(w, c[4]));
+}
+
 // Only AVX2, no FMA: a fused multiply-add would round once where the scalar loop rounds
-// twice. Pyramid: CellInterpolator::LinearScalarAt's pyramid form, else ScalarAt.
-template <bool Pyramid>
+// twice.
+template <Form How>
 __attribute__((target("avx2"), always_inline)) inline int Lanes(
   const LaneCell& cell, const LaneRays& rays, LaneSteps& steps)
 {
@@ -46,6 +130,19 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
   const __m256d zero = _mm256_setzero_pd();
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+  Twist twist{};
+  if (How == Form::PyramidScalarAt)
+  {
+    const double* g = cell.G;
+    const double A = g[2] - g[0] * g[1];
+    for (int i = 0; i < 3; ++i)
+    {
+      twist.G[i] = _mm256_set1_pd(g[i]);
+    }
+    twist.FourA = _mm256_set1_pd(4.0 * A);
+    twist.TwoA = _mm256_set1_pd(2.0 * A);
+    twist.Other = A != 0;
+  }
   const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
   const __m128i count = _mm_set1_epi32(cell.Table.Count);
   const __m128i oneIndex = _mm_set1_epi32(1);
@@ -81,7 +178,11 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
     const __m256d q = _mm256_add_pd(p0[1], _mm256_mul_pd(t, dp[1]));
     const __m256d u = _mm256_add_pd(p0[2], _mm256_mul_pd(t, dp[2]));
     __m256d v;
-    if (Pyramid)
+    if (How == Form::PyramidScalarAt)
+    {
+      v = PyramidScalar(twist, a, r, q, u, one, zero);
+    }
+    else if (How == Form::LinearPyramid)
     {
       // LinearScalarAt of a pyramid, (r, q, u) its (u, v, t): the twist where 1 - t > 0
       // (0 elsewhere, and for NaN), r and s clamped as std::min(std::max(x, 0.0), 1.0).
@@ -138,7 +239,12 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
 __attribute__((target("avx2"))) int LaneSamplesAvx2(
   const LaneCell& cell, const LaneRays& rays, LaneSteps& steps)
 {
-  return cell.Pyramid ? Lanes<true>(cell, rays, steps) : Lanes<false>(cell, rays, steps);
+  if (cell.Twisted)
+  {
+    return Lanes<Form::PyramidScalarAt>(cell, rays, steps);
+  }
+  return cell.Pyramid ? Lanes<Form::LinearPyramid>(cell, rays, steps)
+                      : Lanes<Form::ScalarAt>(cell, rays, steps);
 }
 
 } // namespace walk

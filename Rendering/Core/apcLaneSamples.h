@@ -15,13 +15,16 @@ namespace walk
 {
 
 // What the lanes need of a cell sampled by its linear inverse (CellInterpolator::LinearRay,
-// LinearScalarAt) with every ray starting at the same point.
+// LinearScalarAt), or of a twisted pyramid sampled by its closed-form inverse
+// (PyramidScalarAt at LinearRay's coordinates), with every ray starting at the same point.
 struct LaneCell
 {
   bool Pyramid;         // LinearScalarAt's pyramid form (SC[0 .. 4]), else ScalarAt
+  bool Twisted = false; // PyramidScalarAt (SC[0 .. 4] and G) instead of LinearScalarAt
   double Inverse[3][3]; // LinearRayDirection's matrix
   double P0[3];         // LinearRayOrigin of the shared origin
   double SC[8];         // LinearScalarAt's coefficients
+  double G[3] = {};     // with Twisted: CellInterpolator::GetPyramidG
   double Lo;            // the cell's scalar range (the loop's clamp)
   double Hi;
   TransferTable::Layout Table;
@@ -62,9 +65,9 @@ struct LaneSteps
 
 // Fills steps 0 .. n - 1 for the four lanes and returns n: kLaneSteps, or fewer where no
 // lane has a sample at step n (t >= Tout in every lane). Each lane performs the IEEE
-// operations of the scalar loop (LinearRayDirection, p0 + t dp, LinearScalarAt, the clamp,
-// TransferTable::Lookup's position, entries and interpolation) in the same order and without
-// FMA. Only where HasAvx2() (apcRayClip.h).
+// operations of the scalar loop (LinearRayDirection, p0 + t dp, LinearScalarAt or
+// PyramidScalarAt, the clamp, TransferTable::Lookup's position, entries and interpolation) in
+// the same order and without FMA. Only where HasAvx2() (apcRayClip.h).
 int LaneSamplesAvx2(const LaneCell& cell, const LaneRays& rays, LaneSteps& steps);
 
 } // namespace walk

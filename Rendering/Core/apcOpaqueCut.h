@@ -43,6 +43,7 @@ void CutCachedTile(CachedTile& cached, const TileRect& tile, int width, const Op
   uint32_t* starts = cached.Starts.data();
   CachedSample* samples = cached.Samples.data();
   uint16_t* order = cached.K16.data();
+  float* weights = cached.Weights.empty() ? nullptr : cached.Weights.data(); // end weights
   uint32_t kept = 0;
   for (int p = 0; p < tile.Pixels(); ++p)
   {
@@ -54,6 +55,10 @@ void CutCachedTile(CachedTile& cached, const TileRect& tile, int width, const Op
     {
       std::copy(samples + begin, samples + end, samples + kept);
       std::copy(order + begin, order + end, order + kept);
+      if (weights)
+      {
+        std::copy(weights + begin, weights + end, weights + kept);
+      }
       kept += end - begin;
       continue;
     }
@@ -64,7 +69,13 @@ void CutCachedTile(CachedTile& cached, const TileRect& tile, int width, const Op
       {
         continue;
       }
-      AccumulatePowerMoments<N>(sums, samples[s].Z, table.Lookup(samples[s].Scalar).Absorbance);
+      float absorbance = table.Lookup(samples[s].Scalar).Absorbance;
+      if (weights)
+      {
+        absorbance *= weights[s]; // the product pass 1 took
+        weights[kept] = weights[s];
+      }
+      AccumulatePowerMoments<N>(sums, samples[s].Z, absorbance);
       samples[kept] = samples[s];
       order[kept] = order[s];
       ++kept;
@@ -74,6 +85,7 @@ void CutCachedTile(CachedTile& cached, const TileRect& tile, int width, const Op
   starts[tile.Pixels()] = kept;
   cached.Samples.Size = kept;
   cached.K16.resize(kept);
+  cached.Weights.resize(kept);
 }
 
 } // namespace apc

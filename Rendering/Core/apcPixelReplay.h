@@ -20,11 +20,13 @@ namespace apc
 // Adds the weighted colour of samples[0, n) (one pixel's run) to sums (r, g, b, weight), as
 // ColourSums::Add would, skipping the samples at depths >= hiddenFrom (added to hidden). t:
 // the pixel's reconstruction; a sample its vector arithmetic cannot answer is weighted by t's
-// query. False, and nothing done, if the CPU lacks AVX2 with FMA or t is not a valid pixel:
-// the generic replay then does it.
+// query. weights, if not null: each sample's end weight (apcEndWeights.h), by which its
+// looked-up absorbance is multiplied (a float product, as pass 1 took it). False, and nothing
+// done, if the CPU lacks AVX2 with FMA or t is not a valid pixel: the generic replay then
+// does it.
 bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
   const TransferTable::Layout& table, const CachedSample* samples, int n, double sums[4],
-  int64_t& hidden);
+  int64_t& hidden, const float* weights = nullptr);
 
 } // namespace apc
 

@@ -47,6 +47,8 @@ struct NoSegments
   // The MBOIT passes leave out what lies behind an opaque ray (VolumeRayMarcher::
   // SetOpaqueAbsorbance); the exact blend, the reference, takes every sample.
   static constexpr bool StopsWhenOpaque = false;
+  // With end weights (apcEndWeights.h) the walker weights this visitor's samples.
+  static constexpr bool TakesEndWeights = true;
   void Segment(int, double, double) {}
 };
 
@@ -91,9 +93,14 @@ inline bool SampleBefore(const SampleRecord& a, const SampleRecord& b)
 }
 
 // Each pixel's samples of one tile, in arrival order; the base of the visitors that need
-// whole rays in depth order.
+// whole rays in depth order. These take the plain lattice, end weights or not: sort-last
+// segments are runs of consecutive lattice points, and the middle sample of a pair without a
+// lattice point, of a cell on another process, would have to go inside another process's run
+// (end weights without those samples lose the slivers' length inside the mesh too); the exact
+// blend takes what the segments take, so that the segments still equal it on every partition.
 struct PixelSampleLists : NoSegments
 {
+  static constexpr bool TakesEndWeights = false;
   std::vector<std::vector<SampleRecord>> Pixels;
 
   void BeginTile(const TileRect& tile) { ClearPixelLists(this->Pixels, tile.Pixels()); }
@@ -185,6 +192,7 @@ struct Moments : NoSegments
   RecordBuffer* Buffer = nullptr;
   bool Recording = false;
   bool KeepOrder = false; // the cache keeps the lattice bits (the opaque cut reads them)
+  bool Weighted = false;  // the samples come with end weights (WeightedSample), kept too
 
   Moments(double* output, int width, const LatticeDepthWarp* warp, SampleCache* cache)
     : Output(output)
@@ -207,7 +215,8 @@ struct Moments : NoSegments
   // The walker passes only visible samples (absorbance > 0; StopsWhenOpaque visitors take
   // no transparent ones), a table's absorbance is finite and the warp's depth lies in
   // [-1, 1]: AccumulatePowerMoments' checks would change nothing.
-  void Sample(int pixel, int64_t k, double t, double scalar, const TransferSample& s)
+  [[gnu::always_inline]] void Sample(
+    int pixel, int64_t k, double t, double scalar, const TransferSample& s)
   {
     const double z = (*this->Warp)(k, t);
     AccumulateCheckedPowerMoments<N>(this->Sums.data() + pixel * (N + 1), z, s.Absorbance);
@@ -224,6 +233,17 @@ struct Moments : NoSegments
       ++this->Buffer->Counts[pixel];
     }
   }
+  // A sample with end weights (apcEndWeights.h): s's absorbance is already weight times the
+  // table's; the cache keeps the weight, so that pass 2 takes the same product.
+  [[gnu::always_inline]] void WeightedSample(
+    int pixel, int64_t k, double t, double scalar, const TransferSample& s, float weight)
+  {
+    if (this->Recording)
+    {
+      this->Buffer->Weigh(weight);
+    }
+    this->Sample(pixel, k, t, scalar, s);
+  }
   // A run of one pixel's samples at once (the walker's lanes): RunBegin, RunAdd for each
   // sample in lattice order, visible or not (absorbance 0: it adds nothing), and RunEnd to
   // keep what the run added (without it the run leaves nothing behind). The same sums,
@@ -235,10 +255,11 @@ struct Moments : NoSegments
   {
     double B[N + 1];
     RecordedSample* Record;
+    float* Weight; // with end weights (RunAddWeighted), each record's weight
     uint32_t Kept;
   };
-  // A run of at most n samples of pixel.
-  [[gnu::always_inline]] void RunBegin(Run& run, int pixel, int n)
+  // A run of at most n samples of pixel; weighted: of end-weighted samples (RunAddWeighted).
+  [[gnu::always_inline]] void RunBegin(Run& run, int pixel, int n, bool weighted = false)
   {
     const double* sums = this->Sums.data() + pixel * (N + 1);
     for (int m = 0; m <= N; ++m)
@@ -246,7 +267,29 @@ struct Moments : NoSegments
       run.B[m] = sums[m];
     }
     run.Record = this->Recording ? this->Buffer->Room(static_cast<size_t>(n)) : nullptr;
+    run.Weight = nullptr;
+    if (weighted && run.Record)
+    {
+      // The weights' room follows the records' (RecordBuffer::Weigh).
+      RecordBuffer& buffer = *this->Buffer;
+      if (buffer.Weights.size() < buffer.Recorded.size())
+      {
+        buffer.Weights.resize(buffer.Recorded.size());
+      }
+      run.Weight = buffer.Weights.data() + buffer.Used;
+    }
     run.Kept = 0;
+  }
+  // RunAdd of a sample with end weights (as WeightedSample): absorbance is already weight
+  // times the table's; the record's weight is kept.
+  [[gnu::always_inline]] void RunAddWeighted(
+    Run& run, int pixel, int64_t k, double t, double scalar, float absorbance, float weight) const
+  {
+    if (run.Weight)
+    {
+      run.Weight[run.Kept] = weight;
+    }
+    this->RunAdd(run, pixel, k, t, scalar, absorbance);
   }
   [[gnu::always_inline]] void RunAdd(
     Run& run, int pixel, int64_t k, double t, double scalar, float absorbance) const
@@ -284,7 +327,8 @@ struct Moments : NoSegments
       {
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
         this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Used,
-          this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder);
+          this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder,
+          this->Weighted ? this->Buffer->Weights.data() : nullptr);
       }
       else
       {
@@ -309,6 +353,7 @@ struct SegmentCounts
 {
   static constexpr bool StopsWhenOpaque = false;
   static constexpr bool WantsSegments = true;
+  static constexpr bool TakesEndWeights = false; // no samples
   static constexpr bool WantsSamples = false;
   static constexpr bool WantsTransparentSamples = false;
   int32_t* Output;

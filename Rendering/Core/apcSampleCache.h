@@ -68,31 +68,50 @@ struct OrderSpan
   void resize(size_t n) { this->Size = std::min(n, this->Size); } // only ever shrinks
 };
 
+// A tile's end weights (CachedTile::Weights) in the cache's arena, after its lattice bits.
+struct WeightSpan
+{
+  float* Data = nullptr;
+  size_t Size = 0;
+
+  float* data() const { return this->Data; }
+  size_t size() const { return this->Size; }
+  bool empty() const { return this->Size == 0; }
+  float& operator[](size_t i) const { return this->Data[i]; }
+  void resize(size_t n) { this->Size = std::min(n, this->Size); } // only ever shrinks
+};
+
 // A tile's samples grouped by pixel: pixel p's are Samples[Starts[p] .. Starts[p + 1]), in
 // the order pass 1 took them. K16, kept only for a pass 1 that keeps its own moments
 // (Hybrid), holds the low 16 bits of each sample's lattice index, which order the samples of
 // a pixel whose float depths tie, for the Hybrid resolve's exact own transmittance. The
 // samples and K16 live in the cache's arena (huge pages, refilled frame after frame: per-tile
 // vectors of K16 took ~13,000 fresh 4 KiB pages on the first 1024^2 wind frame); Starts keeps
-// its memory from frame to frame.
+// its memory from frame to frame. Weights, kept only for a pass 1 with end weights
+// (apcEndWeights.h), holds each sample's weight, by which pass 2 multiplies the absorbance
+// it looks up (the same float product pass 1 took).
 struct CachedTile
 {
   UninitializedVector<uint32_t> Starts;
   SampleSpan Samples;
   OrderSpan K16;
+  WeightSpan Weights;
 
   // K16's room in the arena after n samples (whole 8-byte words: the arena's unit).
   static size_t OrderBytes(size_t n) { return (n * sizeof(uint16_t) + 7) / 8 * 8; }
+  static size_t WeightBytes(size_t n) { return (n * sizeof(float) + 7) / 8 * 8; }
   size_t Bytes() const
   {
     return this->Starts.capacity() * sizeof(uint32_t) +
-      this->Samples.size() * sizeof(CachedSample) + OrderBytes(this->K16.size());
+      this->Samples.size() * sizeof(CachedSample) + OrderBytes(this->K16.size()) +
+      WeightBytes(this->Weights.size());
   }
   void Clear()
   {
     this->Starts.clear();
     this->Samples = SampleSpan();
     this->K16 = OrderSpan();
+    this->Weights = WeightSpan();
   }
   void Free() { *this = CachedTile(); }
 };
@@ -119,6 +138,19 @@ struct RecordBuffer
   UninitializedVector<RecordedSample> Recorded;
   size_t Used = 0;
   std::vector<uint32_t> Counts;
+  // With end weights: each record's weight, by index (Weigh), apart from the records so that
+  // a pass 1 without them writes and moves no more bytes per sample.
+  UninitializedVector<float> Weights;
+
+  // Record Used's weight (before Room(1) takes it).
+  void Weigh(float weight)
+  {
+    if (this->Weights.size() <= this->Used)
+    {
+      this->Weights.resize(std::max(this->Recorded.size(), this->Used + 1));
+    }
+    this->Weights[this->Used] = weight;
+  }
 
   // Room for n records past the Used ones (grown, keeping those, where there is less).
   RecordedSample* Room(size_t n)
@@ -201,9 +233,10 @@ struct SampleCache
   // pixel p's end). A (cell, ray) pair's samples arrive together, so the records come in runs
   // of one pixel: a run's slot is kept in a register, not incremented in starts[] per
   // sample, whose store and reload chained every sample of a run to the one before.
-  template <bool WithOrder>
+  template <bool WithOrder, bool WithWeights = false>
   static void Scatter(const RecordedSample* recorded, size_t n, uint32_t* starts,
-    CachedSample* samples, uint16_t* order)
+    CachedSample* samples, uint16_t* order, const float* weights = nullptr,
+    float* weightsOut = nullptr)
   {
     const RecordedSample* r = recorded;
     const RecordedSample* const end = r + n;
@@ -218,6 +251,10 @@ struct SampleCache
         {
           order[at] = r->K16;
         }
+        if (WithWeights)
+        {
+          weightsOut[at] = weights[r - recorded];
+        }
         ++at;
         ++r;
       } while (r < end && r->Pixel == pixel);
@@ -225,8 +262,9 @@ struct SampleCache
     }
   }
   // Groups a marched tile's recorded samples by pixel into Tiles[tile] (counts[p]: pixel p's
-  // samples among them; withOrder: keep the lattice bits) if they fit in the budget; else
-  // frees the tile's memory and stops the recording.
+  // samples among them; withOrder: keep the lattice bits; weights, if not null: each record's
+  // end weight, kept too) if they fit in the budget; else frees the tile's memory and stops
+  // the recording.
   void Keep(size_t tile, const std::vector<RecordedSample>& recorded, const uint32_t* counts,
     int pixels, bool withOrder)
   {
@@ -234,7 +272,7 @@ struct SampleCache
   }
   // The same for the records recorded[0, n).
   void Keep(size_t tile, const RecordedSample* recorded, size_t n, const uint32_t* counts,
-    int pixels, bool withOrder)
+    int pixels, bool withOrder, const float* weights = nullptr)
   {
     CachedTile& cached = this->Tiles[tile];
     if (n == 0)
@@ -247,7 +285,8 @@ struct SampleCache
     cached.Clear();
     cached.Starts.resize(static_cast<size_t>(pixels) + 1);
     const size_t orderBytes = withOrder ? CachedTile::OrderBytes(n) : 0;
-    const size_t arenaBytes = n * sizeof(CachedSample) + orderBytes;
+    const size_t weightBytes = weights ? CachedTile::WeightBytes(n) : 0;
+    const size_t arenaBytes = n * sizeof(CachedSample) + orderBytes + weightBytes;
     const size_t bytes = cached.Bytes() + arenaBytes;
     CachedSample* memory = nullptr;
     if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes ||
@@ -263,6 +302,11 @@ struct SampleCache
     {
       cached.K16 = { reinterpret_cast<uint16_t*>(memory + n), n };
     }
+    if (weights)
+    {
+      cached.Weights = { reinterpret_cast<float*>(reinterpret_cast<char*>(memory + n) + orderBytes),
+        n };
+    }
     // A stable counting sort: each pixel's samples stay in the order they were taken.
     uint32_t* starts = cached.Starts.data();
     starts[0] = 0;
@@ -270,7 +314,20 @@ struct SampleCache
     {
       starts[p + 1] = starts[p] + counts[p];
     }
-    if (withOrder)
+    if (weights)
+    {
+      if (withOrder)
+      {
+        Scatter<true, true>(recorded, n, starts, cached.Samples.data(), cached.K16.data(), weights,
+          cached.Weights.data());
+      }
+      else
+      {
+        Scatter<false, true>(
+          recorded, n, starts, cached.Samples.data(), nullptr, weights, cached.Weights.data());
+      }
+    }
+    else if (withOrder)
     {
       Scatter<true>(recorded, n, starts, cached.Samples.data(), cached.K16.data());
     }

@@ -80,6 +80,21 @@ public:
   // Set it before a frame's passes: pass 2 replays pass 1's samples.
   void SetLatticeJitter(bool jitter) { this->LatticeJitter = jitter; }
 
+  // Weight the end samples of each (cell, ray) pair so that a pair's samples sum to its exact
+  // length, and sample a pair without a lattice point once at its middle (apcEndWeights.h):
+  // no lattice staircase along grazing silhouettes. Both MBOIT passes and the opaque stop take
+  // the same weighted samples, on every partition; the sample cache keeps each one's weight
+  // for pass 2. The exact blend and the segments keep the plain lattice
+  // (visitors::PixelSampleLists says why). Off by default. Set it before a frame's passes.
+  void SetSampleEndWeights(bool weights) { this->SampleEndWeights = weights; }
+  bool GetSampleEndWeights() const { return this->SampleEndWeights; }
+
+  // Take nearly affine cells' and twisted pyramids' samples four rays at a time where the
+  // processor has AVX2 (on by default); off, every pair goes through the scalar loop, with
+  // the same samples (tests compare the two).
+  void SetSampleLanes(bool lanes) { this->SampleLanes = lanes; }
+  bool GetSampleLanes() const { return this->SampleLanes; }
+
   // The MBOIT passes may stop a ray once the absorbance of its samples on this mesh reaches
   // this (the tiles' cells are visited nearest first, so that happens early): a later sample
   // behind all the samples summed so far has a transmittance below exp(-absorbance) whatever
@@ -253,6 +268,8 @@ private:
   double HiddenSampleWeight = kDefaultHiddenSampleWeight;
   int Threads = 0;
   bool LatticeJitter = false;
+  bool SampleEndWeights = false;
+  bool SampleLanes = true;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
   double LinearTolerance = kDefaultLinearTolerance;
   // The opaque stop's bins of the last pass 1 (inactive without a stop), its own profile

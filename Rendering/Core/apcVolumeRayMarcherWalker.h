@@ -7,6 +7,7 @@
 #include "apcVolumeRayMarcher.h"
 
 #include "apcCellInterpolation.h"
+#include "apcEndWeights.h"
 #include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
 #include "apcRayClip.h"
@@ -19,6 +20,7 @@
 #include <cstdint>
 #include <limits>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace apc
@@ -45,6 +47,19 @@ struct AbsorbanceOnly<Visitor, std::void_t<decltype(Visitor::SamplesAbsorbanceOn
 {
 };
 
+// Visitors that keep each sample's end weight (the sample cache) take weighted samples with
+// WeightedSample; the others see the weighted absorbance in Sample.
+template <class Visitor, class = void>
+struct TakesWeights : std::false_type
+{
+};
+template <class Visitor>
+struct TakesWeights<Visitor,
+  std::void_t<decltype(std::declval<Visitor&>().WeightedSample(
+    0, int64_t(0), 0.0, 0.0, std::declval<const TransferSample&>(), 1.0f))>> : std::true_type
+{
+};
+
 //------------------------------------------------------------------------------
 // Marches one tile: all its cells against all its pixels.
 struct VolumeRayMarcher::Walker
@@ -68,9 +83,16 @@ struct VolumeRayMarcher::Walker
   // predicted cut, the same on every process; kBins - 1 bounds nothing), or null.
   const uint8_t* Bound = nullptr;
   int BandWidth = 0;
-  // Nearly affine cells' samples four rays at a time (LaneSamplesAvx2) where the processor
-  // has AVX2 and the visitor reads only absorbance.
+  // Nearly affine cells' and twisted pyramids' samples four rays at a time (LaneSamplesAvx2)
+  // where the processor has AVX2 and the visitor reads only absorbance.
   bool Lanes = walk::HasAvx2();
+  // Weight each (cell, ray) pair's end samples so that they sum to its exact length, and give
+  // a pair without a lattice point one sample at its middle (apcEndWeights.h), for the
+  // visitors that take them (the MBOIT passes; Visitor::TakesEndWeights). The lanes take
+  // such pairs too (their hand-over weights a run's first and last step); a pair without a
+  // lattice point, and every pair of a cell the lanes do not take, goes through the scalar
+  // loop (WeightedRay).
+  bool EndWeights = false;
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
   // in its own coordinates, LinearPyramid), a twisted pyramid's closed-form inverse, or by
@@ -112,6 +134,10 @@ struct VolumeRayMarcher::Walker
     double LinearOrigin[3] = { 0, 0, 0 };
     // The tile's rays clipped against the cell.
     walk::ClippedRays Clipped;
+    // With end weights in the lanes: the weights of the pairs with a lattice point, and their
+    // rays (kept from cell to cell, so that their room is not allocated per cell).
+    std::vector<walk::EndWeights> Weights;
+    std::vector<uint16_t> Weighted;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -184,12 +210,38 @@ struct VolumeRayMarcher::Walker
     const int width = tile.Width();
     const walk::RayRect rect{ (j0 - tile.J0) * width + (i0 - tile.I0), i1 - i0 + 1, j1 - j0 + 1,
       width };
-    // A visitor of segments sees every ray inside, with a sample or not.
+    // A visitor of segments sees every ray inside, with a sample or not; so do the end
+    // weights, which sample a pair without a lattice point too.
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
+    const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights;
     walk::ClippedRays& c = state.Clipped;
     const int hits =
       walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
-        state.Near, allInside ? nullptr : &this->Grid, c);
+        state.Near, allInside || weighted ? nullptr : &this->Grid, c);
+    if constexpr (!allInside)
+    {
+      if (weighted)
+      {
+        if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
+        {
+          if (hits > 0 && this->SharedOrigin && this->Lanes)
+          {
+            this->Prepare(rays[c.Hits[0]], state);
+            if (state.Interpolate && (state.Linear || state.Interpolator.HasPyramidInverse()))
+            {
+              return this->LaneSamples<true>(rays, hits, visitor, state, progress);
+            }
+          }
+        }
+        int64_t samples = 0;
+        for (int h = 0; h < hits; ++h)
+        {
+          const int l = c.Hits[h];
+          samples += this->WeightedRay(l, rays[l], c.Tin[l], c.Tout[l], visitor, state, progress);
+        }
+        return samples;
+      }
+    }
     if (!Visitor::WantsSegments && Visitor::WantsSamples && hits > 0)
     {
       this->Prepare(rays[c.Hits[0]], state);
@@ -199,9 +251,10 @@ struct VolumeRayMarcher::Walker
       }
       if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
       {
-        if (state.Linear && this->SharedOrigin && this->Lanes)
+        if ((state.Linear || state.Interpolator.HasPyramidInverse()) && this->SharedOrigin &&
+          this->Lanes)
         {
-          return this->LaneSamples(rays, hits, visitor, state, progress);
+          return this->LaneSamples<false>(rays, hits, visitor, state, progress);
         }
       }
       if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
@@ -263,6 +316,65 @@ struct VolumeRayMarcher::Walker
     return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
   }
 
+  // Ray's samples with end weights (EndWeights): the ray local inside the cell over
+  // [tin, tout), the pair's interval up to the ray's stop, if any; returns the samples taken.
+  template <class Visitor>
+  int64_t WeightedRay(int local, const RaySetup& ray, double tin, double tout, Visitor& visitor,
+    CellState& state, RayProgress& progress) const
+  {
+    visitor.Segment(local, tin, tout);
+    const walk::EndWeights w = this->PairWeights<Visitor>(local, ray, tin, tout, state, progress);
+    return this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
+  }
+
+  // The end weights of the pair of ray local over [tin, tout) (tout: up to the ray's stop).
+  template <class Visitor>
+  [[gnu::always_inline]] walk::EndWeights PairWeights(int local, const RaySetup& ray, double tin,
+    double tout, CellState& state, const RayProgress& progress) const
+  {
+    // The weights are the whole pair's: where ClipRays cut it at the stop, its end is found
+    // again, with ClipRays' own arithmetic (CellPlanes::Clip from [0, min(End, far))).
+    double end = tout;
+    if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
+    {
+      double start = 0;
+      end = std::min(ray.End, this->FarLimit);
+      state.Planes.Clip(ray, start, end);
+    }
+    return walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
+  }
+
+  // WeightedRay's samples once the pair's weights w are known.
+  template <class Visitor>
+  int64_t WeightedSamples(int local, const RaySetup& ray, double tout, const walk::EndWeights& w,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    this->Prepare(ray, state);
+    const TransferTable::Layout table = this->Table.GetLayout();
+    if (!state.Interpolate)
+    {
+      return this->SampleLoop<Sampling::Constant, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
+    {
+      return this->SampleLoop<Sampling::LinearPyramid, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Linear)
+    {
+      return this->SampleLoop<Sampling::Linear, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    if (state.Interpolator.HasPyramidInverse())
+    {
+      return this->SampleLoop<Sampling::Pyramid, true>(
+        local, ray, w.First, tout, table, visitor, state, progress, &w);
+    }
+    return this->SampleLoop<Sampling::Follow, true>(
+      local, ray, w.First, tout, table, visitor, state, progress, &w);
+  }
+
   // Sets the cell's interpolation up once one of its rays (ray) has a sample: lazily, since
   // most binned cells miss most of their rectangle's rays.
   void Prepare(const RaySetup& ray, CellState& state) const
@@ -305,7 +417,7 @@ struct VolumeRayMarcher::Walker
     return samples;
   }
 
-  // CellSamples<Sampling::Linear> or <LinearPyramid> with a shared origin, four
+  // CellSamples<Sampling::Linear>, <LinearPyramid> or <Pyramid> with a shared origin, four
   // rays at a time: LaneSamplesAvx2 finds up to kLaneSteps samples of each (lane i holds ray
   // i's k-th sample, so the rays' table look-ups overlap), then each ray's steps go to the
   // visitor (Moments::RunAdd) and the stop's bookkeeping (RayProgress::AddRun) as one run,
@@ -313,14 +425,30 @@ struct VolumeRayMarcher::Walker
   // the pixel turns opaque goes sample by sample as in the scalar loop, and leaves the rest of
   // its steps untaken, as that loop's lowered tout does. Each pixel sees the same samples in
   // the same order, with the same sums, records and profile, as from the scalar loop.
+  // Weighted (end weights): each pair's weights are found first; a pair without a lattice
+  // point takes its middle sample in the scalar loop (WeightedSamples) at once, the others go
+  // to the lanes from their first index, and the hand-over multiplies each step's absorbance
+  // by its weight (1 but at the pair's first and last index) as the scalar loop does, before
+  // the visitor and the stop see it: the same weighted samples, sums, records, weights and
+  // cut as WeightedRay's. A pixel holds one pair of a cell, so taking the middle samples
+  // first changes no pixel's order.
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
-  template <class Visitor>
+  template <bool Weighted, class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, int hits,
     Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     const walk::ClippedRays& c = state.Clipped;
     walk::LaneCell cell;
     cell.Pyramid = state.Interpolator.Shape() == CellShape::Pyramid;
+    // Cell takes a pyramid's linear inverse where it is close enough, else its closed form.
+    cell.Twisted = !state.Linear;
+    if (cell.Twisted)
+    {
+      const auto& g = state.Interpolator.GetPyramidG();
+      cell.G[0] = g[0];
+      cell.G[1] = g[1];
+      cell.G[2] = g[2];
+    }
     const auto& inverse = state.Interpolator.GetLinearInverse();
     for (int i = 0; i < 3; ++i)
     {
@@ -345,24 +473,63 @@ struct VolumeRayMarcher::Walker
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     int64_t samples = 0;
-    for (int h = 0; h < hits; h += 4)
+    // The rays the lanes take (with their weights, Weighted), in the rectangle's order.
+    const uint16_t* list = c.Hits;
+    int count = hits;
+    if constexpr (Weighted)
     {
-      const int n = std::min(4, hits - h);
+      if (state.Weights.size() < static_cast<size_t>(hits))
+      {
+        state.Weights.resize(walk::kTilePixels);
+        state.Weighted.resize(walk::kTilePixels);
+      }
+      count = 0;
+      for (int h = 0; h < hits; ++h)
+      {
+        const int l = c.Hits[h];
+        visitor.Segment(l, c.Tin[l], c.Tout[l]);
+        const walk::EndWeights w =
+          this->PairWeights<Visitor>(l, rays[l], c.Tin[l], c.Tout[l], state, progress);
+        if (w.Mid)
+        {
+          samples += this->WeightedSamples(l, rays[l], c.Tout[l], w, visitor, state, progress);
+          continue;
+        }
+        state.Weights[count] = w;
+        state.Weighted[count] = static_cast<uint16_t>(l);
+        ++count;
+      }
+      list = state.Weighted.data();
+    }
+    for (int h = 0; h < count; h += 4)
+    {
+      const int n = std::min(4, count - h);
       int local[4] = { 0, 0, 0, 0 };
       int64_t k[4] = { 0, 0, 0, 0 };
+      const walk::EndWeights* weights[4] = { nullptr, nullptr, nullptr, nullptr };
       for (int i = 0; i < 4; ++i)
       {
-        const int l = c.Hits[h + (i < n ? i : 0)];
+        const int at = h + (i < n ? i : 0);
+        const int l = list[at];
         local[i] = l;
-        k[i] = static_cast<int64_t>(c.Lattice[l]);
-        lanes.K[i] = c.Lattice[l];
+        if constexpr (Weighted)
+        {
+          weights[i] = &state.Weights[at];
+          k[i] = weights[i]->First;
+          lanes.K[i] = static_cast<double>(k[i]);
+        }
+        else
+        {
+          k[i] = static_cast<int64_t>(c.Lattice[l]);
+          lanes.K[i] = c.Lattice[l];
+        }
         lanes.Offset[i] = rays[l].Offset;
         lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
         for (int d = 0; d < 3; ++d)
         {
           lanes.D[d][i] = rays[l].D[d];
         }
-        if (i < n)
+        if (!Weighted && i < n)
         {
           visitor.Segment(l, c.Tin[l], c.Tout[l]);
         }
@@ -381,7 +548,7 @@ struct VolumeRayMarcher::Walker
           // pixel turns opaque is dropped and taken again sample by sample below, so that
           // the samples past the stop are not taken.
           typename Visitor::Run run;
-          visitor.RunBegin(run, l, taken);
+          visitor.RunBegin(run, l, taken, Weighted);
           uint32_t q[RayProgress::kMaxRun];
           uint32_t sum = 0;
           int last = -1;
@@ -393,11 +560,25 @@ struct VolumeRayMarcher::Walker
             {
               break;
             }
-            const float absorbance = steps.Absorbance[s][i];
+            float absorbance = steps.Absorbance[s][i];
+            // A float weight and a float product, as in the scalar loop.
+            float weight = 1;
+            if constexpr (Weighted)
+            {
+              weight = static_cast<float>(weights[i]->Of(kk + s));
+              absorbance *= weight;
+            }
             q[s] = 0;
             if (absorbance > 0)
             {
-              visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
+              if constexpr (Weighted)
+              {
+                visitor.RunAddWeighted(run, l, kk + s, t, steps.Scalar[s][i], absorbance, weight);
+              }
+              else
+              {
+                visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
+              }
               if (own)
               {
                 q[s] = progress.Bins->Quanta(absorbance);
@@ -428,11 +609,24 @@ struct VolumeRayMarcher::Walker
                 break;
               }
               ++samples;
-              const float absorbance = steps.Absorbance[s][i];
+              float absorbance = steps.Absorbance[s][i];
+              float weight = 1;
+              if constexpr (Weighted)
+              {
+                weight = static_cast<float>(weights[i]->Of(kk));
+                absorbance *= weight;
+              }
               if (absorbance > 0)
               {
                 const TransferSample sample{ { 0.f, 0.f, 0.f }, absorbance };
-                visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
+                if constexpr (Weighted && TakesWeights<Visitor>::value)
+                {
+                  visitor.WeightedSample(l, kk, t, steps.Scalar[s][i], sample, weight);
+                }
+                else
+                {
+                  visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
+                }
                 this->OwnStop(l, rays[l].Offset, kk, absorbance, bin, binEnd, tout, progress);
               }
             }
@@ -479,10 +673,12 @@ struct VolumeRayMarcher::Walker
     return this->SampleLoop<How>(
       local, ray, k, tout, this->Table.GetLayout(), visitor, state, progress);
   }
-  template <Sampling How, class Visitor>
+  // Weighted: each sample's absorbance times its end weight (apcEndWeights.h; k is
+  // weights->First), before the visitor and the stop see it.
+  template <Sampling How, bool Weighted = false, class Visitor>
   [[gnu::always_inline]] int64_t SampleLoop(int local, const RaySetup& ray, int64_t k, double tout,
-    const TransferTable::Layout& table, Visitor& visitor, CellState& state,
-    RayProgress& progress) const
+    const TransferTable::Layout& table, Visitor& visitor, CellState& state, RayProgress& progress,
+    const walk::EndWeights* weights = nullptr) const
   {
     double p0[3] = { 0, 0, 0 };
     double dp[3] = { 0, 0, 0 };
@@ -514,7 +710,10 @@ struct VolumeRayMarcher::Walker
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
     int bin = own ? progress.BinOf(k) : 0;
     int64_t binEnd = own ? progress.Ends[bin] : 0;
-    for (double t = this->Grid.At(k, ray.Offset); t < tout; ++k, t = this->Grid.At(k, ray.Offset))
+    // A pair without a lattice point: its one sample at the middle.
+    const bool mid = Weighted && weights->Mid;
+    for (double t = mid ? weights->MidT : this->Grid.At(k, ray.Offset); t < tout;
+         ++k, t = this->Grid.At(k, ray.Offset))
     {
       TransferSample s = state.CellSample;
       double scalar = state.CellScalar;
@@ -549,14 +748,32 @@ struct VolumeRayMarcher::Walker
         scalar = std::min(std::max(interpolated, state.Lo), state.Hi);
         s = TransferTable::Lookup(table, scalar);
       }
+      // A float weight and a float product: what pass 2 takes again from the cache.
+      float weight = 1;
+      if (Weighted)
+      {
+        weight = static_cast<float>(mid ? weights->MidWeight : weights->Of(k));
+        s.Absorbance *= weight;
+      }
       ++samples;
       if (s.Absorbance > 0 || Visitor::WantsTransparentSamples)
       {
-        visitor.Sample(local, k, t, scalar, s);
+        if constexpr (Weighted && TakesWeights<Visitor>::value)
+        {
+          visitor.WeightedSample(local, k, t, scalar, s, weight);
+        }
+        else
+        {
+          visitor.Sample(local, k, t, scalar, s);
+        }
         if (own)
         {
           this->OwnStop(local, ray.Offset, k, s.Absorbance, bin, binEnd, tout, progress);
         }
+      }
+      if (mid)
+      {
+        break;
       }
     }
     return samples;

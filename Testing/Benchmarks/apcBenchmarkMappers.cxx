@@ -8,7 +8,8 @@
 //     [--out DIR] [--csv FILE] [--data DIR] [--threads 1,2] [--zsweep-max-cells N]
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
-//     [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME]
+//     [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] [--end-weights]
+//     [--no-lanes]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -151,7 +152,9 @@ struct Options
   bool Lower60 = false;        // --setup paraview: the ramp with the lower 60 % of the range clear
   std::string WindField = "p"; // --field: the wind's point array (paraview_vs_apc.py: U_mag)
   bool Stop = true; // sampler: time with the recommended opaque stop (off: as ParaView renders)
-  int Moments = 4;  // APC's MBOIT moments
+  bool EndWeights = false; // APC and sampler: vtkAPCVolumeMapper::SetSampleEndWeights
+  bool Lanes = true;       // sampler: VolumeRayMarcher::SetSampleLanes (--no-lanes: scalar loops)
+  int Moments = 4;         // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
   bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
@@ -799,6 +802,7 @@ private:
     mapper->SetInputData(scene.Grid);
     mapper->SetMode(mode);
     mapper->SetNumberOfThreads(threads);
+    mapper->SetSampleEndWeights(this->Opt.EndWeights);
     mapper->SetSampleDistance(spacing);
     mapper->SetNumberOfMoments(this->Opt.Moments);
     stage.SetMapper(mapper, scene);
@@ -854,7 +858,7 @@ private:
     auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
     const apcbench::SamplerTiming s = apcbench::TimeSampler(grid, stage.Renderer, stage.Property,
       this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare,
-      this->Opt.LinearTolerance, this->Opt.Stop);
+      this->Opt.LinearTolerance, this->Opt.Stop, this->Opt.EndWeights, this->Opt.Lanes);
     row.Sampler = s;
     row.Pass1 = s.Pass1Seconds;
     row.Pass2 = s.Pass2Seconds;
@@ -1000,7 +1004,8 @@ void Usage()
                "[--moments 4|6|8]\n"
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
-               "  [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME]\n";
+               "  [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] "
+               "[--end-weights] [--no-lanes]\n";
 }
 
 } // namespace
@@ -1084,6 +1089,14 @@ int main(int argc, char* argv[])
     else if (arg == "--no-stop")
     {
       options.Stop = false;
+    }
+    else if (arg == "--end-weights")
+    {
+      options.EndWeights = true;
+    }
+    else if (arg == "--no-lanes")
+    {
+      options.Lanes = false;
     }
     else if (arg == "--lower60")
     {

@@ -207,11 +207,12 @@ public:
     this->View.Window->Render();
   }
 
-  Picture Render(int mode, double spacing, bool jitter)
+  Picture Render(int mode, double spacing, bool jitter, bool endWeights = false)
   {
     this->Mapper->SetMode(mode);
     this->Mapper->SetSampleDistance(spacing);
     this->Mapper->SetLatticeJitter(jitter);
+    this->Mapper->SetSampleEndWeights(endWeights);
     Picture picture;
     picture.CpuSeconds = this->View.TimedRender();
     const apctest::Frame frame =
@@ -270,6 +271,7 @@ struct Case
   int Mode = vtkAPCVolumeMapper::MBOIT;
   double Spacing = 0; // 0: the mapper's default
   bool Jitter = false;
+  bool EndWeights = false; // vtkAPCVolumeMapper::SetSampleEndWeights
 };
 
 std::vector<Case> Cases(double diagonal, double cell)
@@ -303,6 +305,15 @@ std::vector<Case> Cases(double diagonal, double cell)
     }
   }
   cases.push_back({ "mboit-default", vtkAPCVolumeMapper::MBOIT, 0.0, false });
+  // The end weights (no lattice staircase on grazing silhouettes; MBOIT only, EXACT keeps the
+  // plain lattice) at the default and at coarser spacings.
+  cases.push_back({ "mboit-default-weights", vtkAPCVolumeMapper::MBOIT, 0.0, false, true });
+  for (double f : { 1.0, 1.25, 1.5, 2.0 })
+  {
+    std::ostringstream name;
+    name << "cell" << f << "-weights";
+    cases.push_back({ "mboit-" + name.str(), vtkAPCVolumeMapper::MBOIT, f * cell, false, true });
+  }
   return cases;
 }
 } // namespace
@@ -311,8 +322,9 @@ int SpacingStudy(
   const std::string& data, const std::string& out, int size, const std::string& wanted)
 {
   std::ofstream csv(out + "/spacing.csv");
-  const std::string header = "scene,case,mode,jitter,spacing,spacing_per_cell,"
-                             "samples_per_diagonal,ssim,psnr,max_abs_diff,cpu_s,mean_cell";
+  const std::string header =
+    "scene,case,mode,jitter,spacing,spacing_per_cell,"
+    "samples_per_diagonal,ssim,psnr,max_abs_diff,cpu_s,mean_cell,end_weights";
   csv << header << "\n";
   std::cout << header << std::endl;
   for (const apctest::Scene& scene : SpacingScenes(data, size))
@@ -345,7 +357,8 @@ int SpacingStudy(
     APCStage stage(scene);
     const Picture exact = stage.Render(vtkAPCVolumeMapper::EXACT, finest / 4, false);
     WritePicture(exact.RGB, size, size, out + "/spacing_" + scene.Name + "_reference.png");
-    auto row = [&](const std::string& name, const char* mode, bool jitter, const Picture& p)
+    auto row = [&](const std::string& name, const char* mode, bool jitter, const Picture& p,
+                 bool endWeights = false)
     {
       const apc::ImageComparison c =
         apc::CompareImages(p.RGB.data(), exact.RGB.data(), size, size, 3, 1.0, 16.0 / 255);
@@ -354,7 +367,7 @@ int SpacingStudy(
       line << scene.Name << "," << name << "," << mode << "," << (jitter ? 1 : 0) << ","
            << p.Spacing << "," << (p.Spacing > 0 ? p.Spacing / cell : 0) << ","
            << (p.Spacing > 0 ? diagonal / p.Spacing : 0) << "," << c.Ssim << "," << c.Psnr << ","
-           << c.MaxAbsDiff << "," << p.CpuSeconds << "," << cell;
+           << c.MaxAbsDiff << "," << p.CpuSeconds << "," << cell << "," << (endWeights ? 1 : 0);
       csv << line.str() << std::endl;
       std::cout << line.str() << std::endl;
       WritePicture(p.RGB, size, size, out + "/spacing_" + scene.Name + "_" + name + ".png");
@@ -363,7 +376,7 @@ int SpacingStudy(
     for (const Case& c : cases)
     {
       row(c.Name, c.Mode == vtkAPCVolumeMapper::EXACT ? "exact" : "mboit", c.Jitter,
-        stage.Render(c.Mode, c.Spacing, c.Jitter));
+        stage.Render(c.Mode, c.Spacing, c.Jitter, c.EndWeights), c.EndWeights);
     }
     row("projected-tetra", "pt", false, RenderProjectedTetra(scene));
   }

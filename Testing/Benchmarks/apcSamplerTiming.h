@@ -70,10 +70,11 @@ struct SamplerTiming
 // the non-stopping images for the two errors (one untimed frame each).
 // linearTolerance: the marcher's linear-inverse tolerance in table bins (NaN: its default).
 // withStop false: timed without the opaque stop, as the mapper renders by default (pass 2 then
-// finds hidden depths where rays are opaque).
+// finds hidden depths where rays are opaque). endWeights: VolumeRayMarcher::SetSampleEndWeights.
+// lanes: VolumeRayMarcher::SetSampleLanes (off: every pair in the scalar loop).
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
-  double linearTolerance = NAN, bool withStop = true);
+  double linearTolerance = NAN, bool withStop = true, bool endWeights = false, bool lanes = true);
 
 } // namespace apcbench
 

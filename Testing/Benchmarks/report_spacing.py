@@ -23,6 +23,9 @@ SHOWN = (("mboit-diag256", "old default: diagonal / 256"),
          ("mboit-cell1", "1 mean cell size"),
          ("mboit-cell1-jitter", "1 mean cell size, jitter"),
          ("mboit-cell2-jitter", "2 mean cell sizes, jitter"),
+         ("mboit-default-weights", "default spacing, Sample End Weights"),
+         ("mboit-cell1.5-weights", "1.5 mean cell sizes, end weights"),
+         ("mboit-cell2-weights", "2 mean cell sizes, end weights"),
          ("exact-diag256", "EXACT at diagonal / 256"),
          ("exact-cell1", "EXACT at 1 mean cell size"),
          ("projected-tetra", "projected tetra (ParaView's Volume)"))
@@ -37,7 +40,8 @@ class SpacingSection:
             shutil.copyfile(path, kept)
             for r in rows:
                 if r["scene"] in ("wind", "flange") and r["case"] in (
-                        "reference", "mboit-default", "mboit-diag256", "projected-tetra"):
+                        "reference", "mboit-default", "mboit-default-weights", "mboit-diag256",
+                        "projected-tetra"):
                     png = "spacing_%s_%s.png" % (r["scene"], r["case"])
                     shutil.copyfile(os.path.join(self.results, "quality", png),
                                     os.path.join(self.figures, png))
@@ -106,16 +110,27 @@ class SpacingSection:
             "Lattice Jitter trades bands for noise and does not raise PSNR or SSIM here: it "
             "stays off by default. Grazing silhouettes: the wind's edges show the lattice as a "
             "fine staircase at the new default, and a slightly finer one at 192 along the "
-            "diagonal. On the synthetic puzzle scenes with ParaView's ramp, MBOIT's own error "
-            "(the moments) dominates at every spacing (compare the EXACT rows).\n")
+            "diagonal; with Sample End Weights (each cell's end samples weighted by the exact "
+            "length of the ray inside it, docs/sampler.md) the staircase is gone and the "
+            "silhouettes match the reference's, and PSNR at the same spacing rises on every "
+            "bundled data set (the *end weights* rows; wind 41.3 → 51.5 dB at the default, "
+            "35.2 → 45.4 dB at 2 mean cell sizes). It stays off by default: the frame costs 1.46× "
+            "the CPU with it (pass 1 1.39× per sample in the lanes, 13 % more samples), and a "
+            "coarser spacing does not shed its samples; Lattice Jitter turns the staircase into "
+            "a noisy edge (docs/sampler.md). On the synthetic puzzle scenes with ParaView's ramp, MBOIT's "
+            "own error (the moments) dominates at every spacing (compare the EXACT rows).\n")
         pictures = [s for s in ("wind", "flange") if (s, "reference") in get and os.path.exists(
             os.path.join(self.figures, "spacing_%s_reference.png" % s))]
         if pictures:
-            body = [[s] + ["![](evaluation/spacing_%s_%s.png)" % (s, c) for c in (
-                "reference", "mboit-default", "mboit-diag256", "projected-tetra")]
-                for s in pictures]
-            self.add(table(["scene", "exact reference", "new default", "old default",
-                            "projected tetra"], body))
+            cases = ["reference", "mboit-default", "mboit-diag256", "projected-tetra"]
+            heads = ["scene", "exact reference", "new default", "old default", "projected tetra"]
+            if all(os.path.exists(os.path.join(
+                    self.figures, "spacing_%s_mboit-default-weights.png" % s)) for s in pictures):
+                cases.insert(2, "mboit-default-weights")
+                heads.insert(3, "new default, end weights")
+            body = [[s] + ["![](evaluation/spacing_%s_%s.png)" % (s, c) for c in cases]
+                    for s in pictures]
+            self.add(table(heads, body))
 
 
 if __name__ == "__main__":

@@ -1,8 +1,9 @@
 // Pass 1's samples of four rays at a time (LaneSamplesAvx2) against the walker's scalar
 // sample loop, written out here with the same calls (LinearRayOrigin, LinearRayDirection,
-// p0 + t dp, LinearScalarAt, the clamp, TransferTable::Lookup): every depth, scalar and absorbance
-// the same bit for bit, on random distorted cells, rays, lattice offsets and tables; and with
-// pass 1's own stop, each lane's opaque bin (RayProgress::BinOf).
+// p0 + t dp, LinearScalarAt or a twisted pyramid's PyramidScalarAt, the clamp,
+// TransferTable::Lookup): every depth, scalar and absorbance the same bit for bit, on random
+// distorted cells, rays, lattice offsets and tables; and with pass 1's own stop, each lane's
+// opaque bin (RayProgress::BinOf).
 #include "apcCellInterpolation.h"
 #include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
@@ -51,10 +52,28 @@ bool SameBits(float a, float b)
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
+// Whether PyramidCoordinates took its quadratic's other root at a (its w is not the first
+// root's, written out as it forms that root).
+bool TookOtherRoot(const CellInterpolator& interpolator, const double a[3])
+{
+  const auto& g = interpolator.GetPyramidG();
+  const double A = g[2] - g[0] * g[1];
+  const double B = 1.0 - a[2] + a[0] * g[1] + a[1] * g[0];
+  const double C = a[0] * a[1];
+  const double root = std::sqrt(std::max(B * B + 4.0 * A * C, 0.0));
+  const double denom = B >= 0 ? B + root : B - root;
+  const double first = denom != 0 ? 2.0 * C / denom : 0.0;
+  double q[3];
+  double w = 0;
+  interpolator.PyramidCoordinates(a, q, w);
+  return !SameBits(w, first) && !(std::isnan(w) && std::isnan(first));
+}
+
 // Random cells, each with four rays from one eye (a random lattice index to start from, a
 // random end, unused lanes included); overflow gives some lanes a direction whose
-// coordinates overflow, so that their scalars are infinite or NaN.
-void CheckLanes(double distortion, bool jitter, bool overflow)
+// coordinates overflow, so that their scalars are infinite or NaN. twisted: pyramids only,
+// by their closed-form inverse (LaneCell::Twisted), with rays aimed through the cell.
+void CheckLanes(double distortion, bool jitter, bool overflow, bool twisted = false)
 {
   std::mt19937 rng(1234);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -66,9 +85,10 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
   int visible = 0;
   int binsCompared = 0;
   int binsAboveZero = 0;
+  int otherRoots = 0; // twisted: samples whose closed form took the quadratic's other root
   for (int trial = 0; trial < 2000; ++trial)
   {
-    const CellShape shape = shapes[trial % 4];
+    const CellShape shape = twisted ? CellShape::Pyramid : shapes[trial % 4];
     const CellCorners corners = apctest::DistortedCell(shape, distortion, rng);
     CellInterpolator interpolator;
     interpolator.Set(corners);
@@ -79,6 +99,9 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
 
     apc::walk::LaneCell cell;
     cell.Pyramid = shape == CellShape::Pyramid;
+    cell.Twisted = twisted;
+    const auto& g = interpolator.GetPyramidG();
+    std::copy(g, g + 3, cell.G);
     const auto& inverse = interpolator.GetLinearInverse();
     double p0[3];
     interpolator.LinearRayOrigin(eye, p0);
@@ -98,7 +121,25 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
     apc::walk::LaneRays rays;
     for (int i = 0; i < 4; ++i)
     {
-      const double k = std::floor(40.0 + 60.0 * unit(rng));
+      double k = std::floor(40.0 + 60.0 * unit(rng));
+      double through[3] = { 0, 0, 0 };
+      if (twisted)
+      {
+        // Towards a point in or near the cell (corners at about 50 to 53), from a few steps
+        // before it.
+        double length = 0;
+        for (int d = 0; d < 3; ++d)
+        {
+          through[d] = 50.0 + 3.0 * unit(rng) - eye[d];
+          length += through[d] * through[d];
+        }
+        length = std::sqrt(length);
+        for (auto& d : through)
+        {
+          d /= length;
+        }
+        k = std::floor(length / lattice.Spacing - 8.0 * unit(rng));
+      }
       rays.K[i] = k;
       rays.Offset[i] = jitter ? unit(rng) : 0.0;
       const double t0 = lattice.At(static_cast<int64_t>(k), rays.Offset[i]);
@@ -107,7 +148,7 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
       rays.Tout[i] = r < 0.1 ? -inf : t0 + lattice.Spacing * 12.0 * unit(rng);
       for (int d = 0; d < 3; ++d)
       {
-        rays.D[d][i] = u(rng);
+        rays.D[d][i] = twisted ? through[d] : u(rng);
       }
       if (overflow && i == trial % 4)
       {
@@ -174,8 +215,13 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
         {
           pcoords[a] = p0[a] + t * dp[a];
         }
-        const double scalar =
-          std::min(std::max(interpolator.LinearScalarAt(pcoords), cell.Lo), cell.Hi);
+        const double interpolated =
+          twisted ? interpolator.PyramidScalarAt(pcoords) : interpolator.LinearScalarAt(pcoords);
+        const double scalar = std::min(std::max(interpolated, cell.Lo), cell.Hi);
+        if (twisted)
+        {
+          otherRoots += TookOtherRoot(interpolator, pcoords) ? 1 : 0;
+        }
         const apc::TransferSample sample = apc::TransferTable::Lookup(layout, scalar);
         ASSERT_TRUE(SameBits(steps.T[s][i], t)) << "trial " << trial << " lane " << i;
         ASSERT_TRUE(SameBits(steps.Scalar[s][i], scalar) ||
@@ -196,6 +242,8 @@ void CheckLanes(double distortion, bool jitter, bool overflow)
   // The bins of pass 1's own stop (LaneSteps::Bin): inside, before and past the ends.
   EXPECT_GT(binsCompared, 1000);
   EXPECT_GT(binsAboveZero, binsCompared / 4);
+  // The second root's blend is exercised.
+  EXPECT_TRUE(!twisted || otherRoots > 100) << otherRoots << " other roots";
 }
 
 } // namespace
@@ -216,6 +264,16 @@ TEST(LaneSamples, JitteredAndDistortedCellsMatchBitForBit)
     GTEST_SKIP() << "no AVX2";
   }
   CheckLanes(0.2, true, false);
+}
+
+TEST(LaneSamples, TwistedPyramidsClosedFormMatchesBitForBit)
+{
+  if (!apc::walk::HasAvx2())
+  {
+    GTEST_SKIP() << "no AVX2";
+  }
+  CheckLanes(0.3, false, false, true);
+  CheckLanes(0.3, true, true, true);
 }
 
 TEST(LaneSamples, ScalarsThatAreNotFiniteGiveNoAbsorbance)

@@ -293,6 +293,13 @@ int main(int argc, char* argv[])
   CompareWithWhole(controller, "wind jittered", jittered, WindPieces(rank, ranks), 96, false);
   CompareWithWhole(
     controller, "segments wind jittered", jittered, WindPieces(rank, ranks), 96, false, true);
+  // The end weights depend only on the cell and the ray: still the one-process image, with the
+  // opaque stop (on by default) cutting weighted pairs, and in the exact sort-last mode.
+  apctest::Scene weighted = wind;
+  weighted.SampleEndWeights = true;
+  CompareWithWhole(controller, "wind end weights", weighted, WindPieces(rank, ranks), 96, false);
+  CompareWithWhole(
+    controller, "segments wind end weights", weighted, WindPieces(rank, ranks), 96, false, true);
 
   // The exact sort-last baseline against the one-process EXACT image.
   CompareWithWhole(

@@ -33,6 +33,7 @@ void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const Scene&
   mapper->SetSampleDistance(scene.SampleDistance);
   mapper->SetNumberOfMoments(scene.Moments);
   mapper->SetLatticeJitter(scene.LatticeJitter);
+  mapper->SetSampleEndWeights(scene.SampleEndWeights);
   volume->SetMapper(mapper);
   volume->SetProperty(MakeVolumeProperty(scene.TF));
 }

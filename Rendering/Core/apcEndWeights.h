@@ -1,0 +1,72 @@
+// The samples of one (cell, ray) pair weighted so that they sum to the pair's exact length
+// (VolumeRayMarcher::SetSampleEndWeights). Every lattice sample stands for one spacing s of
+// ray, so a ray's sampled length inside the mesh jumps by s whenever a boundary face crosses
+// a lattice point: along a grazing silhouette those jumps line up into a staircase. Weighted,
+// the pair's first sample counts (t_first - tin) / s + 1/2, its last (tout - t_last) / s + 1/2
+// and a pair's only sample (tout - tin) / s, the others 1: the weights sum to (tout - tin) / s,
+// two pairs meeting at a shared face still sum to 2 there (the interior hardly changes), and
+// the mesh's boundary is integrated exactly. A pair with no lattice point gets one sample at
+// its middle weighted by its length, so that grazing slivers of boundary cells do not drop in
+// and out. The weights depend only on the pair's interval (the cell and the ray), never on
+// which process holds the cell. Internal to the core's marcher.
+#ifndef apcEndWeights_h
+#define apcEndWeights_h
+
+#include "apcRayWalk.h"
+
+#include <cstdint>
+
+namespace apc
+{
+namespace walk
+{
+
+struct EndWeights
+{
+  int64_t First = 0; // the first lattice index in [tin, tout); with Mid, the one before tin
+  int64_t Last = -1; // the last lattice index in [tin, tout) (< First: none)
+  double FirstWeight = 1;
+  double LastWeight = 1;
+  // No lattice point in [tin, tout): one sample at MidT of weight MidWeight, which counts as
+  // lattice index First (the lattice point before it, so that it falls in the opaque stop's
+  // bin whose edge lies behind it).
+  bool Mid = false;
+  double MidT = 0;
+  double MidWeight = 0;
+
+  // The weight of lattice sample k of the pair (First <= k <= Last).
+  double Of(int64_t k) const
+  {
+    return k == this->First ? this->FirstWeight : (k == this->Last ? this->LastWeight : 1.0);
+  }
+};
+
+// The weights of the pair [tin, tout) (tin < tout) of a ray with this lattice offset.
+[[gnu::always_inline]] inline EndWeights EndWeightsOf(
+  const Lattice& lattice, double tin, double tout, double offset)
+{
+  EndWeights w;
+  w.First = lattice.First(tin, offset);
+  w.Last = lattice.First(tout, offset) - 1;
+  if (w.Last < w.First)
+  {
+    w.Mid = true;
+    w.First -= 1;
+    w.MidT = 0.5 * (tin + tout);
+    w.MidWeight = (tout - tin) * lattice.InverseSpacing;
+    return w;
+  }
+  if (w.Last == w.First)
+  {
+    w.FirstWeight = w.LastWeight = (tout - tin) * lattice.InverseSpacing;
+    return w;
+  }
+  w.FirstWeight = (lattice.At(w.First, offset) - tin) * lattice.InverseSpacing + 0.5;
+  w.LastWeight = (tout - lattice.At(w.Last, offset)) * lattice.InverseSpacing + 0.5;
+  return w;
+}
+
+} // namespace walk
+} // namespace apc
+
+#endif
