@@ -443,7 +443,8 @@ Frame RenderBlock(const apc::CellMesh& mesh, bool lanes, bool weights, bool stop
   out.Pass1Samples = marcher.GetLastSampleCount();
   if (stop)
   {
-    out.Profile = marcher.GetOpaqueProfile();
+    const apc::VolumeRayMarcher::OpaqueProfile profile = marcher.GetOpaqueProfile();
+    out.Profile.assign(profile.data(), profile.data() + profile.size());
     std::vector<double> own = out.Moments;
     marcher.ApplyOpaqueCut<4>(table, warp, out.Profile.data(), own.data());
     out.Moments = own;
