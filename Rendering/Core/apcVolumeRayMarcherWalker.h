@@ -297,23 +297,35 @@ struct VolumeRayMarcher::Walker
       k = this->Grid.First(tin, ray.Offset);
     }
     this->Prepare(ray, state);
+    return BySampling(state,
+      [&](auto how) {
+        return this->Samples<decltype(how)::value>(local, ray, k, tout, visitor, state, progress);
+      });
+  }
+
+  // Calls f with the sampling a prepared cell state takes (Prepare), as a
+  // std::integral_constant: the one choice for the loops that take one ray at a time.
+  template <class F>
+  static int64_t BySampling(const CellState& state, F&& f)
+  {
+    using S = Sampling;
     if (!state.Interpolate)
     {
-      return this->Samples<Sampling::Constant>(local, ray, k, tout, visitor, state, progress);
+      return f(std::integral_constant<S, S::Constant>());
     }
     if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
     {
-      return this->Samples<Sampling::LinearPyramid>(local, ray, k, tout, visitor, state, progress);
+      return f(std::integral_constant<S, S::LinearPyramid>());
     }
     if (state.Linear)
     {
-      return this->Samples<Sampling::Linear>(local, ray, k, tout, visitor, state, progress);
+      return f(std::integral_constant<S, S::Linear>());
     }
     if (state.Interpolator.HasPyramidInverse())
     {
-      return this->Samples<Sampling::Pyramid>(local, ray, k, tout, visitor, state, progress);
+      return f(std::integral_constant<S, S::Pyramid>());
     }
-    return this->Samples<Sampling::Follow>(local, ray, k, tout, visitor, state, progress);
+    return f(std::integral_constant<S, S::Follow>());
   }
 
   // Ray's samples with end weights (EndWeights): the ray local inside the cell over
@@ -351,28 +363,12 @@ struct VolumeRayMarcher::Walker
   {
     this->Prepare(ray, state);
     const TransferTable::Layout table = this->Table.GetLayout();
-    if (!state.Interpolate)
-    {
-      return this->SampleLoop<Sampling::Constant, true>(
-        local, ray, w.First, tout, table, visitor, state, progress, &w);
-    }
-    if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
-    {
-      return this->SampleLoop<Sampling::LinearPyramid, true>(
-        local, ray, w.First, tout, table, visitor, state, progress, &w);
-    }
-    if (state.Linear)
-    {
-      return this->SampleLoop<Sampling::Linear, true>(
-        local, ray, w.First, tout, table, visitor, state, progress, &w);
-    }
-    if (state.Interpolator.HasPyramidInverse())
-    {
-      return this->SampleLoop<Sampling::Pyramid, true>(
-        local, ray, w.First, tout, table, visitor, state, progress, &w);
-    }
-    return this->SampleLoop<Sampling::Follow, true>(
-      local, ray, w.First, tout, table, visitor, state, progress, &w);
+    return BySampling(state,
+      [&](auto how)
+      {
+        return this->SampleLoop<decltype(how)::value, true>(
+          local, ray, w.First, tout, table, visitor, state, progress, &w);
+      });
   }
 
   // Sets the cell's interpolation up once one of its rays (ray) has a sample: lazily, since
