@@ -91,6 +91,11 @@ public:
 
   const LogDepthWarp& GetWarp() const { return this->Warp; }
   int64_t GetNumberOfEntries() const { return static_cast<int64_t>(this->Z.size()); }
+  // The table itself (entry i: the warp of index GetBase() + i, of depth index times
+  // GetSpacing()), for the walker's lanes, which read four entries at once.
+  const double* GetEntries() const { return this->Z.data(); }
+  int64_t GetBase() const { return this->Base; }
+  double GetSpacing() const { return this->Spacing; }
 
 private:
   LogDepthWarp Warp;

@@ -7,6 +7,7 @@
 #define apcRayVisitors_h
 
 #include "apcDepthWarp.h"
+#include "apcLaneMoments.h"
 #include "apcPowerMoments.h"
 #include "apcRaySegments.h"
 #include "apcSampleCache.h"
@@ -317,6 +318,44 @@ struct Moments : NoSegments
     {
       this->Buffer->Used += run.Kept;
       this->Buffer->Counts[pixel] += run.Kept;
+    }
+  }
+  // The lanes' hand-over four pixels at a time (walk::LaneMomentsAvx2, for 4 moments): the
+  // walker reads each pixel's sums here and hands back each lane's run it keeps with
+  // LaneRunEnd.
+  static constexpr bool TakesLaneMoments = N == 4;
+  const double* PixelSums(int pixel) const { return this->Sums.data() + pixel * (N + 1); }
+  // Keeps lane's run of m (steps from lattice index k, pixel's): its sums, and the records of
+  // its visible steps in order, as RunBegin, RunAdd per step and RunEnd would.
+  [[gnu::always_inline]] void LaneRunEnd(
+    int pixel, const walk::LaneMoments& m, int lane, int64_t k, const walk::LaneSteps& steps)
+  {
+    static_assert(N == 4, "the lanes' sums are four moments'");
+    const uint64_t visible = static_cast<uint64_t>(m.Visible[lane]);
+    if (visible == 0)
+    {
+      return; // adds nothing (+0 to each sum) and records nothing
+    }
+    double* sums = this->Sums.data() + pixel * (N + 1);
+    for (int j = 0; j < 4; ++j)
+    {
+      sums[j] = m.Sums[lane][j];
+    }
+    sums[4] = m.Sum4[lane];
+    if (this->Recording)
+    {
+      RecordedSample* record = this->Buffer->Room(static_cast<size_t>(m.Steps[lane]));
+      uint32_t kept = 0;
+      for (uint64_t bits = visible; bits; bits &= bits - 1, ++kept)
+      {
+        const int s = __builtin_ctzll(bits);
+        record[kept].Z = m.Z[s][lane];
+        record[kept].Scalar = static_cast<float>(steps.Scalar[s][lane]);
+        record[kept].Pixel = static_cast<uint16_t>(pixel);
+        record[kept].K16 = static_cast<uint16_t>(k + s);
+      }
+      this->Buffer->Used += kept;
+      this->Buffer->Counts[pixel] += kept;
     }
   }
   void EndTile(const TileRect& tile)

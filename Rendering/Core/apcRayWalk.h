@@ -292,9 +292,9 @@ struct RayProgress
   {
     return this->Opaque[p] || this->Total[p] + sum < OpaqueBins::kOpaque;
   }
-  // bin: BinOf(k); sample s's quanta q[s].
+  // bin: BinOf(k); sample s's quanta q[s * stride].
   [[gnu::always_inline]] void AddRun(
-    int p, int64_t k, int bin, const uint32_t* q, uint32_t sum, int last)
+    int p, int64_t k, int bin, const uint32_t* q, uint32_t sum, int last, int stride = 1)
   {
     if (last < 0)
     {
@@ -314,7 +314,7 @@ struct RayProgress
         {
           ++bin;
         }
-        this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q[s]);
+        this->Profile[p][bin] = OpaqueBins::Add(this->Profile[p][bin], q[s * stride]);
       }
     }
     this->FarK[p] = std::max(this->FarK[p], k + last);

@@ -8,6 +8,7 @@
 
 #include "apcCellInterpolation.h"
 #include "apcEndWeights.h"
+#include "apcLaneMoments.h"
 #include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
 #include "apcRayClip.h"
@@ -57,6 +58,18 @@ template <class Visitor>
 struct TakesWeights<Visitor,
   std::void_t<decltype(std::declval<Visitor&>().WeightedSample(
     0, int64_t(0), 0.0, 0.0, std::declval<const TransferSample&>(), 1.0f))>> : std::true_type
+{
+};
+
+// Visitors that take the lanes' hand-over four pixels at a time (walk::LaneMomentsAvx2:
+// Moments<4>) say so with TakesLaneMoments.
+template <class Visitor, class = void>
+struct LaneMomentsVisitor : std::false_type
+{
+};
+template <class Visitor>
+struct LaneMomentsVisitor<Visitor, std::void_t<decltype(Visitor::TakesLaneMoments)>>
+  : std::bool_constant<Visitor::TakesLaneMoments>
 {
 };
 
@@ -229,7 +242,7 @@ struct VolumeRayMarcher::Walker
             this->Prepare(rays[c.Hits[0]], state);
             if (state.Interpolate && (state.Linear || state.Interpolator.HasPyramidInverse()))
             {
-              return this->LaneSamples<true>(rays, hits, visitor, state, progress);
+              return this->LaneSamples<true>(rays, packed, hits, visitor, state, progress);
             }
           }
         }
@@ -254,7 +267,7 @@ struct VolumeRayMarcher::Walker
         if ((state.Linear || state.Interpolator.HasPyramidInverse()) && this->SharedOrigin &&
           this->Lanes)
         {
-          return this->LaneSamples<false>(rays, hits, visitor, state, progress);
+          return this->LaneSamples<false>(rays, packed, hits, visitor, state, progress);
         }
       }
       if (state.Linear && state.Interpolator.Shape() == CellShape::Pyramid)
@@ -430,8 +443,8 @@ struct VolumeRayMarcher::Walker
   // first changes no pixel's order.
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
   template <bool Weighted, class Visitor>
-  [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, int hits,
-    Visitor& visitor, CellState& state, RayProgress& progress) const
+  [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, const TileRays& packed,
+    int hits, Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     const walk::ClippedRays& c = state.Clipped;
     walk::LaneCell cell;
@@ -468,6 +481,7 @@ struct VolumeRayMarcher::Walker
     cell.BinEnds = own ? progress.BinEnds : nullptr;
     walk::LaneRays lanes;
     walk::LaneSteps steps;
+    walk::LaneMoments across;
     int64_t samples = 0;
     // The rays the lanes take (with their weights, Weighted), in the rectangle's order.
     const uint16_t* list = c.Hits;
@@ -513,83 +527,125 @@ struct VolumeRayMarcher::Walker
           weights[i] = &state.Weights[at];
           k[i] = weights[i]->First;
           lanes.K[i] = static_cast<double>(k[i]);
+          lanes.Offset[i] = rays[l].Offset;
+          lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
+          for (int d = 0; d < 3; ++d)
+          {
+            lanes.D[d][i] = rays[l].D[d];
+          }
         }
         else
         {
           k[i] = static_cast<int64_t>(c.Lattice[l]);
-          lanes.K[i] = c.Lattice[l];
+          if (i < n)
+          {
+            visitor.Segment(l, c.Tin[l], c.Tout[l]);
+          }
         }
-        lanes.Offset[i] = rays[l].Offset;
-        lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
-        for (int d = 0; d < 3; ++d)
-        {
-          lanes.D[d][i] = rays[l].D[d];
-        }
-        if (!Weighted && i < n)
-        {
-          visitor.Segment(l, c.Tin[l], c.Tout[l]);
-        }
+      }
+      if constexpr (!Weighted)
+      {
+        walk::GatherLaneRays(packed, c, list + h, n, lanes);
       }
       for (bool more = true; more;)
       {
         const int taken = walk::LaneSamplesAvx2(cell, lanes, steps);
         more = false;
+        // Four pixels' sums at once: each step's warp, moments and quanta across the lanes.
+        constexpr bool acrossLanes = !Weighted && LaneMomentsVisitor<Visitor>::value;
+        if constexpr (acrossLanes)
+        {
+          const double* sums[4];
+          for (int i = 0; i < 4; ++i)
+          {
+            sums[i] = visitor.PixelSums(local[i]);
+          }
+          walk::LaneMomentsAvx2(steps, taken, lanes, sums, *visitor.Warp,
+            own ? progress.Bins->QuantaPerAbsorbance : 0.0, across);
+        }
         for (int i = 0; i < n; ++i)
         {
           const int l = local[i];
           double tout = lanes.Tout[i];
           int64_t kk = k[i];
-          // The ray's steps inside its interval, handed over as one run in one loop: the
-          // pixel's sums in registers, its records' room taken once. A run in which the
-          // pixel turns opaque is dropped and taken again sample by sample below, so that
-          // the samples past the stop are not taken.
-          typename Visitor::Run run;
-          visitor.RunBegin(run, l, taken, Weighted);
-          uint32_t q[RayProgress::kMaxRun];
-          uint32_t sum = 0;
-          int last = -1;
           int s = 0;
-          for (; s < taken; ++s)
+          bool kept = false;
+          if constexpr (acrossLanes)
           {
-            const double t = steps.T[s][i];
-            if (!(t < tout))
+            // The lane's run as LaneMomentsAvx2 found it: kept where it cannot turn the
+            // pixel opaque, else taken again sample by sample below.
+            const uint32_t sum = static_cast<uint32_t>(across.QuantaSum[i]);
+            kept = !own || progress.RunStaysOpen(l, sum);
+            if (kept)
             {
-              break;
-            }
-            float absorbance = steps.Absorbance[s][i];
-            // A float weight and a float product, as in the scalar loop.
-            float weight = 1;
-            if constexpr (Weighted)
-            {
-              weight = static_cast<float>(weights[i]->Of(kk + s));
-              absorbance *= weight;
-            }
-            q[s] = 0;
-            if (absorbance > 0)
-            {
-              if constexpr (Weighted)
-              {
-                visitor.RunAddWeighted(run, l, kk + s, t, steps.Scalar[s][i], absorbance, weight);
-              }
-              else
-              {
-                visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
-              }
+              s = static_cast<int>(across.Steps[i]);
+              visitor.LaneRunEnd(l, across, i, kk, steps);
               if (own)
               {
-                q[s] = progress.Bins->Quanta(absorbance);
-                sum += q[s]; // at most kMaxRun times kOpaque: no overflow
-                last = s;
+                const uint64_t visible = static_cast<uint64_t>(across.Visible[i]);
+                const int last = visible ? 63 - __builtin_clzll(visible) : -1;
+                progress.AddRun(
+                  l, kk, static_cast<int>(steps.Bin[i]), &across.Quanta[0][i], sum, last, 4);
               }
             }
           }
-          if (!own || progress.RunStaysOpen(l, sum))
+          else
           {
-            visitor.RunEnd(run, l);
-            if (own)
+            // The ray's steps inside its interval, handed over as one run in one loop: the
+            // pixel's sums in registers, its records' room taken once. A run in which the
+            // pixel turns opaque is dropped and taken again sample by sample below, so that
+            // the samples past the stop are not taken.
+            typename Visitor::Run run;
+            visitor.RunBegin(run, l, taken, Weighted);
+            uint32_t q[RayProgress::kMaxRun];
+            uint32_t sum = 0;
+            int last = -1;
+            for (; s < taken; ++s)
             {
-              progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, sum, last);
+              const double t = steps.T[s][i];
+              if (!(t < tout))
+              {
+                break;
+              }
+              float absorbance = steps.Absorbance[s][i];
+              // A float weight and a float product, as in the scalar loop.
+              float weight = 1;
+              if constexpr (Weighted)
+              {
+                weight = static_cast<float>(weights[i]->Of(kk + s));
+                absorbance *= weight;
+              }
+              q[s] = 0;
+              if (absorbance > 0)
+              {
+                if constexpr (Weighted)
+                {
+                  visitor.RunAddWeighted(run, l, kk + s, t, steps.Scalar[s][i], absorbance, weight);
+                }
+                else
+                {
+                  visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
+                }
+                if (own)
+                {
+                  q[s] = progress.Bins->Quanta(absorbance);
+                  sum += q[s]; // at most kMaxRun times kOpaque: no overflow
+                  last = s;
+                }
+              }
             }
+            kept = !own || progress.RunStaysOpen(l, sum);
+            if (kept)
+            {
+              visitor.RunEnd(run, l);
+              if (own)
+              {
+                progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, sum, last);
+              }
+            }
+          }
+          if (kept)
+          {
             samples += s;
             kk += s;
           }

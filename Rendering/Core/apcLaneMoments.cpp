@@ -1,0 +1,121 @@
+#include "apcLaneMoments.h"
+
+#include "apcOpaqueBins.h"
+
+#include <immintrin.h>
+
+namespace apc
+{
+namespace walk
+{
+
+namespace
+{
+
+// Rows r0 .. r3 to columns: c[j] holds r0[j], r1[j], r2[j], r3[j] (its own inverse).
+__attribute__((target("avx2"), always_inline)) inline void Transpose(
+  __m256d r0, __m256d r1, __m256d r2, __m256d r3, __m256d* c)
+{
+  const __m256d t0 = _mm256_unpacklo_pd(r0, r1);
+  const __m256d t1 = _mm256_unpackhi_pd(r0, r1);
+  const __m256d t2 = _mm256_unpacklo_pd(r2, r3);
+  const __m256d t3 = _mm256_unpackhi_pd(r2, r3);
+  c[0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+  c[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+  c[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+  c[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+} // namespace
+
+// Only AVX2, no FMA: each product and sum must round as Moments::RunAdd's do.
+__attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int taken,
+  const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
+  double quantaPerAbsorbance, LaneMoments& out)
+{
+  // The four pixels' sums, one pixel per lane.
+  __m256d b[5];
+  Transpose(_mm256_loadu_pd(sums[0]), _mm256_loadu_pd(sums[1]), _mm256_loadu_pd(sums[2]),
+    _mm256_loadu_pd(sums[3]), b);
+  b[4] = _mm256_setr_pd(sums[0][4], sums[1][4], sums[2][4], sums[3][4]);
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d tout = _mm256_load_pd(rays.Tout);
+  // LatticeDepthWarp's table: index k - Base in [0, size) and t == k spacing (the lattice's
+  // own depth, not a jittered one); the integers are exact as doubles.
+  const double* entries = warp.GetEntries();
+  const __m256d base = _mm256_set1_pd(static_cast<double>(warp.GetBase()));
+  const __m256d size = _mm256_set1_pd(static_cast<double>(warp.GetNumberOfEntries()));
+  const __m256d spacing = _mm256_set1_pd(warp.GetSpacing());
+  const __m256d perAbsorbance = _mm256_set1_pd(quantaPerAbsorbance);
+  const __m256d opaque = _mm256_set1_pd(static_cast<double>(OpaqueBins::kOpaque));
+  __m256d k = _mm256_load_pd(rays.K);
+  __m256i count = _mm256_setzero_si256();
+  __m256i visible = _mm256_setzero_si256();
+  __m128i quanta = _mm_setzero_si128();
+  for (int s = 0; s < taken; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
+  {
+    const __m256d t = _mm256_load_pd(steps.T[s]);
+    const __m256d inside = _mm256_cmp_pd(t, tout, _CMP_LT_OQ);
+    __m256d a = _mm256_cvtps_pd(_mm_load_ps(steps.Absorbance[s]));
+    const __m256d vis = _mm256_and_pd(inside, _mm256_cmp_pd(a, zero, _CMP_GT_OQ));
+    // A step that is not visible adds a * z^m = +0 (z = 0): the sums stay as they are.
+    a = _mm256_and_pd(a, vis);
+    const __m256d index = _mm256_sub_pd(k, base);
+    const __m256d inTable = _mm256_and_pd(
+      _mm256_and_pd(_mm256_cmp_pd(index, zero, _CMP_GE_OQ), _mm256_cmp_pd(index, size, _CMP_LT_OQ)),
+      _mm256_cmp_pd(t, _mm256_mul_pd(k, spacing), _CMP_EQ_OQ));
+    const __m256d take = _mm256_and_pd(inTable, vis);
+    __m256d z = _mm256_mask_i32gather_pd(
+      zero, entries, _mm256_cvttpd_epi32(_mm256_and_pd(index, take)), take, 8);
+    const int miss = _mm256_movemask_pd(_mm256_andnot_pd(inTable, vis));
+    if (miss != 0)
+    {
+      // A jittered ray's depth, or an index outside the table: the warp itself.
+      alignas(32) double zs[4];
+      alignas(32) double ts[4];
+      _mm256_store_pd(zs, z);
+      _mm256_store_pd(ts, t);
+      for (int m = miss; m; m &= m - 1)
+      {
+        const int i = __builtin_ctz(m);
+        zs[i] = warp.GetWarp()(ts[i]);
+      }
+      z = _mm256_load_pd(zs);
+    }
+    // AccumulateCheckedPowerMoments: w = a, then w *= z for each higher moment.
+    b[0] = _mm256_add_pd(b[0], a);
+    __m256d w = _mm256_mul_pd(a, z);
+    b[1] = _mm256_add_pd(b[1], w);
+    w = _mm256_mul_pd(w, z);
+    b[2] = _mm256_add_pd(b[2], w);
+    w = _mm256_mul_pd(w, z);
+    b[3] = _mm256_add_pd(b[3], w);
+    w = _mm256_mul_pd(w, z);
+    b[4] = _mm256_add_pd(b[4], w);
+    _mm_store_ps(out.Z[s], _mm256_cvtpd_ps(z));
+    // OpaqueBins::Quanta: q >= kOpaque ? kOpaque : (q > 0 ? truncated q : 0).
+    __m256d q = _mm256_mul_pd(a, perAbsorbance);
+    q = _mm256_blendv_pd(q, opaque, _mm256_cmp_pd(q, opaque, _CMP_GE_OQ));
+    q = _mm256_and_pd(q, _mm256_cmp_pd(q, zero, _CMP_GT_OQ));
+    const __m128i qi = _mm256_cvttpd_epi32(q);
+    _mm_store_si128(reinterpret_cast<__m128i*>(out.Quanta[s]), qi);
+    quanta = _mm_add_epi32(quanta, qi); // at most kLaneSteps times kOpaque: no overflow
+    count = _mm256_sub_epi64(count, _mm256_castpd_si256(inside));
+    visible = _mm256_or_si256(
+      visible, _mm256_and_si256(_mm256_castpd_si256(vis), _mm256_set1_epi64x(int64_t(1) << s)));
+  }
+  __m256d rows[4];
+  Transpose(b[0], b[1], b[2], b[3], rows);
+  for (int i = 0; i < 4; ++i)
+  {
+    _mm256_store_pd(out.Sums[i], rows[i]);
+  }
+  _mm256_store_pd(out.Sum4, b[4]);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(out.Steps), count);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(out.Visible), visible);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(out.QuantaSum), _mm256_cvtepi32_epi64(quanta));
+}
+
+} // namespace walk
+} // namespace apc

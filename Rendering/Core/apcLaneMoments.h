@@ -1,0 +1,51 @@
+// Pass 1's hand-over of a lanes' call (LaneSamplesAvx2's steps of four rays, one pixel per
+// lane) to the four pixels' moment sums, four pixels at once (internal to the marcher's
+// walker): each step's depth warp, its four power-moment products and five sums, and the
+// opaque stop's quanta, as vectors across the lanes instead of ray after ray. Each pixel still
+// receives its own samples in lattice order, with the same operations, so its sums are the
+// same bit for bit as from Moments::RunAdd per visible sample (the walker keeps or drops each
+// lane's run and writes its records).
+#ifndef apcLaneMoments_h
+#define apcLaneMoments_h
+
+#include "apcDepthWarp.h"
+#include "apcLaneSamples.h"
+
+#include <cstdint>
+
+namespace apc
+{
+namespace walk
+{
+
+// What LaneMomentsAvx2 finds for one call's steps, by lane.
+struct LaneMoments
+{
+  // Each lane's five sums (4 power moments) with its visible steps added, lane by lane.
+  alignas(32) double Sums[4][4];
+  alignas(32) double Sum4[4];
+  // Each step's warped depth, rounded to float (the record's), and its quanta
+  // (OpaqueBins::Quanta; 0 where the step is not visible), step by step.
+  alignas(16) float Z[kLaneSteps][4];
+  alignas(16) uint32_t Quanta[kLaneSteps][4];
+  // The lane's steps inside its interval (t < Tout), the sum of their quanta, and a bit per
+  // visible step (inside, absorbance > 0).
+  alignas(32) int64_t Steps[4];
+  alignas(32) int64_t QuantaSum[4];
+  alignas(32) int64_t Visible[4];
+};
+
+// Adds steps 0 .. taken - 1 of the four lanes (rays.K: each lane's first index, rays.Tout its
+// end) to the sums of each lane's pixel (sums[i]: five doubles, read only): a step at or past
+// Tout adds nothing, a visible one absorbance times 1, z, z^2, z^3, z^4 with z =
+// warp(k, t) (the table where warp takes it, else the warp itself), in AccumulateCheckedPower
+// Moments' order. With quantaPerAbsorbance > 0 each visible step's quanta are found too
+// (OpaqueBins::Quanta of that scale). Only where HasAvx2().
+void LaneMomentsAvx2(const LaneSteps& steps, int taken, const LaneRays& rays,
+  const double* const sums[4], const LatticeDepthWarp& warp, double quantaPerAbsorbance,
+  LaneMoments& out);
+
+} // namespace walk
+} // namespace apc
+
+#endif

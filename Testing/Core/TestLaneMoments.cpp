@@ -1,0 +1,317 @@
+// The lanes' hand-over four pixels at a time (walk::LaneMomentsAvx2, with Moments::LaneRunEnd
+// in the walker) against the scalar path: each lane's five sums, its records' warped depths,
+// its quanta, its steps and visible steps the same bit for bit as Moments::RunAdd and
+// OpaqueBins::Quanta per visible sample, on random steps (steps past a lane's end, clear
+// steps, unused lanes, jittered depths and indices outside the depth warp's table); and the
+// marcher with the lanes against its scalar sample loops (pass 1's moments, the opaque
+// profile and cut, pass 2 from the cache) on a block of distorted hexahedra and pyramids.
+#include "apcCellMesh.h"
+#include "apcDepthWarp.h"
+#include "apcLaneMoments.h"
+#include "apcOpaqueBins.h"
+#include "apcPowerMoments.h"
+#include "apcRayCamera.h"
+#include "apcRayClip.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace
+{
+
+using apc::walk::kLaneSteps;
+
+bool Same(double a, double b)
+{
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
+{
+  if (!apc::walk::HasAvx2())
+  {
+    GTEST_SKIP() << "no AVX2";
+  }
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double spacing = 0.0137;
+  const apc::LogDepthWarp log(1.0, 9.0);
+  const apc::LatticeDepthWarp warp(log, spacing);
+  const int64_t base = warp.GetBase();
+  const int64_t entries = warp.GetNumberOfEntries();
+  ASSERT_GT(entries, 100);
+  const apc::OpaqueBins bins = apc::OpaqueBins::Make(2.5, 1.0, 9.0, spacing);
+  ASSERT_TRUE(bins.Active());
+  int visibleSteps = 0;
+  int jittered = 0;
+  int outside = 0;
+  int opaqueQuanta = 0;
+  for (int trial = 0; trial < 20000; ++trial)
+  {
+    apc::walk::LaneRays rays;
+    apc::walk::LaneSteps steps;
+    const int taken = 1 + static_cast<int>(u(rng) * kLaneSteps) % kLaneSteps;
+    const bool withQuanta = trial % 3 != 0;
+    std::array<std::array<double, 5>, 4> sums;
+    const double* pointers[4];
+    for (int i = 0; i < 4; ++i)
+    {
+      // Mostly inside the table, some before or past it.
+      const double where = u(rng);
+      int64_t k = base + static_cast<int64_t>(u(rng) * static_cast<double>(entries));
+      if (where < 0.05)
+      {
+        k = base - 1 - static_cast<int64_t>(u(rng) * 20);
+      }
+      else if (where < 0.1)
+      {
+        k = base + entries - 4 + static_cast<int64_t>(u(rng) * 8);
+      }
+      rays.K[i] = static_cast<double>(k);
+      // Jittered lanes' depths are not k times the spacing.
+      rays.Offset[i] = u(rng) < 0.2 ? u(rng) - 0.5 : 0.0;
+      const double tout =
+        (static_cast<double>(k) + rays.Offset[i] + u(rng) * (kLaneSteps + 1)) * spacing;
+      rays.Tout[i] = u(rng) < 0.05 ? -std::numeric_limits<double>::infinity() : tout;
+      for (int s = 0; s < kLaneSteps; ++s)
+      {
+        steps.T[s][i] = (static_cast<double>(k + s) + rays.Offset[i]) * spacing;
+        const double v = u(rng);
+        // Clear steps, and past the end values that must not count (NaN, huge).
+        float a = v < 0.25 ? 0.f : static_cast<float>(u(rng) * 3.0);
+        if (!(steps.T[s][i] < rays.Tout[i]) && v > 0.8)
+        {
+          a = v > 0.9 ? std::numeric_limits<float>::quiet_NaN() : 1e30f;
+        }
+        steps.Absorbance[s][i] = a;
+        steps.Scalar[s][i] = u(rng);
+      }
+      for (double& b : sums[i])
+      {
+        b = u(rng) < 0.3 ? 0.0 : u(rng) * 10.0 - 2.0;
+      }
+      pointers[i] = sums[i].data();
+    }
+    apc::walk::LaneMoments out;
+    apc::walk::LaneMomentsAvx2(
+      steps, taken, rays, pointers, warp, withQuanta ? bins.QuantaPerAbsorbance : 0.0, out);
+    for (int i = 0; i < 4; ++i)
+    {
+      double expected[5];
+      std::copy(sums[i].begin(), sums[i].end(), expected);
+      int64_t count = 0;
+      int64_t visible = 0;
+      int64_t quanta = 0;
+      for (int s = 0; s < taken && steps.T[s][i] < rays.Tout[i]; ++s)
+      {
+        ++count;
+        const float a = steps.Absorbance[s][i];
+        if (!(a > 0))
+        {
+          EXPECT_EQ(out.Quanta[s][i], 0u);
+          continue;
+        }
+        const int64_t k = static_cast<int64_t>(rays.K[i]) + s;
+        const double t = steps.T[s][i];
+        const double z = warp(k, t);
+        jittered += rays.Offset[i] != 0 ? 1 : 0;
+        outside += k < base || k >= base + entries ? 1 : 0;
+        ++visibleSteps;
+        apc::AccumulateCheckedPowerMoments<4>(expected, z, a);
+        visible |= int64_t(1) << s;
+        EXPECT_EQ(out.Z[s][i], static_cast<float>(z)) << "trial " << trial << " lane " << i;
+        const uint32_t q = withQuanta ? bins.Quanta(a) : 0u;
+        opaqueQuanta += q == apc::OpaqueBins::kOpaque ? 1 : 0;
+        EXPECT_EQ(out.Quanta[s][i], q);
+        quanta += q;
+      }
+      EXPECT_EQ(out.Steps[i], count) << "trial " << trial << " lane " << i;
+      EXPECT_EQ(out.Visible[i], visible) << "trial " << trial << " lane " << i;
+      EXPECT_EQ(out.QuantaSum[i], quanta) << "trial " << trial << " lane " << i;
+      for (int m = 0; m < 4; ++m)
+      {
+        EXPECT_TRUE(Same(out.Sums[i][m], expected[m]))
+          << "trial " << trial << " lane " << i << " moment " << m;
+      }
+      EXPECT_TRUE(Same(out.Sum4[i], expected[4])) << "trial " << trial << " lane " << i;
+    }
+  }
+  // Each path was taken.
+  EXPECT_GT(visibleSteps, 100000);
+  EXPECT_GT(jittered, 1000);
+  EXPECT_GT(outside, 1000);
+  EXPECT_GT(opaqueQuanta, 100);
+}
+
+// A block of distorted hexahedra and, in every other cell, six pyramids about its centre
+// (twisted bases), random point scalars.
+constexpr int kNx = 8, kNy = 4, kNz = 8;
+constexpr double kH = 0.25;
+constexpr double kLo[3] = { -1.0, -0.5, -1.0 };
+constexpr int kSize = 64;
+
+apc::CellMesh DistortedBlock(std::mt19937& rng)
+{
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> value(0.0, 1.0);
+  apc::CellMesh mesh;
+  for (int k = 0; k <= kNz; ++k)
+  {
+    for (int j = 0; j <= kNy; ++j)
+    {
+      for (int i = 0; i <= kNx; ++i)
+      {
+        mesh.Points.push_back({ kLo[0] + i * kH + 0.15 * kH * u(rng),
+          kLo[1] + j * kH + 0.15 * kH * u(rng), kLo[2] + k * kH + 0.15 * kH * u(rng) });
+        mesh.PointScalars.push_back(static_cast<float>(value(rng)));
+      }
+    }
+  }
+  auto id = [](int i, int j, int k)
+  { return static_cast<int64_t>((k * (kNy + 1) + j) * (kNx + 1) + i); };
+  constexpr int kFaces[6][4] = { { 0, 1, 2, 3 }, { 4, 5, 6, 7 }, { 0, 1, 5, 4 }, { 1, 2, 6, 5 },
+    { 2, 3, 7, 6 }, { 3, 0, 4, 7 } };
+  for (int k = 0; k < kNz; ++k)
+  {
+    for (int j = 0; j < kNy; ++j)
+    {
+      for (int i = 0; i < kNx; ++i)
+      {
+        const int64_t ids[8] = { id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k),
+          id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1) };
+        if ((i + j + k) % 2 == 0)
+        {
+          mesh.AddCell(apc::CellShape::Hexahedron, ids);
+          continue;
+        }
+        std::array<double, 3> centre = { 0, 0, 0 };
+        for (int64_t p : ids)
+        {
+          for (int d = 0; d < 3; ++d)
+          {
+            centre[d] += mesh.Points[p][d] / 8;
+          }
+        }
+        const int64_t apex = static_cast<int64_t>(mesh.Points.size());
+        mesh.Points.push_back(centre);
+        mesh.PointScalars.push_back(static_cast<float>(value(rng)));
+        for (const auto& face : kFaces)
+        {
+          const auto& p0 = mesh.Points[ids[face[0]]];
+          const auto& p1 = mesh.Points[ids[face[1]]];
+          const auto& p3 = mesh.Points[ids[face[3]]];
+          const double a[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
+          const double b[3] = { p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2] };
+          const double n[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0] };
+          const double towards =
+            n[0] * (centre[0] - p0[0]) + n[1] * (centre[1] - p0[1]) + n[2] * (centre[2] - p0[2]);
+          int64_t pyramid[5];
+          for (int c = 0; c < 4; ++c)
+          {
+            pyramid[c] = ids[face[towards > 0 ? c : 3 - c]];
+          }
+          pyramid[4] = apex;
+          mesh.AddCell(apc::CellShape::Pyramid, pyramid);
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(mesh.Finalize());
+  return mesh;
+}
+
+struct Frame
+{
+  std::vector<double> Moments; // pass 1's (after the cut with the stop)
+  std::vector<uint16_t> Profile;
+  std::vector<double> Colour; // pass 2 from the cache
+  int64_t Pass1Samples = 0;
+  int64_t Pass2Samples = 0;
+};
+
+Frame Render(const apc::CellMesh& mesh, bool lanes, bool stop, bool jitter, double spacing)
+{
+  const apc::TransferTable table(0.0, 1.0,
+    { { 1.f, 0.f, 0.f }, { 0.f, 1.f, 0.f }, { 0.f, 0.f, 1.f }, { 1.f, 1.f, 0.f } },
+    { 0.05, 0.6, 0.0, 0.9 }, spacing, stop ? 0.02 : 1.0);
+  const apc::RayCamera camera(
+    { 0.2, 0.95, 4.0 }, { 0.0, 0.45, 0.0 }, { 0, 1, 0 }, 40.0, false, 1.0, kSize, kSize, 0.1, 20.0);
+  const apc::LogDepthWarp warp(2.0, 7.0);
+  const size_t pixels = static_cast<size_t>(kSize) * kSize;
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  marcher.SetView(camera, nullptr);
+  marcher.SetSampleLanes(lanes);
+  marcher.SetLatticeJitter(jitter);
+  marcher.SetMaxSampleCacheBytes(size_t(1) << 30);
+  if (stop)
+  {
+    marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+  }
+  Frame out;
+  out.Moments.assign(pixels * 5, 0.0);
+  marcher.AccumulateMoments<4>(table, warp, out.Moments.data());
+  out.Pass1Samples = marcher.GetLastSampleCount();
+  if (stop)
+  {
+    const apc::VolumeRayMarcher::OpaqueProfile profile = marcher.GetOpaqueProfile();
+    out.Profile.assign(profile.data(), profile.data() + profile.size());
+    std::vector<double> own = out.Moments;
+    marcher.ApplyOpaqueCut<4>(table, warp, out.Profile.data(), own.data());
+    out.Moments = own;
+  }
+  out.Colour.assign(pixels * 4, 0.0);
+  marcher.AccumulateColour<4>(
+    table, warp, out.Moments.data(), apc::MomentSettings<4>(), out.Colour.data());
+  out.Pass2Samples = marcher.GetLastSampleCount();
+  EXPECT_EQ(marcher.GetLastColourCacheShare(), 1.0);
+  return out;
+}
+
+TEST(LaneMoments, MarcherLanesTakeTheScalarLoopsSamples)
+{
+  // Pass 1's moments, the opaque profile and cut, and pass 2 from the cache (its records)
+  // with the lanes equal the scalar loops' bit for bit; at the finer spacing pairs hold more
+  // than a call's kLaneSteps samples, and jittered lattices miss the depth warp's table.
+  std::mt19937 rng(5);
+  for (int mesh = 0; mesh < 4; ++mesh)
+  {
+    const apc::CellMesh block = DistortedBlock(rng);
+    const double spacing = mesh < 2 ? 0.1 : 0.02;
+    for (bool stop : { false, true })
+    {
+      for (bool jitter : { false, true })
+      {
+        const Frame lanes = Render(block, true, stop, jitter, spacing);
+        const Frame scalar = Render(block, false, stop, jitter, spacing);
+        EXPECT_GT(lanes.Pass1Samples, 1000);
+        EXPECT_EQ(lanes.Pass1Samples, scalar.Pass1Samples);
+        EXPECT_EQ(lanes.Pass2Samples, scalar.Pass2Samples);
+        EXPECT_TRUE(lanes.Profile == scalar.Profile);
+        int differ = 0;
+        for (size_t v = 0; v < lanes.Moments.size(); ++v)
+        {
+          differ += Same(lanes.Moments[v], scalar.Moments[v]) ? 0 : 1;
+        }
+        for (size_t v = 0; v < lanes.Colour.size(); ++v)
+        {
+          differ += Same(lanes.Colour[v], scalar.Colour[v]) ? 0 : 1;
+        }
+        EXPECT_EQ(differ, 0) << "mesh " << mesh << (stop ? " with the stop" : "")
+                             << (jitter ? " jittered" : "");
+      }
+    }
+  }
+}
+
+} // namespace
