@@ -13,7 +13,12 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <vector>
+
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace apc
 {
@@ -229,37 +234,84 @@ struct SampleCache
     this->Arena.Release();
     this->Buffers.clear();
   }
-  // The counting sort's scatter: each record to its pixel's next slot (starts[p] ends at
+  // The counting sort's slots: slots[at] is the record that goes to slot at (starts[p] ends at
   // pixel p's end). A (cell, ray) pair's samples arrive together, so the records come in runs
-  // of one pixel: a run's slot is kept in a register, not incremented in starts[] per
-  // sample, whose store and reload chained every sample of a run to the one before.
-  template <bool WithOrder, bool WithWeights = false>
-  static void Scatter(const RecordedSample* recorded, size_t n, uint32_t* starts,
-    CachedSample* samples, uint16_t* order, const float* weights = nullptr,
-    float* weightsOut = nullptr)
+  // of one pixel: a run's slot is kept in a register, not incremented in starts[] per sample,
+  // whose store and reload chained every sample of a run to the one before.
+  static void Slots(const RecordedSample* recorded, size_t n, uint32_t* starts, uint32_t* slots)
   {
-    const RecordedSample* r = recorded;
-    const RecordedSample* const end = r + n;
+    uint32_t r = 0;
+    const uint32_t end = static_cast<uint32_t>(n);
     while (r < end)
     {
-      const uint16_t pixel = r->Pixel;
+      const uint16_t pixel = recorded[r].Pixel;
       uint32_t at = starts[pixel];
       do
       {
-        samples[at] = { r->Z, r->Scalar };
-        if (WithOrder)
-        {
-          order[at] = r->K16;
-        }
-        if (WithWeights)
-        {
-          weightsOut[at] = weights[r - recorded];
-        }
-        ++at;
-        ++r;
-      } while (r < end && r->Pixel == pixel);
+        slots[at++] = r++;
+      } while (r < end && recorded[r].Pixel == pixel);
       starts[pixel] = at;
     }
+  }
+  // The records in slot order, written front to back. The cache's memory is far larger than
+  // the processor's caches, so its lines are not there when a frame writes them again: the
+  // records scattered straight to their pixels' slots (a stream per pixel) waited on a read
+  // of each line before its write. Written in order, by streaming stores, whole lines go out
+  // without being read. The caller fences (StreamFence) before the samples are read.
+  template <bool WithOrder, bool WithWeights = false>
+  static void Copy(const RecordedSample* recorded, const uint32_t* slots, size_t n,
+    CachedSample* samples, uint16_t* order, const float* weights = nullptr,
+    float* weightsOut = nullptr)
+  {
+    static_assert(offsetof(RecordedSample, Z) == offsetof(CachedSample, Z) &&
+        offsetof(RecordedSample, Scalar) == offsetof(CachedSample, Scalar),
+      "a record begins with its cached sample");
+    size_t at = 0;
+#ifdef __SSE2__
+    // Four samples (and their four lattice bits: 8 bytes, at an 8-byte boundary since the
+    // arena's unit is 8 bytes) at a time.
+    for (; at + 4 <= n; at += 4)
+    {
+      uint64_t k16 = 0;
+      for (size_t j = 0; j < 4; ++j)
+      {
+        const RecordedSample& r = recorded[slots[at + j]];
+        long long bits;
+        std::memcpy(&bits, &r, sizeof bits);
+        _mm_stream_si64(reinterpret_cast<long long*>(samples + at + j), bits);
+        k16 |= static_cast<uint64_t>(r.K16) << (16 * j);
+        if (WithWeights)
+        {
+          weightsOut[at + j] = weights[slots[at + j]];
+        }
+      }
+      if (WithOrder)
+      {
+        _mm_stream_si64(reinterpret_cast<long long*>(order + at), static_cast<long long>(k16));
+      }
+    }
+#endif
+    for (; at < n; ++at)
+    {
+      const RecordedSample& r = recorded[slots[at]];
+      samples[at] = { r.Z, r.Scalar };
+      if (WithOrder)
+      {
+        order[at] = r.K16;
+      }
+      if (WithWeights)
+      {
+        weightsOut[at] = weights[slots[at]];
+      }
+    }
+  }
+  // Orders Copy's streaming stores before any later store (the tile's Kept flag, and what
+  // the threads' join publishes).
+  static void StreamFence()
+  {
+#ifdef __SSE2__
+    _mm_sfence();
+#endif
   }
   // Groups a marched tile's recorded samples by pixel into Tiles[tile] (counts[p]: pixel p's
   // samples among them; withOrder: keep the lattice bits; weights, if not null: each record's
@@ -314,27 +366,36 @@ struct SampleCache
     {
       starts[p + 1] = starts[p] + counts[p];
     }
+    // Slot by slot: which record goes where (in a thread's own scratch, which stays in the
+    // processor's cache), then the records in that order.
+    thread_local std::vector<uint32_t> slots;
+    if (slots.size() < n)
+    {
+      slots.resize(std::max(n, 2 * slots.size()));
+    }
+    Slots(recorded, n, starts, slots.data());
     if (weights)
     {
       if (withOrder)
       {
-        Scatter<true, true>(recorded, n, starts, cached.Samples.data(), cached.K16.data(), weights,
-          cached.Weights.data());
+        Copy<true, true>(recorded, slots.data(), n, cached.Samples.data(), cached.K16.data(),
+          weights, cached.Weights.data());
       }
       else
       {
-        Scatter<false, true>(
-          recorded, n, starts, cached.Samples.data(), nullptr, weights, cached.Weights.data());
+        Copy<false, true>(recorded, slots.data(), n, cached.Samples.data(), nullptr, weights,
+          cached.Weights.data());
       }
     }
     else if (withOrder)
     {
-      Scatter<true>(recorded, n, starts, cached.Samples.data(), cached.K16.data());
+      Copy<true>(recorded, slots.data(), n, cached.Samples.data(), cached.K16.data());
     }
     else
     {
-      Scatter<false>(recorded, n, starts, cached.Samples.data(), nullptr);
+      Copy<false>(recorded, slots.data(), n, cached.Samples.data(), nullptr);
     }
+    StreamFence();
     // starts[p] now holds pixel p's end: shift back to the starts.
     for (int p = pixels; p > 0; --p)
     {
