@@ -144,10 +144,12 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
     twist.Other = A != 0;
   }
   const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
+  const __m128i count = _mm_set1_epi32(cell.Table.Count);
+  const __m128i oneIndex = _mm_set1_epi32(1);
   // Each 64-bit lane's low half: a double mask as four floats.
   const __m256i lowHalves = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
-  const double* pairTable = reinterpret_cast<const double*>(cell.Table.AbsorbancePairs);
-  const __m256i firstsThenSeconds = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+  const float* absorbances = &cell.Table.Entries[0].Absorbance;
+  static_assert(sizeof(TransferSample) == 4 * sizeof(float), "an entry is four floats");
   const __m256d offset = _mm256_load_pd(rays.Offset);
   const __m256d tout = _mm256_load_pd(rays.Tout);
   __m256d k = _mm256_load_pd(rays.K);
@@ -217,13 +219,11 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
     __m256d x = _mm256_blendv_pd(above, zero, _mm256_cmp_pd(position, zero, _CMP_LT_OQ));
     x = _mm256_and_pd(x, finite);
     const __m128i i = _mm256_cvttpd_epi32(x);
+    const __m128i i1 = _mm_add_epi32(i, oneIndex);
+    const __m128i j = _mm_blendv_epi8(i, i1, _mm_cmplt_epi32(i1, count));
     const __m128 f = _mm256_cvtpd_ps(_mm256_sub_pd(x, _mm256_cvtepi32_pd(i)));
-    // Entries i and min(i + 1, Count - 1)'s absorbances, side by side in the pairs' table:
-    // one gather of four pairs, then the firsts and the seconds apart.
-    const __m256 pairs = _mm256_permutevar8x32_ps(
-      _mm256_castpd_ps(_mm256_i32gather_pd(pairTable, i, 8)), firstsThenSeconds);
-    const __m128 ea = _mm256_castps256_ps128(pairs);
-    const __m128 eb = _mm256_extractf128_ps(pairs, 1);
+    const __m128 ea = _mm_i32gather_ps(absorbances, _mm_slli_epi32(i, 2), 4);
+    const __m128 eb = _mm_i32gather_ps(absorbances, _mm_slli_epi32(j, 2), 4);
     const __m128 absorbance = _mm_add_ps(ea, _mm_mul_ps(f, _mm_sub_ps(eb, ea)));
     const __m128 keep =
       _mm256_castps256_ps128(_mm256_permutevar8x32_ps(_mm256_castpd_ps(finite), lowHalves));

@@ -49,14 +49,10 @@ public:
     double Min;
     double Scale;
     double Last;
-    // Entry i's absorbance and the next one's (entry i's again for the last), side by side:
-    // the two absorbances Lookup interpolates between, in one 8-byte read (the walker's lanes).
-    const float* AbsorbancePairs;
   };
   Layout GetLayout() const
   {
-    return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last,
-      this->AbsorbancePairs.data() };
+    return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last };
   }
   // Lookup from a layout held in registers: a loop that stores samples between its look-ups
   // (the marcher's) otherwise reloads the table's fields through the table for every one.
@@ -118,7 +114,6 @@ private:
   double Last;
   double Spacing;
   std::vector<TransferSample> Entries;
-  std::vector<float> AbsorbancePairs; // Layout::AbsorbancePairs
   // VisibleBefore[i]: how many of the first i entries have a positive absorbance.
   std::vector<int> VisibleBefore;
 };
