@@ -241,9 +241,12 @@ struct Frame
 
 Frame Render(const apc::CellMesh& mesh, bool lanes, bool stop, bool jitter, double spacing)
 {
+  // Clear below a quarter of the range and at its middle: runs with clear steps between
+  // visible ones.
   const apc::TransferTable table(0.0, 1.0,
-    { { 1.f, 0.f, 0.f }, { 0.f, 1.f, 0.f }, { 0.f, 0.f, 1.f }, { 1.f, 1.f, 0.f } },
-    { 0.05, 0.6, 0.0, 0.9 }, spacing, stop ? 0.02 : 1.0);
+    { { 1.f, 0.f, 0.f }, { 0.f, 1.f, 0.f }, { 0.f, 0.f, 1.f }, { 1.f, 1.f, 0.f },
+      { 0.f, 1.f, 1.f } },
+    { 0.0, 0.0, 0.6, 0.0, 0.9 }, spacing, stop ? 0.02 : 1.0);
   const apc::RayCamera camera(
     { 0.2, 0.95, 4.0 }, { 0.0, 0.45, 0.0 }, { 0, 1, 0 }, 40.0, false, 1.0, kSize, kSize, 0.1, 20.0);
   const apc::LogDepthWarp warp(2.0, 7.0);
