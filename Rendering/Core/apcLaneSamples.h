@@ -74,7 +74,7 @@ int LaneSamplesAvx2(const LaneCell& cell, const LaneRays& rays, LaneSteps& steps
 // Fills rays with the tile's rays list[0 .. n - 1] (n <= 4; directions and offsets from packed,
 // first lattice indices and interval ends from clipped), lanes n .. 3 unused (Tout = -inf),
 // one vector store per field: loads of the lanes from stores of one double each waited for
-// those stores to reach the cache. list[0 .. 3] must be readable. Only where HasAvx2().
+// those stores to reach the cache. Only where HasAvx2().
 void GatherLaneRays(
   const TileRays& packed, const ClippedRays& clipped, const uint16_t* list, int n, LaneRays& rays);
 
