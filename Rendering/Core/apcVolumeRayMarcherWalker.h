@@ -134,9 +134,11 @@ struct VolumeRayMarcher::Walker
     double LinearOrigin[3] = { 0, 0, 0 };
     // The tile's rays clipped against the cell.
     walk::ClippedRays Clipped;
-    // With end weights in the lanes: the weights of the pairs with a lattice point, and their
-    // rays (kept from cell to cell, so that their room is not allocated per cell).
-    std::vector<walk::EndWeights> Weights;
+    // With end weights where the lanes are on: each kept pair's weights, found by the
+    // clipping (walk::ClipRaysWeighted).
+    walk::ClippedWeights Ends;
+    // With end weights in the lanes: the rays of the pairs with a lattice point (kept from
+    // cell to cell, so that their room is not allocated per cell).
     std::vector<uint16_t> Weighted;
   };
 
@@ -215,9 +217,14 @@ struct VolumeRayMarcher::Walker
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
     const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights;
     walk::ClippedRays& c = state.Clipped;
-    const int hits =
-      walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
-        state.Near, allInside || weighted ? nullptr : &this->Grid, c);
+    const double* stop = Visitor::StopsWhenOpaque ? progress.Stop : nullptr;
+    // Where the lanes are on, the clipping finds the pairs' end weights four rays at a time;
+    // else PairWeights finds them ray by ray (the form the lanes' weights are tested against).
+    const bool clipWeights = weighted && this->Lanes;
+    const int hits = clipWeights ? walk::ClipRaysWeighted(state.Planes, packed, rect, stop,
+                                     state.Near, this->Grid, c, state.Ends)
+                                 : walk::ClipRays(state.Planes, packed, rect, stop, state.Near,
+                                     allInside || weighted ? nullptr : &this->Grid, c);
     if constexpr (!allInside)
     {
       if (weighted)
@@ -237,6 +244,13 @@ struct VolumeRayMarcher::Walker
         for (int h = 0; h < hits; ++h)
         {
           const int l = c.Hits[h];
+          if (clipWeights)
+          {
+            visitor.Segment(l, c.Tin[l], c.Tout[l]);
+            samples += this->WeightedSamples(
+              l, rays[l], c.Tout[l], state.Ends.Of(l), visitor, state, progress);
+            continue;
+          }
           samples += this->WeightedRay(l, rays[l], c.Tin[l], c.Tout[l], visitor, state, progress);
         }
         return samples;
@@ -421,7 +435,7 @@ struct VolumeRayMarcher::Walker
   // the pixel turns opaque goes sample by sample as in the scalar loop, and leaves the rest of
   // its steps untaken, as that loop's lowered tout does. Each pixel sees the same samples in
   // the same order, with the same sums, records and profile, as from the scalar loop.
-  // Weighted (end weights): each pair's weights are found first; a pair without a lattice
+  // Weighted (end weights, found by the clipping: state.Ends): a pair without a lattice
   // point takes its middle sample in the scalar loop (WeightedSamples) at once, the others go
   // to the lanes from their first index, and the hand-over multiplies each step's absorbance
   // by its weight (1 but at the pair's first and last index) as the scalar loop does, before
@@ -472,11 +486,11 @@ struct VolumeRayMarcher::Walker
     // The rays the lanes take (with their weights, Weighted), in the rectangle's order.
     const uint16_t* list = c.Hits;
     int count = hits;
+    const walk::ClippedWeights& ends = state.Ends;
     if constexpr (Weighted)
     {
-      if (state.Weights.size() < static_cast<size_t>(hits))
+      if (state.Weighted.size() < static_cast<size_t>(hits))
       {
-        state.Weights.resize(walk::kTilePixels);
         state.Weighted.resize(walk::kTilePixels);
       }
       count = 0;
@@ -484,14 +498,12 @@ struct VolumeRayMarcher::Walker
       {
         const int l = c.Hits[h];
         visitor.Segment(l, c.Tin[l], c.Tout[l]);
-        const walk::EndWeights w =
-          this->PairWeights<Visitor>(l, rays[l], c.Tin[l], c.Tout[l], state, progress);
-        if (w.Mid)
+        if (ends.Mid[l] != 0)
         {
-          samples += this->WeightedSamples(l, rays[l], c.Tout[l], w, visitor, state, progress);
+          samples +=
+            this->WeightedSamples(l, rays[l], c.Tout[l], ends.Of(l), visitor, state, progress);
           continue;
         }
-        state.Weights[count] = w;
         state.Weighted[count] = static_cast<uint16_t>(l);
         ++count;
       }
@@ -502,7 +514,12 @@ struct VolumeRayMarcher::Walker
       const int n = std::min(4, count - h);
       int local[4] = { 0, 0, 0, 0 };
       int64_t k[4] = { 0, 0, 0, 0 };
-      const walk::EndWeights* weights[4] = { nullptr, nullptr, nullptr, nullptr };
+      // Weighted: each ray's pair's first and last index and their float weights (as
+      // EndWeights::Of gives them, then cast as the scalar loop does).
+      int64_t firstK[4] = { 0, 0, 0, 0 };
+      int64_t lastK[4] = { 0, 0, 0, 0 };
+      float firstWeight[4] = { 1, 1, 1, 1 };
+      float lastWeight[4] = { 1, 1, 1, 1 };
       for (int i = 0; i < 4; ++i)
       {
         const int at = h + (i < n ? i : 0);
@@ -510,9 +527,12 @@ struct VolumeRayMarcher::Walker
         local[i] = l;
         if constexpr (Weighted)
         {
-          weights[i] = &state.Weights[at];
-          k[i] = weights[i]->First;
-          lanes.K[i] = static_cast<double>(k[i]);
+          firstK[i] = static_cast<int64_t>(ends.First[l]);
+          lastK[i] = static_cast<int64_t>(ends.Last[l]);
+          firstWeight[i] = static_cast<float>(ends.FirstWeight[l]);
+          lastWeight[i] = static_cast<float>(ends.LastWeight[l]);
+          k[i] = firstK[i];
+          lanes.K[i] = ends.First[l];
         }
         else
         {
@@ -561,7 +581,8 @@ struct VolumeRayMarcher::Walker
             float weight = 1;
             if constexpr (Weighted)
             {
-              weight = static_cast<float>(weights[i]->Of(kk + s));
+              weight =
+                kk + s == firstK[i] ? firstWeight[i] : (kk + s == lastK[i] ? lastWeight[i] : 1.f);
               absorbance *= weight;
             }
             q[s] = 0;
@@ -609,7 +630,7 @@ struct VolumeRayMarcher::Walker
               float weight = 1;
               if constexpr (Weighted)
               {
-                weight = static_cast<float>(weights[i]->Of(kk));
+                weight = kk == firstK[i] ? firstWeight[i] : (kk == lastK[i] ? lastWeight[i] : 1.f);
                 absorbance *= weight;
               }
               if (absorbance > 0)
