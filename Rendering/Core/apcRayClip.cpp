@@ -105,11 +105,21 @@ int ClipRaysWeightedScalar(const CellPlanes& planes, const TileRays& rays, const
   const double* stop, double near, const Lattice& lattice, ClippedRays& out,
   ClippedWeights& weights)
 {
-  const int n = ClipRaysScalar(planes, rays, rect, stop, near, nullptr, out);
-  for (int h = 0; h < n; ++h)
+  const int kept = ClipRaysScalar(planes, rays, rect, stop, near, nullptr, out);
+  int n = 0;
+  weights.MidCount = 0;
+  for (int h = 0; h < kept; ++h)
   {
     const int l = out.Hits[h];
     WeightsOf(planes, rays, l, stop, lattice, out.Tin[l], out.Tout[l], weights);
+    if (weights.Mid[l] != 0)
+    {
+      weights.MidHits[weights.MidCount++] = static_cast<uint16_t>(l);
+    }
+    else
+    {
+      out.Hits[n++] = static_cast<uint16_t>(l); // n <= h: a kept ray not yet read
+    }
   }
   return n;
 }
@@ -325,6 +335,7 @@ __attribute__((target("avx2"))) int ClipRaysWeightedAvx2(const CellPlanes& plane
   const __m256d spacing = _mm256_set1_pd(lattice.Spacing);
   const __m256d inverse = _mm256_set1_pd(lattice.InverseSpacing);
   int n = 0;
+  int mids = 0;
   for (int row = 0; row < rect.Rows; ++row)
   {
     const int begin = rect.First + row * rect.Stride;
@@ -338,6 +349,7 @@ __attribute__((target("avx2"))) int ClipRaysWeightedAvx2(const CellPlanes& plane
       ClipFour(planes, rays, l, valid, stop, near, lo, hi);
       _mm256_storeu_pd(out.Tin + l, lo);
       _mm256_storeu_pd(out.Tout + l, hi);
+      int midLanes = 0;
       const int keep = _mm256_movemask_pd(_mm256_cmp_pd(lo, hi, _CMP_LT_OQ)) &
         _mm256_movemask_pd(_mm256_castsi256_pd(valid));
       if (keep)
@@ -376,19 +388,27 @@ __attribute__((target("avx2"))) int ClipRaysWeightedAvx2(const CellPlanes& plane
         _mm256_storeu_pd(weights.LastWeight + l, _mm256_blendv_pd(lastWeight, length, single));
         _mm256_storeu_pd(weights.Mid + l, _mm256_and_pd(mid, one));
         _mm256_storeu_pd(weights.MidT + l, _mm256_mul_pd(half, _mm256_add_pd(lo, full)));
+        midLanes = _mm256_movemask_pd(mid) & keep;
         for (int m = keep & (unsettledIn | unsettledOut); m; m &= m - 1)
         {
-          const int r = l + __builtin_ctz(m);
+          const int lane = __builtin_ctz(m);
+          const int r = l + lane;
           WeightsOf(planes, rays, r, stop, lattice, out.Tin[r], out.Tout[r], weights);
+          midLanes = (midLanes & ~(1 << lane)) | (weights.Mid[r] != 0 ? 1 << lane : 0);
         }
       }
-      // Four 16-bit ray numbers l + lane, of which the first popcount(keep) are kept.
-      const __m128i hits = _mm_add_epi16(_mm_set1_epi16(static_cast<short>(l)),
-        _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[keep])));
-      _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n), hits);
-      n += __builtin_popcount(keep);
+      // Four 16-bit ray numbers l + lane, of which the first popcount(lanes) are taken.
+      const __m128i base = _mm_set1_epi16(static_cast<short>(l));
+      const int sampled = keep & ~midLanes;
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n),
+        _mm_add_epi16(base, _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[sampled]))));
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(weights.MidHits + mids),
+        _mm_add_epi16(base, _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[midLanes]))));
+      n += __builtin_popcount(sampled);
+      mids += __builtin_popcount(midLanes);
     }
   }
+  weights.MidCount = mids;
   return n;
 }
 #else

@@ -97,6 +97,10 @@ struct ClippedWeights
   double LastWeight[TileRays::kSize];  // MidWeight
   double MidT[TileRays::kSize];        // with Mid
   double Mid[TileRays::kSize];         // 1: no lattice point in the pair (EndWeights::Mid)
+  // The kept rays with Mid, in the rectangle's order (ClippedRays::Hits holds the others):
+  // the lanes take those, the scalar loop these, with no test per ray to tell them apart.
+  uint16_t MidHits[kTilePixels + 3];
+  int MidCount = 0;
 
   EndWeights Of(int l) const
   {
@@ -112,9 +116,11 @@ struct ClippedWeights
   }
 };
 
-// ClipRays without a lattice (every ray with Tin < Tout kept, the same Tin, Tout and Hits)
-// and each kept ray's end weights on the lattice to weights. Four rays per AVX2 instruction
-// where the processor has it, else ray by ray (CellPlanes::Clip, EndWeightsOf).
+// ClipRays without a lattice (every ray with Tin < Tout kept, the same Tin and Tout) and each
+// kept ray's end weights on the lattice to weights; the kept rays with a lattice point go to
+// out.Hits (their count is returned), those without one to weights.MidHits (MidCount), each
+// in the rectangle's order. Four rays per AVX2 instruction where the processor has it, else
+// ray by ray (CellPlanes::Clip, EndWeightsOf).
 int ClipRaysWeighted(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice& lattice, ClippedRays& out,
   ClippedWeights& weights);

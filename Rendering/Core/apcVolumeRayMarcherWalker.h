@@ -137,9 +137,6 @@ struct VolumeRayMarcher::Walker
     // With end weights where the lanes are on: each kept pair's weights, found by the
     // clipping (walk::ClipRaysWeighted).
     walk::ClippedWeights Ends;
-    // With end weights in the lanes: the rays of the pairs with a lattice point (kept from
-    // cell to cell, so that their room is not allocated per cell).
-    std::vector<uint16_t> Weighted;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -227,30 +224,44 @@ struct VolumeRayMarcher::Walker
                                      allInside || weighted ? nullptr : &this->Grid, c);
     if constexpr (!allInside)
     {
-      if (weighted)
+      if (weighted && clipWeights)
       {
+        // Hits: the pairs with a lattice point; Ends.MidHits: those without one.
+        const walk::ClippedWeights& ends = state.Ends;
+        if (hits + ends.MidCount == 0)
+        {
+          return 0;
+        }
         if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
         {
-          if (hits > 0 && this->SharedOrigin && this->Lanes)
+          if (this->SharedOrigin)
           {
-            this->Prepare(rays[c.Hits[0]], state);
+            this->Prepare(rays[hits > 0 ? c.Hits[0] : ends.MidHits[0]], state);
             if (state.Interpolate && (state.Linear || state.Interpolator.HasPyramidInverse()))
             {
               return this->LaneSamples<true>(rays, hits, visitor, state, progress);
             }
           }
         }
+        // In the rectangle's order, the two lists merged: Newton starts each ray from the
+        // cell's previous ray's first sample (CellState::FirstMemory).
+        int64_t samples = 0;
+        for (int h = 0, m = 0; h < hits || m < ends.MidCount;)
+        {
+          const bool mid = h == hits || (m < ends.MidCount && ends.MidHits[m] < c.Hits[h]);
+          const int l = mid ? ends.MidHits[m++] : c.Hits[h++];
+          visitor.Segment(l, c.Tin[l], c.Tout[l]);
+          samples +=
+            this->WeightedSamples(l, rays[l], c.Tout[l], ends.Of(l), visitor, state, progress);
+        }
+        return samples;
+      }
+      if (weighted)
+      {
         int64_t samples = 0;
         for (int h = 0; h < hits; ++h)
         {
           const int l = c.Hits[h];
-          if (clipWeights)
-          {
-            visitor.Segment(l, c.Tin[l], c.Tout[l]);
-            samples += this->WeightedSamples(
-              l, rays[l], c.Tout[l], state.Ends.Of(l), visitor, state, progress);
-            continue;
-          }
           samples += this->WeightedRay(l, rays[l], c.Tin[l], c.Tout[l], visitor, state, progress);
         }
         return samples;
@@ -483,31 +494,20 @@ struct VolumeRayMarcher::Walker
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     int64_t samples = 0;
-    // The rays the lanes take (with their weights, Weighted), in the rectangle's order.
+    // The rays the lanes take, in the rectangle's order (Weighted: those with a lattice
+    // point; the clipping listed the others apart, in Ends.MidHits).
     const uint16_t* list = c.Hits;
-    int count = hits;
+    const int count = hits;
     const walk::ClippedWeights& ends = state.Ends;
     if constexpr (Weighted)
     {
-      if (state.Weighted.size() < static_cast<size_t>(hits))
+      for (int h = 0; h < ends.MidCount; ++h)
       {
-        state.Weighted.resize(walk::kTilePixels);
-      }
-      count = 0;
-      for (int h = 0; h < hits; ++h)
-      {
-        const int l = c.Hits[h];
+        const int l = ends.MidHits[h];
         visitor.Segment(l, c.Tin[l], c.Tout[l]);
-        if (ends.Mid[l] != 0)
-        {
-          samples +=
-            this->WeightedSamples(l, rays[l], c.Tout[l], ends.Of(l), visitor, state, progress);
-          continue;
-        }
-        state.Weighted[count] = static_cast<uint16_t>(l);
-        ++count;
+        samples +=
+          this->WeightedSamples(l, rays[l], c.Tout[l], ends.Of(l), visitor, state, progress);
       }
-      list = state.Weighted.data();
     }
     for (int h = 0; h < count; h += 4)
     {
@@ -545,7 +545,7 @@ struct VolumeRayMarcher::Walker
         {
           lanes.D[d][i] = rays[l].D[d];
         }
-        if (!Weighted && i < n)
+        if (i < n)
         {
           visitor.Segment(l, c.Tin[l], c.Tout[l]);
         }

@@ -1,6 +1,7 @@
 // walk::ClipRaysWeighted, the clipping that also finds each kept pair's end weights (four rays
-// per AVX2 instruction): the same intervals and kept rays as ClipRays without a lattice, and
-// the weights EndWeightsOf gives from the pair's interval, its end clipped again without the
+// per AVX2 instruction): the same intervals and kept rays as ClipRays without a lattice, those
+// with a lattice point in Hits and the others in MidHits, in order, and the weights
+// EndWeightsOf gives from the pair's interval, its end clipped again without the
 // opaque stop, bit for bit. The weighted marcher's lanes take their weights from it, so a
 // weight one ulp off would change a sample no test of images could see.
 #include "apcRayClip.h"
@@ -104,11 +105,19 @@ void CheckForm(WeightedForm form, Counts& counts)
     const int n = apc::walk::ClipRaysScalar(cell, packed, rect, stops, near, nullptr, plain);
     ClippedRays out;
     ClippedWeights weights;
-    EXPECT_EQ(form(cell, packed, rect, stops, near, grid, out, weights), n);
+    const int sampled = form(cell, packed, rect, stops, near, grid, out, weights);
+    ASSERT_EQ(sampled + weights.MidCount, n) << "trial " << trial;
+    int h1 = 0;
+    int h2 = 0;
     for (int h = 0; h < n; ++h)
     {
       const int l = plain.Hits[h];
-      ASSERT_EQ(out.Hits[h], l) << "trial " << trial;
+      // The kept ray is the next of one of the two lists.
+      const bool inHits = h1 < sampled && out.Hits[h1] == l;
+      const bool inMids = h2 < weights.MidCount && weights.MidHits[h2] == l;
+      ASSERT_TRUE(inHits != inMids) << "trial " << trial << " ray " << l;
+      h1 += inHits ? 1 : 0;
+      h2 += inMids ? 1 : 0;
       ASSERT_TRUE(SameBits(out.Tin[l], plain.Tin[l]) && SameBits(out.Tout[l], plain.Tout[l]))
         << "trial " << trial << " ray " << l;
       // The pair's own end: the cell clipped from the ray's end, without the stop.
@@ -119,6 +128,7 @@ void CheckForm(WeightedForm form, Counts& counts)
       const EndWeights w = apc::walk::EndWeightsOf(grid, out.Tin[l], end, rays[l].Offset);
       const EndWeights got = weights.Of(l);
       ASSERT_EQ(got.Mid, w.Mid) << "trial " << trial << " ray " << l;
+      ASSERT_EQ(inMids, w.Mid) << "trial " << trial << " ray " << l;
       ASSERT_EQ(got.First, w.First) << "trial " << trial << " ray " << l;
       if (w.Mid)
       {
