@@ -72,8 +72,9 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
 namespace
 {
 
-void Store(const EndWeights& w, int l, ClippedWeights& out)
+void Store(const EndWeights& w, int l, double offset, ClippedWeights& out)
 {
+  out.LaneOffset[l] = w.Mid ? w.MidOffset : offset;
   out.First[l] = static_cast<double>(w.First);
   out.Last[l] = static_cast<double>(w.Last);
   out.FirstWeight[l] = w.Mid ? w.MidWeight : w.FirstWeight;
@@ -96,7 +97,7 @@ void WeightsOf(const CellPlanes& planes, const TileRays& rays, int l, const doub
     end = rays.End[l];
     planes.Clip(ray, start, end);
   }
-  Store(EndWeightsOf(lattice, tin, end, rays.Offset[l]), l, out);
+  Store(EndWeightsOf(lattice, tin, end, rays.Offset[l]), l, rays.Offset[l], out);
 }
 
 } // namespace
@@ -382,12 +383,19 @@ __attribute__((target("avx2"))) int ClipRaysWeightedAvx2(const CellPlanes& plane
           _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(tFirst, lo), inverse), half);
         const __m256d lastWeight =
           _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(full, tLast), inverse), half);
-        _mm256_storeu_pd(weights.First + l, _mm256_sub_pd(first, _mm256_and_pd(mid, one)));
+        // EndWeightsOf's middle: MidOffset from the index before the pair, MidT = At(that
+        // index, MidOffset).
+        const __m256d before = _mm256_sub_pd(first, _mm256_and_pd(mid, one));
+        const __m256d midOffset = _mm256_sub_pd(
+          _mm256_mul_pd(_mm256_mul_pd(half, _mm256_add_pd(lo, full)), inverse), before);
+        _mm256_storeu_pd(weights.First + l, before);
+        _mm256_storeu_pd(weights.LaneOffset + l, _mm256_blendv_pd(offset, midOffset, mid));
         _mm256_storeu_pd(weights.Last + l, last);
         _mm256_storeu_pd(weights.FirstWeight + l, _mm256_blendv_pd(firstWeight, length, single));
         _mm256_storeu_pd(weights.LastWeight + l, _mm256_blendv_pd(lastWeight, length, single));
         _mm256_storeu_pd(weights.Mid + l, _mm256_and_pd(mid, one));
-        _mm256_storeu_pd(weights.MidT + l, _mm256_mul_pd(half, _mm256_add_pd(lo, full)));
+        _mm256_storeu_pd(
+          weights.MidT + l, _mm256_mul_pd(_mm256_add_pd(before, midOffset), spacing));
         midLanes = _mm256_movemask_pd(mid) & keep;
         for (int m = keep & (unsettledIn | unsettledOut); m; m &= m - 1)
         {

@@ -96,7 +96,9 @@ struct ClippedWeights
   double FirstWeight[TileRays::kSize]; // EndWeights::FirstWeight, LastWeight; with Mid, both
   double LastWeight[TileRays::kSize];  // MidWeight
   double MidT[TileRays::kSize];        // with Mid
-  double Mid[TileRays::kSize];         // 1: no lattice point in the pair (EndWeights::Mid)
+  // The lattice offset a lane steps from: the ray's, or with Mid EndWeights::MidOffset.
+  double LaneOffset[TileRays::kSize];
+  double Mid[TileRays::kSize]; // 1: no lattice point in the pair (EndWeights::Mid)
   // The kept rays with Mid, in the rectangle's order (ClippedRays::Hits holds the others):
   // the lanes take those, the scalar loop these, with no test per ray to tell them apart.
   uint16_t MidHits[kTilePixels + 3];
@@ -111,6 +113,7 @@ struct ClippedWeights
     w.LastWeight = this->LastWeight[l];
     w.Mid = this->Mid[l] != 0;
     w.MidT = this->MidT[l];
+    w.MidOffset = w.Mid ? this->LaneOffset[l] : 0.0;
     w.MidWeight = this->FirstWeight[l];
     return w;
   }

@@ -446,13 +446,13 @@ struct VolumeRayMarcher::Walker
   // the pixel turns opaque goes sample by sample as in the scalar loop, and leaves the rest of
   // its steps untaken, as that loop's lowered tout does. Each pixel sees the same samples in
   // the same order, with the same sums, records and profile, as from the scalar loop.
-  // Weighted (end weights, found by the clipping: state.Ends): a pair without a lattice
-  // point takes its middle sample in the scalar loop (WeightedSamples) at once, the others go
-  // to the lanes from their first index, and the hand-over multiplies each step's absorbance
-  // by its weight (1 but at the pair's first and last index) as the scalar loop does, before
-  // the visitor and the stop see it: the same weighted samples, sums, records, weights and
-  // cut as WeightedRay's. A pixel holds one pair of a cell, so taking the middle samples
-  // first changes no pixel's order.
+  // Weighted (end weights, found by the clipping: state.Ends): a pair goes to the lanes from
+  // its first index, a pair without a lattice point as a lane stepping from its middle
+  // (EndWeights::MidOffset: its one step is MidT, the next lies past the pair), and the
+  // hand-over multiplies each step's absorbance by its weight (1 but at the pair's first and
+  // last index; a middle sample's MidWeight) as the scalar loop does, before the visitor and
+  // the stop see it: the same weighted samples, sums, records, weights and cut as
+  // WeightedRay's.
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
   template <bool Weighted, class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, int hits,
@@ -494,20 +494,16 @@ struct VolumeRayMarcher::Walker
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     int64_t samples = 0;
-    // The rays the lanes take, in the rectangle's order (Weighted: those with a lattice
-    // point; the clipping listed the others apart, in Ends.MidHits).
+    // The rays the lanes take, in the rectangle's order; Weighted: then the pairs without a
+    // lattice point (Ends.MidHits), each a lane whose one step lies at its middle
+    // (Ends.LaneOffset). A pixel holds one pair of a cell, so no pixel's order changes.
     const uint16_t* list = c.Hits;
-    const int count = hits;
+    int count = hits;
     const walk::ClippedWeights& ends = state.Ends;
     if constexpr (Weighted)
     {
-      for (int h = 0; h < ends.MidCount; ++h)
-      {
-        const int l = ends.MidHits[h];
-        visitor.Segment(l, c.Tin[l], c.Tout[l]);
-        samples +=
-          this->WeightedSamples(l, rays[l], c.Tout[l], ends.Of(l), visitor, state, progress);
-      }
+      std::copy(ends.MidHits, ends.MidHits + ends.MidCount, state.Clipped.Hits + hits);
+      count = hits + ends.MidCount;
     }
     for (int h = 0; h < count; h += 4)
     {
@@ -539,7 +535,7 @@ struct VolumeRayMarcher::Walker
           k[i] = static_cast<int64_t>(c.Lattice[l]);
           lanes.K[i] = c.Lattice[l];
         }
-        lanes.Offset[i] = rays[l].Offset;
+        lanes.Offset[i] = Weighted ? ends.LaneOffset[l] : rays[l].Offset;
         lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
         for (int d = 0; d < 3; ++d)
         {

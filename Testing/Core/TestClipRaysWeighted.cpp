@@ -133,7 +133,8 @@ void CheckForm(WeightedForm form, Counts& counts)
       if (w.Mid)
       {
         ++counts.Mid;
-        ASSERT_TRUE(SameBits(got.MidT, w.MidT) && SameBits(got.MidWeight, w.MidWeight))
+        ASSERT_TRUE(SameBits(got.MidT, w.MidT) && SameBits(got.MidOffset, w.MidOffset) &&
+          SameBits(got.MidWeight, w.MidWeight))
           << "trial " << trial << " ray " << l;
         continue;
       }
