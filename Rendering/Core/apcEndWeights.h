@@ -29,9 +29,12 @@ struct EndWeights
   double LastWeight = 1;
   // No lattice point in [tin, tout): one sample at MidT of weight MidWeight, which counts as
   // lattice index First (the lattice point before it, so that it falls in the opaque stop's
-  // bin whose edge lies behind it).
+  // bin whose edge lies behind it). MidT is Lattice::At(First, MidOffset), the pair's middle
+  // as a point of the ray's lattice shifted by MidOffset - offset: the lanes, which step
+  // from (K + Offset) spacing, take it as a lane's first step with Offset = MidOffset.
   bool Mid = false;
   double MidT = 0;
+  double MidOffset = 0;
   double MidWeight = 0;
 
   // The weight of lattice sample k of the pair (First <= k <= Last).
@@ -52,7 +55,8 @@ struct EndWeights
   {
     w.Mid = true;
     w.First -= 1;
-    w.MidT = 0.5 * (tin + tout);
+    w.MidOffset = 0.5 * (tin + tout) * lattice.InverseSpacing - static_cast<double>(w.First);
+    w.MidT = lattice.At(w.First, w.MidOffset);
     w.MidWeight = (tout - tin) * lattice.InverseSpacing;
     return w;
   }

@@ -69,6 +69,62 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
   return n;
 }
 
+namespace
+{
+
+void Store(const EndWeights& w, int l, double offset, ClippedWeights& out)
+{
+  out.LaneOffset[l] = w.Mid ? w.MidOffset : offset;
+  out.First[l] = static_cast<double>(w.First);
+  out.Last[l] = static_cast<double>(w.Last);
+  out.FirstWeight[l] = w.Mid ? w.MidWeight : w.FirstWeight;
+  out.LastWeight[l] = w.Mid ? w.MidWeight : w.LastWeight;
+  out.Mid[l] = w.Mid ? 1.0 : 0.0;
+  out.MidT[l] = w.MidT;
+}
+
+// The weights of ray l's pair from tin, whose clipped end tout the stop may have cut: then
+// the pair's own end is clipped again from the ray's end, as the scalar walker did.
+void WeightsOf(const CellPlanes& planes, const TileRays& rays, int l, const double* stop,
+  const Lattice& lattice, double tin, double tout, ClippedWeights& out)
+{
+  double end = tout;
+  if (stop && tout == stop[l])
+  {
+    const RaySetup ray{ { rays.Ox[l], rays.Oy[l], rays.Oz[l] },
+      { rays.Dx[l], rays.Dy[l], rays.Dz[l] }, rays.End[l], rays.Offset[l] };
+    double start = 0;
+    end = rays.End[l];
+    planes.Clip(ray, start, end);
+  }
+  Store(EndWeightsOf(lattice, tin, end, rays.Offset[l]), l, rays.Offset[l], out);
+}
+
+} // namespace
+
+int ClipRaysWeightedScalar(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice& lattice, ClippedRays& out,
+  ClippedWeights& weights)
+{
+  const int kept = ClipRaysScalar(planes, rays, rect, stop, near, nullptr, out);
+  int n = 0;
+  weights.MidCount = 0;
+  for (int h = 0; h < kept; ++h)
+  {
+    const int l = out.Hits[h];
+    WeightsOf(planes, rays, l, stop, lattice, out.Tin[l], out.Tout[l], weights);
+    if (weights.Mid[l] != 0)
+    {
+      weights.MidHits[weights.MidCount++] = static_cast<uint16_t>(l);
+    }
+    else
+    {
+      out.Hits[n++] = static_cast<uint16_t>(l); // n <= h: a kept ray not yet read
+    }
+  }
+  return n;
+}
+
 #ifdef APC_HAVE_AVX2_CLIP
 namespace
 {
@@ -267,11 +323,113 @@ __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const
   }
   return n;
 }
+// ClipRaysAvx2 without a lattice, and the end weights of the kept rays' pairs: EndWeightsOf's
+// operations, four rays at a time. Where some lane's interval ends at its stop, the packet is
+// clipped again without the stop for the pair's own end (ClipFour's arithmetic is Clip's);
+// a lane FirstFour does not settle goes ray by ray.
+__attribute__((target("avx2"))) int ClipRaysWeightedAvx2(const CellPlanes& planes,
+  const TileRays& rays, const RayRect& rect, const double* stop, double near,
+  const Lattice& lattice, ClippedRays& out, ClippedWeights& weights)
+{
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d half = _mm256_set1_pd(0.5);
+  const __m256d spacing = _mm256_set1_pd(lattice.Spacing);
+  const __m256d inverse = _mm256_set1_pd(lattice.InverseSpacing);
+  int n = 0;
+  int mids = 0;
+  for (int row = 0; row < rect.Rows; ++row)
+  {
+    const int begin = rect.First + row * rect.Stride;
+    const int end = begin + rect.Width;
+    for (int l = begin; l < end; l += 4)
+    {
+      const __m256i valid =
+        _mm256_cmpgt_epi64(_mm256_set1_epi64x(end - l), _mm256_setr_epi64x(0, 1, 2, 3));
+      __m256d lo;
+      __m256d hi;
+      ClipFour(planes, rays, l, valid, stop, near, lo, hi);
+      _mm256_storeu_pd(out.Tin + l, lo);
+      _mm256_storeu_pd(out.Tout + l, hi);
+      int midLanes = 0;
+      const int keep = _mm256_movemask_pd(_mm256_cmp_pd(lo, hi, _CMP_LT_OQ)) &
+        _mm256_movemask_pd(_mm256_castsi256_pd(valid));
+      if (keep)
+      {
+        __m256d full = hi;
+        if (stop)
+        {
+          const __m256d atStop = _mm256_cmp_pd(hi, _mm256_maskload_pd(stop + l, valid), _CMP_EQ_OQ);
+          if (_mm256_movemask_pd(atStop) & keep)
+          {
+            __m256d lo2;
+            __m256d hi2;
+            ClipFour(planes, rays, l, valid, nullptr, near, lo2, hi2);
+            full = _mm256_blendv_pd(hi, hi2, atStop);
+          }
+        }
+        const __m256d offset = _mm256_loadu_pd(rays.Offset + l);
+        int unsettledIn = 0;
+        int unsettledOut = 0;
+        __m256d tFirst;
+        __m256d tEnd;
+        const __m256d first = FirstFour(lattice, lo, offset, tFirst, unsettledIn);
+        const __m256d last =
+          _mm256_sub_pd(FirstFour(lattice, full, offset, tEnd, unsettledOut), one);
+        const __m256d mid = _mm256_cmp_pd(last, first, _CMP_LT_OQ);
+        const __m256d single = _mm256_cmp_pd(last, first, _CMP_LE_OQ); // or Mid
+        const __m256d length = _mm256_mul_pd(_mm256_sub_pd(full, lo), inverse);
+        const __m256d tLast = _mm256_mul_pd(_mm256_add_pd(last, offset), spacing);
+        const __m256d firstWeight =
+          _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(tFirst, lo), inverse), half);
+        const __m256d lastWeight =
+          _mm256_add_pd(_mm256_mul_pd(_mm256_sub_pd(full, tLast), inverse), half);
+        // EndWeightsOf's middle: MidOffset from the index before the pair, MidT = At(that
+        // index, MidOffset).
+        const __m256d before = _mm256_sub_pd(first, _mm256_and_pd(mid, one));
+        const __m256d midOffset = _mm256_sub_pd(
+          _mm256_mul_pd(_mm256_mul_pd(half, _mm256_add_pd(lo, full)), inverse), before);
+        _mm256_storeu_pd(weights.First + l, before);
+        _mm256_storeu_pd(weights.LaneOffset + l, _mm256_blendv_pd(offset, midOffset, mid));
+        _mm256_storeu_pd(weights.Last + l, last);
+        _mm256_storeu_pd(weights.FirstWeight + l, _mm256_blendv_pd(firstWeight, length, single));
+        _mm256_storeu_pd(weights.LastWeight + l, _mm256_blendv_pd(lastWeight, length, single));
+        _mm256_storeu_pd(weights.Mid + l, _mm256_and_pd(mid, one));
+        _mm256_storeu_pd(
+          weights.MidT + l, _mm256_mul_pd(_mm256_add_pd(before, midOffset), spacing));
+        midLanes = _mm256_movemask_pd(mid) & keep;
+        for (int m = keep & (unsettledIn | unsettledOut); m; m &= m - 1)
+        {
+          const int lane = __builtin_ctz(m);
+          const int r = l + lane;
+          WeightsOf(planes, rays, r, stop, lattice, out.Tin[r], out.Tout[r], weights);
+          midLanes = (midLanes & ~(1 << lane)) | (weights.Mid[r] != 0 ? 1 << lane : 0);
+        }
+      }
+      // Four 16-bit ray numbers l + lane, of which the first popcount(lanes) are taken.
+      const __m128i base = _mm_set1_epi16(static_cast<short>(l));
+      const int sampled = keep & ~midLanes;
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n),
+        _mm_add_epi16(base, _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[sampled]))));
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(weights.MidHits + mids),
+        _mm_add_epi16(base, _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[midLanes]))));
+      n += __builtin_popcount(sampled);
+      mids += __builtin_popcount(midLanes);
+    }
+  }
+  weights.MidCount = mids;
+  return n;
+}
 #else
 int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out)
 {
   return ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
+}
+int ClipRaysWeightedAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice& lattice, ClippedRays& out,
+  ClippedWeights& weights)
+{
+  return ClipRaysWeightedScalar(planes, rays, rect, stop, near, lattice, out, weights);
 }
 #endif
 
@@ -280,6 +438,14 @@ int ClipRays(const CellPlanes& planes, const TileRays& rays, const RayRect& rect
 {
   return HasAvx2() ? ClipRaysAvx2(planes, rays, rect, stop, near, lattice, out)
                    : ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
+}
+
+int ClipRaysWeighted(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice& lattice, ClippedRays& out,
+  ClippedWeights& weights)
+{
+  return HasAvx2() ? ClipRaysWeightedAvx2(planes, rays, rect, stop, near, lattice, out, weights)
+                   : ClipRaysWeightedScalar(planes, rays, rect, stop, near, lattice, out, weights);
 }
 
 } // namespace walk

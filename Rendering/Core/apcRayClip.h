@@ -5,6 +5,7 @@
 #ifndef apcRayClip_h
 #define apcRayClip_h
 
+#include "apcEndWeights.h"
 #include "apcRayWalk.h"
 
 #include <algorithm>
@@ -82,6 +83,57 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
 int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out);
 bool HasAvx2();
+
+// With end weights (apcEndWeights.h): each kept pair's EndWeightsOf(lattice, Tin, End,
+// Offset), bit for bit, by the ray's index in the tile, End the pair's end before the opaque
+// stop cut it (CellPlanes::Clip from [0, TileRays::End)). Found with the clipping, four rays
+// at a time: ray by ray, the two Lattice::First of each pair and their corrections cost the
+// weighted marcher about as much as the samples' hand-over.
+struct ClippedWeights
+{
+  double First[TileRays::kSize]; // EndWeights::First, Last (integers)
+  double Last[TileRays::kSize];
+  double FirstWeight[TileRays::kSize]; // EndWeights::FirstWeight, LastWeight; with Mid, both
+  double LastWeight[TileRays::kSize];  // MidWeight
+  double MidT[TileRays::kSize];        // with Mid
+  // The lattice offset a lane steps from: the ray's, or with Mid EndWeights::MidOffset.
+  double LaneOffset[TileRays::kSize];
+  double Mid[TileRays::kSize]; // 1: no lattice point in the pair (EndWeights::Mid)
+  // The kept rays with Mid, in the rectangle's order (ClippedRays::Hits holds the others):
+  // the lanes take those, the scalar loop these, with no test per ray to tell them apart.
+  uint16_t MidHits[kTilePixels + 3];
+  int MidCount = 0;
+
+  EndWeights Of(int l) const
+  {
+    EndWeights w;
+    w.First = static_cast<int64_t>(this->First[l]);
+    w.Last = static_cast<int64_t>(this->Last[l]);
+    w.FirstWeight = this->FirstWeight[l];
+    w.LastWeight = this->LastWeight[l];
+    w.Mid = this->Mid[l] != 0;
+    w.MidT = this->MidT[l];
+    w.MidOffset = w.Mid ? this->LaneOffset[l] : 0.0;
+    w.MidWeight = this->FirstWeight[l];
+    return w;
+  }
+};
+
+// ClipRays without a lattice (every ray with Tin < Tout kept, the same Tin and Tout) and each
+// kept ray's end weights on the lattice to weights; the kept rays with a lattice point go to
+// out.Hits (their count is returned), those without one to weights.MidHits (MidCount), each
+// in the rectangle's order. Four rays per AVX2 instruction where the processor has it, else
+// ray by ray (CellPlanes::Clip, EndWeightsOf).
+int ClipRaysWeighted(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice& lattice, ClippedRays& out,
+  ClippedWeights& weights);
+// The two forms ClipRaysWeighted chooses from (tests); the AVX2 one only where HasAvx2().
+int ClipRaysWeightedScalar(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice& lattice, ClippedRays& out,
+  ClippedWeights& weights);
+int ClipRaysWeightedAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice& lattice, ClippedRays& out,
+  ClippedWeights& weights);
 
 } // namespace walk
 } // namespace apc

@@ -147,10 +147,9 @@ struct VolumeRayMarcher::Walker
     double LinearOrigin[3] = { 0, 0, 0 };
     // The tile's rays clipped against the cell.
     walk::ClippedRays Clipped;
-    // With end weights in the lanes: the weights of the pairs with a lattice point, and their
-    // rays (kept from cell to cell, so that their room is not allocated per cell).
-    std::vector<walk::EndWeights> Weights;
-    std::vector<uint16_t> Weighted;
+    // With end weights where the lanes are on: each kept pair's weights, found by the
+    // clipping (walk::ClipRaysWeighted).
+    walk::ClippedWeights Ends;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -228,24 +227,50 @@ struct VolumeRayMarcher::Walker
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
     const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights;
     walk::ClippedRays& c = state.Clipped;
-    const int hits =
-      walk::ClipRays(state.Planes, packed, rect, Visitor::StopsWhenOpaque ? progress.Stop : nullptr,
-        state.Near, allInside || weighted ? nullptr : &this->Grid, c);
+    const double* stop = Visitor::StopsWhenOpaque ? progress.Stop : nullptr;
+    // Where the lanes are on, the clipping finds the pairs' end weights four rays at a time;
+    // else PairWeights finds them ray by ray (the form the lanes' weights are tested against).
+    const bool clipWeights = weighted && this->Lanes;
+    const int hits = clipWeights ? walk::ClipRaysWeighted(state.Planes, packed, rect, stop,
+                                     state.Near, this->Grid, c, state.Ends)
+                                 : walk::ClipRays(state.Planes, packed, rect, stop, state.Near,
+                                     allInside || weighted ? nullptr : &this->Grid, c);
     if constexpr (!allInside)
     {
-      if (weighted)
+      if (weighted && clipWeights)
       {
+        // Hits: the pairs with a lattice point; Ends.MidHits: those without one.
+        const walk::ClippedWeights& ends = state.Ends;
+        if (hits + ends.MidCount == 0)
+        {
+          return 0;
+        }
         if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
         {
-          if (hits > 0 && this->SharedOrigin && this->Lanes)
+          if (this->SharedOrigin)
           {
-            this->Prepare(rays[c.Hits[0]], state);
+            this->Prepare(rays[hits > 0 ? c.Hits[0] : ends.MidHits[0]], state);
             if (state.Interpolate && (state.Linear || state.Interpolator.HasPyramidInverse()))
             {
               return this->LaneSamples<true>(rays, packed, hits, visitor, state, progress);
             }
           }
         }
+        // In the rectangle's order, the two lists merged: Newton starts each ray from the
+        // cell's previous ray's first sample (CellState::FirstMemory).
+        int64_t samples = 0;
+        for (int h = 0, m = 0; h < hits || m < ends.MidCount;)
+        {
+          const bool mid = h == hits || (m < ends.MidCount && ends.MidHits[m] < c.Hits[h]);
+          const int l = mid ? ends.MidHits[m++] : c.Hits[h++];
+          visitor.Segment(l, c.Tin[l], c.Tout[l]);
+          samples +=
+            this->WeightedSamples(l, rays[l], c.Tout[l], ends.Of(l), visitor, state, progress);
+        }
+        return samples;
+      }
+      if (weighted)
+      {
         int64_t samples = 0;
         for (int h = 0; h < hits; ++h)
         {
@@ -434,13 +459,13 @@ struct VolumeRayMarcher::Walker
   // the pixel turns opaque goes sample by sample as in the scalar loop, and leaves the rest of
   // its steps untaken, as that loop's lowered tout does. Each pixel sees the same samples in
   // the same order, with the same sums, records and profile, as from the scalar loop.
-  // Weighted (end weights): each pair's weights are found first; a pair without a lattice
-  // point takes its middle sample in the scalar loop (WeightedSamples) at once, the others go
-  // to the lanes from their first index, and the hand-over multiplies each step's absorbance
-  // by its weight (1 but at the pair's first and last index) as the scalar loop does, before
-  // the visitor and the stop see it: the same weighted samples, sums, records, weights and
-  // cut as WeightedRay's. A pixel holds one pair of a cell, so taking the middle samples
-  // first changes no pixel's order.
+  // Weighted (end weights, found by the clipping: state.Ends): a pair goes to the lanes from
+  // its first index, a pair without a lattice point as a lane stepping from its middle
+  // (EndWeights::MidOffset: its one step is MidT, the next lies past the pair), and the
+  // hand-over multiplies each step's absorbance by its weight (1 but at the pair's first and
+  // last index; a middle sample's MidWeight) as the scalar loop does, before the visitor and
+  // the stop see it: the same weighted samples, sums, records, weights and cut as
+  // WeightedRay's.
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
   template <bool Weighted, class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, const TileRays& packed,
@@ -483,40 +508,28 @@ struct VolumeRayMarcher::Walker
     walk::LaneSteps steps;
     walk::LaneMoments across;
     int64_t samples = 0;
-    // The rays the lanes take (with their weights, Weighted), in the rectangle's order.
+    // The rays the lanes take, in the rectangle's order; Weighted: then the pairs without a
+    // lattice point (Ends.MidHits), each a lane whose one step lies at its middle
+    // (Ends.LaneOffset). A pixel holds one pair of a cell, so no pixel's order changes.
     const uint16_t* list = c.Hits;
     int count = hits;
+    const walk::ClippedWeights& ends = state.Ends;
     if constexpr (Weighted)
     {
-      if (state.Weights.size() < static_cast<size_t>(hits))
-      {
-        state.Weights.resize(walk::kTilePixels);
-        state.Weighted.resize(walk::kTilePixels);
-      }
-      count = 0;
-      for (int h = 0; h < hits; ++h)
-      {
-        const int l = c.Hits[h];
-        visitor.Segment(l, c.Tin[l], c.Tout[l]);
-        const walk::EndWeights w =
-          this->PairWeights<Visitor>(l, rays[l], c.Tin[l], c.Tout[l], state, progress);
-        if (w.Mid)
-        {
-          samples += this->WeightedSamples(l, rays[l], c.Tout[l], w, visitor, state, progress);
-          continue;
-        }
-        state.Weights[count] = w;
-        state.Weighted[count] = static_cast<uint16_t>(l);
-        ++count;
-      }
-      list = state.Weighted.data();
+      std::copy(ends.MidHits, ends.MidHits + ends.MidCount, state.Clipped.Hits + hits);
+      count = hits + ends.MidCount;
     }
     for (int h = 0; h < count; h += 4)
     {
       const int n = std::min(4, count - h);
       int local[4] = { 0, 0, 0, 0 };
       int64_t k[4] = { 0, 0, 0, 0 };
-      const walk::EndWeights* weights[4] = { nullptr, nullptr, nullptr, nullptr };
+      // Weighted: each ray's pair's first and last index and their float weights (as
+      // EndWeights::Of gives them, then cast as the scalar loop does).
+      int64_t firstK[4] = { 0, 0, 0, 0 };
+      int64_t lastK[4] = { 0, 0, 0, 0 };
+      float firstWeight[4] = { 1, 1, 1, 1 };
+      float lastWeight[4] = { 1, 1, 1, 1 };
       for (int i = 0; i < 4; ++i)
       {
         const int at = h + (i < n ? i : 0);
@@ -524,10 +537,13 @@ struct VolumeRayMarcher::Walker
         local[i] = l;
         if constexpr (Weighted)
         {
-          weights[i] = &state.Weights[at];
-          k[i] = weights[i]->First;
-          lanes.K[i] = static_cast<double>(k[i]);
-          lanes.Offset[i] = rays[l].Offset;
+          firstK[i] = static_cast<int64_t>(ends.First[l]);
+          lastK[i] = static_cast<int64_t>(ends.Last[l]);
+          firstWeight[i] = static_cast<float>(ends.FirstWeight[l]);
+          lastWeight[i] = static_cast<float>(ends.LastWeight[l]);
+          k[i] = firstK[i];
+          lanes.K[i] = ends.First[l];
+          lanes.Offset[i] = ends.LaneOffset[l];
           lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
           for (int d = 0; d < 3; ++d)
           {
@@ -537,10 +553,10 @@ struct VolumeRayMarcher::Walker
         else
         {
           k[i] = static_cast<int64_t>(c.Lattice[l]);
-          if (i < n)
-          {
-            visitor.Segment(l, c.Tin[l], c.Tout[l]);
-          }
+        }
+        if (i < n)
+        {
+          visitor.Segment(l, c.Tin[l], c.Tout[l]);
         }
       }
       if constexpr (!Weighted)
@@ -612,7 +628,8 @@ struct VolumeRayMarcher::Walker
               float weight = 1;
               if constexpr (Weighted)
               {
-                weight = static_cast<float>(weights[i]->Of(kk + s));
+                weight =
+                  kk + s == firstK[i] ? firstWeight[i] : (kk + s == lastK[i] ? lastWeight[i] : 1.f);
                 absorbance *= weight;
               }
               q[s] = 0;
@@ -665,7 +682,7 @@ struct VolumeRayMarcher::Walker
               float weight = 1;
               if constexpr (Weighted)
               {
-                weight = static_cast<float>(weights[i]->Of(kk));
+                weight = kk == firstK[i] ? firstWeight[i] : (kk == lastK[i] ? lastWeight[i] : 1.f);
                 absorbance *= weight;
               }
               if (absorbance > 0)
