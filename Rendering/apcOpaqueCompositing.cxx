@@ -299,8 +299,8 @@ bool PredictOpaqueBand(
       Hold(buffers.Bound, pixels));
 }
 
-void ProbeOpaqueCuts(
-  const ProcessGroup& group, const CompositeFrame& frame, MomentBuffers& buffers, FrameRecord& record)
+void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, MomentBuffers& buffers,
+  FrameRecord& record)
 {
   constexpr int bins = OpaqueBins::kBins;
   const int step = frame.Settings.OpaqueProbeStep;
@@ -329,8 +329,8 @@ void ProbeOpaqueCuts(
   {
     cuts[p] = static_cast<uint8_t>(CutBin(profile.data() + p * bins));
   }
-  buffers.PreviousCuts.Begin(buffers.Cuts.Image, frame.Rect.I0, frame.Rect.J0, frame.RectWidth(),
-    frame.RectHeight());
+  buffers.PreviousCuts.Begin(
+    buffers.Cuts.Image, frame.Rect.I0, frame.Rect.J0, frame.RectWidth(), frame.RectHeight());
   SpreadProbeCuts(cuts.data(), width, height, step, offset, buffers.PreviousCuts);
   record.Clock.Lap("opaque_prepass");
 }

@@ -130,8 +130,7 @@ int vtkAPCCompositePass::GetNumberOfVolumes() const
 APC_FRAME_SETTING(DisplayDepthComposited, bool, value)
 APC_FRAME_SETTING(CompositeInDouble, bool, value)
 APC_FRAME_SETTING(OpaqueProbeStep, int,
-  apc::CheckedSetting(
-    this, "OpaqueProbeStep", value, 0, apc::FrameSettings::MaxOpaqueProbeStep))
+  apc::CheckedSetting(this, "OpaqueProbeStep", value, 0, apc::FrameSettings::MaxOpaqueProbeStep))
 APC_FRAME_SETTING(MaxBandPixels, vtkIdType,
   apc::CheckedSetting<vtkIdType>(this, "MaxBandPixels", value, 1, VTK_ID_MAX))
 APC_FRAME_SETTING(MaxMessageBytes, vtkIdType,

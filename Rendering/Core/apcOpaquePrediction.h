@@ -148,8 +148,8 @@ inline void SpreadProbeCuts(const uint8_t* probe, int probeWidth, int probeHeigh
       const int i1 = above(x, probeWidth);
       const size_t r0 = static_cast<size_t>(j0) * probeWidth;
       const size_t r1 = static_cast<size_t>(j1) * probeWidth;
-      memory.Cut[static_cast<size_t>(y) * memory.Width + x] =
-        std::max(std::max(probe[r0 + i0], probe[r0 + i1]), std::max(probe[r1 + i0], probe[r1 + i1]));
+      memory.Cut[static_cast<size_t>(y) * memory.Width + x] = std::max(
+        std::max(probe[r0 + i0], probe[r0 + i1]), std::max(probe[r1 + i0], probe[r1 + i1]));
     }
   }
 }
