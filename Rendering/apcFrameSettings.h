@@ -28,7 +28,7 @@ struct FrameSettings
   int InteractiveImageReduction = 4;
   // Stop Where Opaque on several processes: a frame with no previous cut first probes the
   // rays of every this-many-th pixel in each direction for its bound (0: no probe).
-  int OpaqueProbeStep = 4;
+  int OpaqueProbeStep = 8;
 
   // The largest interactive factors the setters accept (vtkAPCCompositePass's and ParaView's
   // APC Volume's); the smallest is 1, which switches either off.

@@ -151,7 +151,7 @@ public:
    * cut to bound pass 1 with) first marches the rays of every OpaqueProbeStep-th pixel in each
    * direction with each process's own stop, agrees their cut and bounds pass 1 with it as a
    * later frame does with the previous cut (docs/sampler.md). The image is the same either
-   * way; 0 switches the probe off. Default 4 (a sixteenth of the rays). Must be the same on
+   * way; 0 switches the probe off. Default 8 (1/64 of the rays). Must be the same on
    * every process.
    */
   void SetOpaqueProbeStep(int step);
