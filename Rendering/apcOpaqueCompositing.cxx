@@ -329,6 +329,14 @@ void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, Mom
   {
     cuts[p] = static_cast<uint8_t>(CutBin(profile.data() + p * bins));
   }
+  // No probe ray turned opaque: a bound of "none" everywhere would bound nothing and cost the
+  // bounded frame's bookkeeping, so the frame goes on as one without a previous cut.
+  if (std::all_of(
+        cuts.begin(), cuts.end(), [](uint8_t cut) { return cut == OpaqueBins::kBins - 1; }))
+  {
+    record.Clock.Lap("opaque_prepass");
+    return;
+  }
   buffers.PreviousCuts.Begin(
     buffers.Cuts.Image, frame.Rect.I0, frame.Rect.J0, frame.RectWidth(), frame.RectHeight());
   SpreadProbeCuts(cuts.data(), width, height, step, offset, buffers.PreviousCuts);
