@@ -153,6 +153,7 @@ struct FrameRecord
   // marcher tiles marched again for them (docs/sampler.md).
   vtkIdType OpaquePredictedUnresolved = 0;
   vtkIdType OpaquePredictedRedone = 0;
+  vtkIdType OpaquePrepassSamples = 0;
   int Bands = 0; // APC mode: bands of rows rendered
   SegmentStatistics Segments;
   bool Failed = false;
@@ -231,6 +232,12 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
 // there is none (another image, the first frame).
 bool PredictOpaqueBand(
   const CompositeFrame& frame, const RowBand& band, size_t pixels, MomentBuffers& buffers);
+// On several processes, before the bands of a frame that has no previous cut for its image
+// (buffers.Cuts.Image): every process probes the rays of every OpaqueProbeStep-th pixel with
+// its own stop, their profiles are summed, and their agreed cuts spread over the rectangle
+// into buffers.PreviousCuts, for PredictOpaqueBand. Every process makes the same calls.
+void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, MomentBuffers& buffers,
+  FrameRecord& record);
 // After pass 1 of band (pixels of it): every volume's opaque profile summed over the covered
 // tiles of every process, then each volume's own moments (own[e], or moments with one volume)
 // cut where the sum is opaque and summed into moments. bounded: pass 1 took buffers.Bound,

@@ -457,6 +457,50 @@ void FrameEngine::RedoOpaqueTiles(const MomentParameters& parameters, const uint
   this->Clock.Lap("moments");
 }
 
+int64_t FrameEngine::ProbeOpaqueProfile(
+  const MomentParameters& parameters, int step, int offset, uint16_t* profile)
+{
+  if (!this->Ready || !this->StopsWhereOpaque(parameters))
+  {
+    return 0;
+  }
+  // The very rays of those pixels, with their ray ends, on the frame's lattice, warp and bins
+  // (they follow from the camera and the data, not from the image's resolution).
+  const RayCamera coarse = this->Camera->Decimated(step, offset);
+  const int width = this->Camera->GetWidth();
+  const std::vector<float>& ends = this->Marcher.GetRayEnds();
+  std::vector<float> coarseEnds(static_cast<size_t>(coarse.GetWidth()) * coarse.GetHeight());
+  for (int j = 0; j < coarse.GetHeight(); ++j)
+  {
+    for (int i = 0; i < coarse.GetWidth(); ++i)
+    {
+      const size_t fine = static_cast<size_t>(j * step + offset) * width + (i * step + offset);
+      coarseEnds[static_cast<size_t>(j) * coarse.GetWidth() + i] =
+        fine < ends.size() ? ends[fine] : std::numeric_limits<float>::infinity();
+    }
+  }
+  // A marcher of its own: the frame's keeps its view and cache for the frame's passes.
+  this->Probe.reset(new VolumeRayMarcher);
+  VolumeRayMarcher& probe = *this->Probe;
+  probe.SetNumberOfThreads(this->Settings.NumberOfThreads);
+  probe.SetLatticeJitter(this->Settings.LatticeJitter);
+  probe.SetSampleEndWeights(this->Settings.SampleEndWeights);
+  probe.SetOpaqueAbsorbance(VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+  probe.SetMaxSampleCacheBytes(0);
+  probe.SetMesh(&this->Mesh);
+  probe.SetView(coarse, std::move(coarseEnds));
+  std::vector<double> moments(
+    static_cast<size_t>(coarse.GetWidth()) * coarse.GetHeight() * (parameters.Moments + 1), 0.0);
+  DispatchMoments(parameters.Moments,
+    [&](auto n) { probe.AccumulateMoments<n()>(*this->Table, *this->Warp, moments.data()); });
+  const VolumeRayMarcher::OpaqueProfile own = probe.GetOpaqueProfile();
+  AddProfiles(profile, own.data(), own.size());
+  const int64_t samples = probe.GetLastSampleCount();
+  this->Probe.reset();
+  this->Clock.Lap("opaque_prepass");
+  return samples;
+}
+
 //------------------------------------------------------------------------------
 void FrameEngine::RenderColour(const MomentParameters& parameters, const double* moments,
   double* colourSums, const RowBand& band)

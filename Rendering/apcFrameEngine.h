@@ -184,6 +184,14 @@ public:
   /// (this volume's own) and profile are replaced. Its samples count as pass 1's.
   void RedoOpaqueTiles(const MomentParameters& parameters, const uint8_t* unresolved,
     double* moments, const RowBand& band);
+  /// Stop Where Opaque's probe of a first frame on several processes (apcOpaquePrediction.h):
+  /// marches the rays of every step-th pixel of the crop in each direction (the crop's pixel
+  /// (i * step + offset, j * step + offset) is probe pixel (i, j); apc::ProbeSize gives the
+  /// probe image's size) with this volume's own stop and no sample cache, and adds their
+  /// opaque profile (OpaqueBins::kBins per probe pixel) into profile. Returns the samples
+  /// taken (0 if the volume does not stop where opaque or is not prepared).
+  int64_t ProbeOpaqueProfile(
+    const MomentParameters& parameters, int step, int offset, uint16_t* profile);
   /// Samples marched again by the cuts since Prepare (tiles the sample cache did not hold).
   int64_t GetCutSampleCount() const { return this->CutSamples; }
   /// Marcher tiles pass 1 kept as marched without the stop since Prepare (alone only).
@@ -214,6 +222,7 @@ private:
   InputReport Report;
   bool ReportPending = false;
   VolumeRayMarcher Marcher;
+  std::unique_ptr<VolumeRayMarcher> Probe; // ProbeOpaqueProfile's, only while it runs
 
   bool Ready = false;
   int X0 = 0;

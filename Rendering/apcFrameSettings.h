@@ -26,11 +26,15 @@ struct FrameSettings
   // Interactive frames only: the factor on the sample distance and the image reduction.
   double InteractiveSampleDistanceFactor = 2.0;
   int InteractiveImageReduction = 4;
+  // Stop Where Opaque on several processes: a frame with no previous cut first probes the
+  // rays of every this-many-th pixel in each direction for its bound (0: no probe).
+  int OpaqueProbeStep = 8;
 
   // The largest interactive factors the setters accept (vtkAPCCompositePass's and ParaView's
   // APC Volume's); the smallest is 1, which switches either off.
   static constexpr double MaxSampleDistanceFactor = 16.0;
   static constexpr int MaxImageReduction = 16;
+  static constexpr int MaxOpaqueProbeStep = 64;
 };
 
 // How the processes' values of a setting become the frame's.
@@ -54,6 +58,7 @@ void ForEachAgreed(Settings& settings, F&& f)
   f("InteractiveSampleDistanceFactor", settings.InteractiveSampleDistanceFactor,
     AgreementRule::Largest);
   f("InteractiveImageReduction", settings.InteractiveImageReduction, AgreementRule::Largest);
+  f("OpaqueProbeStep", settings.OpaqueProbeStep, AgreementRule::Same);
 }
 
 } // namespace apc

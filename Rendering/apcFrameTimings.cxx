@@ -112,6 +112,7 @@ vtkAPCCompositePass::Timings TimingsOf(const FrameRecord& record)
   t.ProfileBytes = record.ProfileBytes;
   t.OpaquePredictedUnresolved = static_cast<double>(record.OpaquePredictedUnresolved);
   t.OpaquePredictedRedone = static_cast<double>(record.OpaquePredictedRedone);
+  t.OpaquePrepassSamples = static_cast<double>(record.OpaquePrepassSamples);
   t.Bands = record.Bands;
   if (record.Pass2Samples > 0)
   {

@@ -494,6 +494,14 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
                          frame.ViewHeight, frame.Interactive ? frame.Reduction() : 0 },
       frame.Rect.I0, frame.Rect.J0, frame.RectWidth(), frame.RectHeight());
   }
+  // Without a previous cut for this image (a first frame), a probe of a few rays gives one.
+  // Agreed: the cuts every process remembers, the frame's settings and its try without the stop.
+  if (buffers.Cuts.Valid && frame.Settings.OpaqueProbeStep > 0 && !frame.TryWithoutOpaqueStop &&
+    !(buffers.PreviousCuts.Valid && buffers.PreviousCuts.Image == buffers.Cuts.Image))
+  {
+    record.Clock.Lap("pass1"); // the engines' set-up, in pass 1 as without the probe
+    ProbeOpaqueCuts(group, frame, buffers, record);
+  }
   // The same bands on every process: they follow from the agreed rectangle and band size.
   // One process has no collective to pay per band: its bands are small (apcAloneBands.h).
   size_t bandPixels = static_cast<size_t>(frame.Settings.MaxBandPixels);

@@ -101,7 +101,7 @@ void AllReduceInMessages(const ProcessGroup& group, const CompositeFrame& frame,
 // without volumes sends zeros.
 void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const TileGrid& tiles,
   const std::vector<unsigned char>& mask, const uint16_t* mine, const uint8_t* bound,
-  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record)
+  uint16_t* summed, MomentBuffers& buffers, FrameRecord& record, const char* stage = "profile")
 {
   constexpr int bins = OpaqueBins::kBins;
   const size_t pixels = tiles.PixelsIn(mask);
@@ -114,7 +114,7 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
   size_t i = 0;
   tiles.ForEachPacked(mask, [&](size_t p) { summaries[i++] = OpaqueSummary::Of(mine + p * bins); });
   OpaqueSummaryCombine combine;
-  AllReduceInMessages(group, frame, "profile", summaries, combined, pixels, &combine, record);
+  AllReduceInMessages(group, frame, stage, summaries, combined, pixels, &combine, record);
   if (bound)
   {
     i = 0;
@@ -148,7 +148,7 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
       at += static_cast<size_t>(keep);
     });
   SaturatingProfileSum sum;
-  AllReduceInMessages(group, frame, "profile", send, received, count, &sum, record);
+  AllReduceInMessages(group, frame, stage, send, received, count, &sum, record);
   i = 0;
   at = 0;
   tiles.ForEachPacked(mask,
@@ -290,7 +290,6 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
 }
 
 bool PredictOpaqueBand(
-
   const CompositeFrame& frame, const RowBand& band, size_t pixels, MomentBuffers& buffers)
 {
   const OpaqueCutMemory& previous = buffers.PreviousCuts;
@@ -298,6 +297,50 @@ bool PredictOpaqueBand(
     PredictOpaqueBound(previous, buffers.Cuts.Image, frame.Rect.I0, frame.Rect.J0 + band.J0,
       frame.RectWidth(), band.J1 - band.J0, kPredictionRadius, kPredictionMargin,
       Hold(buffers.Bound, pixels));
+}
+
+void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, MomentBuffers& buffers,
+  FrameRecord& record)
+{
+  constexpr int bins = OpaqueBins::kBins;
+  const int step = frame.Settings.OpaqueProbeStep;
+  const int offset = step / 2; // the middle of each step x step block
+  const int width = ProbeSize(frame.RectWidth(), step, offset);
+  const int height = ProbeSize(frame.RectHeight(), step, offset);
+  const size_t pixels = static_cast<size_t>(width) * height;
+  std::vector<uint16_t> profile(pixels * bins, uint16_t(0));
+  for (FrameEngine* engine : frame.Engines)
+  {
+    if (engine->GetWidth() == frame.RectWidth() && engine->GetHeight() == frame.RectHeight())
+    {
+      record.OpaquePrepassSamples +=
+        engine->ProbeOpaqueProfile(frame.Moments, step, offset, profile.data());
+    }
+  }
+  // The probe's rays are a complete set of rays: their own stops and the summaries give
+  // their exact cut, as in a first frame without a bound. Every process joins, with zeros if
+  // it has nothing to probe.
+  const TileGrid tiles(width, 0, 0, width, height);
+  const std::vector<unsigned char> all(tiles.Tiles(), 1);
+  SumProfiles(group, frame, tiles, all, profile.data(), nullptr, profile.data(), buffers, record,
+    "opaque_prepass");
+  std::vector<uint8_t> cuts(pixels);
+  for (size_t p = 0; p < pixels; ++p)
+  {
+    cuts[p] = static_cast<uint8_t>(CutBin(profile.data() + p * bins));
+  }
+  // No probe ray turned opaque: a bound of "none" everywhere would bound nothing and cost the
+  // bounded frame's bookkeeping, so the frame goes on as one without a previous cut.
+  if (std::all_of(
+        cuts.begin(), cuts.end(), [](uint8_t cut) { return cut == OpaqueBins::kBins - 1; }))
+  {
+    record.Clock.Lap("opaque_prepass");
+    return;
+  }
+  buffers.PreviousCuts.Begin(
+    buffers.Cuts.Image, frame.Rect.I0, frame.Rect.J0, frame.RectWidth(), frame.RectHeight());
+  SpreadProbeCuts(cuts.data(), width, height, step, offset, buffers.PreviousCuts);
+  record.Clock.Lap("opaque_prepass");
 }
 
 } // namespace apc

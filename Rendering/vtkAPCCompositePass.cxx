@@ -129,6 +129,8 @@ int vtkAPCCompositePass::GetNumberOfVolumes() const
 
 APC_FRAME_SETTING(DisplayDepthComposited, bool, value)
 APC_FRAME_SETTING(CompositeInDouble, bool, value)
+APC_FRAME_SETTING(OpaqueProbeStep, int,
+  apc::CheckedSetting(this, "OpaqueProbeStep", value, 0, apc::FrameSettings::MaxOpaqueProbeStep))
 APC_FRAME_SETTING(MaxBandPixels, vtkIdType,
   apc::CheckedSetting<vtkIdType>(this, "MaxBandPixels", value, 1, VTK_ID_MAX))
 APC_FRAME_SETTING(MaxMessageBytes, vtkIdType,
@@ -482,6 +484,7 @@ void vtkAPCCompositePass::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "CompositeInDouble: " << settings.CompositeInDouble << "\n";
   os << indent << "MaxBandPixels: " << settings.MaxBandPixels << "\n";
   os << indent << "MaxMessageBytes: " << settings.MaxMessageBytes << "\n";
+  os << indent << "OpaqueProbeStep: " << settings.OpaqueProbeStep << "\n";
   os << indent << "KeepLastImage: " << this->KeepLastImage << "\n";
   const char* modes[] = { "APC", "SEGMENTS", "LOCAL_EXACT", "AUTO" };
   os << indent << "CompositeMode: " << modes[settings.CompositeMode] << "\n";

@@ -147,6 +147,19 @@ public:
 
   ///@{
   /**
+   * Stop Where Opaque on several processes: the first frame of a view (no previous frame's
+   * cut to bound pass 1 with) first marches the rays of every OpaqueProbeStep-th pixel in each
+   * direction with each process's own stop, agrees their cut and bounds pass 1 with it as a
+   * later frame does with the previous cut (docs/sampler.md). The image is the same either
+   * way; 0 switches the probe off. Default 8 (1/64 of the rays). Must be the same on
+   * every process.
+   */
+  void SetOpaqueProbeStep(int step);
+  int GetOpaqueProbeStep() const;
+  ///@}
+
+  ///@{
+  /**
    * Ship the moment and colour sums in double instead of the compact wire (default off:
    * fixed-point moments and float colour sums, half the bytes; each process still sums its
    * own samples in double).
@@ -372,6 +385,10 @@ public:
     // without it for them.
     double OpaquePredictedUnresolved = 0;
     double OpaquePredictedRedone = 0;
+    // A first frame's bound on several processes (SetOpaqueProbeStep): the probe's seconds
+    // (its march and its profiles' allreduce) and this process's samples in it.
+    double OpaquePrepass = 0;
+    double OpaquePrepassSamples = 0;
     // APC mode: the bands of rows the frame was rendered in (one process takes small ones).
     double Bands = 0;
     // Each stage's wait for the last process and transfer after it (see above).
@@ -443,6 +460,8 @@ public:
     f("profile_bytes", timings.ProfileBytes);
     f("opaque_predicted_unresolved", timings.OpaquePredictedUnresolved);
     f("opaque_predicted_redone", timings.OpaquePredictedRedone);
+    f("opaque_prepass", timings.OpaquePrepass);
+    f("opaque_prepass_samples", timings.OpaquePrepassSamples);
     f("bands", timings.Bands);
     f("agree_wait", timings.AgreeWait);
     f("agree_transfer", timings.AgreeTransfer);
@@ -475,7 +494,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 69;
+  static constexpr int NumberOfTimings = 71;
 
   ///@{
   /**

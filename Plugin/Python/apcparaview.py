@@ -73,7 +73,9 @@ def last_timings(display):
     "profile_bytes" (the opaque summaries' and profiles' share of "bytes_sent"),
     "opaque_predicted_unresolved" and
     "opaque_predicted_redone" (on several ranks: pixels whose cut the previous frame's
-    predicted bound left unknown, and the 16x16 tiles marched again for them), "bands" (APC
+    predicted bound left unknown, and the 16x16 tiles marched again for them),
+    "opaque_prepass" and "opaque_prepass_samples" (on several ranks, a first frame's probe
+    of every 8th ray for that bound: its seconds and this rank's samples), "bands" (APC
     mode: the bands of rows the frame was rendered in); per stage with collectives its wait for the slowest rank and its
     transfer after the last arrival ("tiles_wait", "tiles_transfer", ...), "wait" and
     "transfer" (their sums), "render" (the display rank's), "render_mean", "render_max",

@@ -105,6 +105,55 @@ inline bool PredictOpaqueBound(const OpaqueCutMemory& previous, const std::vecto
   return true;
 }
 
+// A first frame has no previous cut. On several processes it probes instead: every process
+// marches the rays of every step-th pixel in each direction (from offset) with its own stop,
+// their profiles are summed and cut (the exact cut of those rays), and each pixel of the
+// rectangle takes the largest probe cut around it as its "previous" cut, which
+// PredictOpaqueBound then widens as for a later frame. A wrong prediction costs only time:
+// the pixels it leaves unresolved are marched again.
+//
+// The probe's pixels along a side of pixels pixels (at least one).
+inline int ProbeSize(int pixels, int step, int offset)
+{
+  return std::max(1, (pixels - offset + step - 1) / step);
+}
+
+// Fills memory's rectangle (after Begin) from the probe's agreed cuts (probeWidth x
+// probeHeight, probe pixel (i, j) = the rectangle's pixel (i * step + offset, j * step +
+// offset)): each pixel takes the largest cut of the (up to) two probe columns and two probe
+// rows nearest it on either side, so that an opaque region's edge between two probe pixels
+// is not taken as open.
+inline void SpreadProbeCuts(const uint8_t* probe, int probeWidth, int probeHeight, int step,
+  int offset, OpaqueCutMemory& memory)
+{
+  const auto below = [&](int x, int n)
+  {
+    const int d = x - offset;
+    const int a = d >= 0 ? d / step : -1;
+    return std::min(std::max(a, 0), n - 1);
+  };
+  const auto above = [&](int x, int n)
+  {
+    const int d = x - offset;
+    const int a = d >= 0 ? d / step : -1;
+    return std::min(std::max(a + 1, 0), n - 1);
+  };
+  for (int y = 0; y < memory.Height; ++y)
+  {
+    const int j0 = below(y, probeHeight);
+    const int j1 = above(y, probeHeight);
+    for (int x = 0; x < memory.Width; ++x)
+    {
+      const int i0 = below(x, probeWidth);
+      const int i1 = above(x, probeWidth);
+      const size_t r0 = static_cast<size_t>(j0) * probeWidth;
+      const size_t r1 = static_cast<size_t>(j1) * probeWidth;
+      memory.Cut[static_cast<size_t>(y) * memory.Width + x] = std::max(
+        std::max(probe[r0 + i0], probe[r0 + i1]), std::max(probe[r1 + i0], probe[r1 + i1]));
+    }
+  }
+}
+
 // Marks the pixels whose summed profile (kBins per pixel) does not reach the threshold by
 // their bound (only pixels with a bound below kBins - 1): their cut is unknown, since past
 // the bound no process took a sample. Returns how many.

@@ -62,10 +62,24 @@ RayCamera RayCamera::Cropped(int i0, int j0, int width, int height) const
 }
 
 //------------------------------------------------------------------------------
+RayCamera RayCamera::Decimated(int step, int offset) const
+{
+  RayCamera coarse(*this);
+  step = std::max(step, 1);
+  offset = std::min(std::max(offset, 0), step - 1);
+  // Composes with an earlier decimation: pixel i is this camera's i * step + offset.
+  coarse.Offset = this->Offset + this->Step * offset;
+  coarse.Step = this->Step * step;
+  coarse.Width = std::max(1, (this->Width - offset + step - 1) / step);
+  coarse.Height = std::max(1, (this->Height - offset + step - 1) / step);
+  return coarse;
+}
+
+//------------------------------------------------------------------------------
 Ray RayCamera::PixelRay(int i, int j) const
 {
-  const double gi = i + this->CropI0 + 0.5;
-  const double gj = j + this->CropJ0 + 0.5;
+  const double gi = i * this->Step + this->Offset + this->CropI0 + 0.5;
+  const double gj = j * this->Step + this->Offset + this->CropJ0 + 0.5;
   const double x =
     (2.0 * gi / this->FullWidth - 1.0 + this->Center[0]) * this->HalfHeight * this->Aspect;
   const double y = (2.0 * gj / this->FullHeight - 1.0 + this->Center[1]) * this->HalfHeight;
@@ -108,6 +122,11 @@ bool RayCamera::Project(const Vec& x, double& px, double& py) const
     0.5 - this->CropI0;
   py = (Dot(v, this->Up) / scale - this->Center[1] + 1.0) * 0.5 * this->FullHeight - 0.5 -
     this->CropJ0;
+  if (this->Step != 1)
+  {
+    px = (px - this->Offset) / this->Step;
+    py = (py - this->Offset) / this->Step;
+  }
   return std::isfinite(px) && std::isfinite(py);
 }
 

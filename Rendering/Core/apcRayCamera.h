@@ -43,8 +43,15 @@ public:
     const std::array<double, 2>& windowCenter = { 0.0, 0.0 }, double aspect = 0.0);
 
   // The camera of the pixels [i0, i0 + width) x [j0, j0 + height) of this one (clamped to
-  // at least one pixel): same frustum, same rays, pixel indices relative to (i0, j0).
+  // at least one pixel): same frustum, same rays, pixel indices relative to (i0, j0). Of an
+  // undecimated camera only (Decimated comes after the crop).
   RayCamera Cropped(int i0, int j0, int width, int height) const;
+
+  // The camera of every step-th pixel of this one in each direction: its pixel (i, j) has the
+  // same ray as this camera's pixel (i * step + offset, j * step + offset), and it has as many
+  // pixels as that leaves inside this one. A coarse set of the very rays this camera casts
+  // (the opaque stop's first-frame probe, apcOpaquePrediction.h). step >= 1, 0 <= offset < step.
+  RayCamera Decimated(int step, int offset) const;
 
   // The pixels this camera renders (the crop's size; the full image if not cropped).
   int GetWidth() const { return this->Width; }
@@ -53,6 +60,9 @@ public:
   // must not depend on the crop (the lattice jitter's pattern, for one).
   int GetCropI0() const { return this->CropI0; }
   int GetCropJ0() const { return this->CropJ0; }
+  // The uncropped, undecimated image's column and row of pixel (i, j).
+  int ImageColumn(int i) const { return i * this->Step + this->Offset + this->CropI0; }
+  int ImageRow(int j) const { return j * this->Step + this->Offset + this->CropJ0; }
   bool IsParallel() const { return this->Parallel; }
   const std::array<double, 3>& GetPosition() const { return this->Position; }
   const std::array<double, 3>& GetViewDirection() const { return this->Forward; }
@@ -87,6 +97,8 @@ private:
   int FullHeight;
   int CropI0 = 0;
   int CropJ0 = 0;
+  int Step = 1; // Decimated: pixel i is the undecimated crop's pixel i * Step + Offset
+  int Offset = 0;
   double Near;
   double Far;
 };

@@ -107,8 +107,8 @@ void VolumeRayMarcher::SetUpRays(const TileRect& tile, std::vector<RaySetup>& ra
     std::copy(ray.Direction.begin(), ray.Direction.end(), r.D);
     r.End = this->RayEnds[tile.ImagePixel(p, width)];
     r.Offset = this->LatticeJitter
-      ? LatticeOffset(this->Camera->GetCropI0() + tile.I0 + p % tile.Width(),
-          this->Camera->GetCropJ0() + tile.J0 + p / tile.Width())
+      ? LatticeOffset(this->Camera->ImageColumn(tile.I0 + p % tile.Width()),
+          this->Camera->ImageRow(tile.J0 + p / tile.Width()))
       : 0.0;
   }
 }

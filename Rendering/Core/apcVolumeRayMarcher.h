@@ -73,6 +73,9 @@ public:
   // twice while the view is set up.
   void SetView(const RayCamera& camera, std::vector<float>&& rayEnds);
 
+  // The distances at which the current view's rays stop (W*H; +inf where nothing stops them).
+  const std::vector<float>& GetRayEnds() const { return this->RayEnds; }
+
   // 0 = as many as TBB offers.
   void SetNumberOfThreads(int threads) { this->Threads = threads; }
 

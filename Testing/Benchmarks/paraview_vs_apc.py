@@ -117,9 +117,13 @@ STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", 
 # APC's collectives: each stage's wait for the slowest rank and its transfer after it.
 COLLECTIVES = ["tiles", "profile", "allreduce", "reduce"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
-FIRST_STAGES = ["pass1", "tiles", "profile", "cut", "allreduce", "pass2", "reduce"]
-FIRST_COUNTS = ["bytes_display_rank", "profile_bytes_per_covered_pixel", "pass1_samples",
-                "opaque_unstopped_tiles"]
+FIRST_STAGES = ["opaque_prepass", "pass1", "tiles", "profile", "cut", "allreduce", "pass2",
+                "reduce"]
+# Stop Where Opaque's counts in the first frame (several ranks: the probe's samples, the pixels
+# its bound left unresolved and the tiles marched again for them).
+FIRST_OPAQUE_COUNTS = ["pass1_samples", "opaque_unstopped_tiles", "opaque_prepass_samples",
+                       "opaque_predicted_unresolved", "opaque_predicted_redone"]
+FIRST_COUNTS = ["bytes_display_rank", "profile_bytes_per_covered_pixel"] + FIRST_OPAQUE_COUNTS
 COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "float_image",
             "first_frame_s", "frame_s", "first_frame_cpu_s", "frame_cpu_s",
             "first_frame_sys_s", "frame_sys_s", "first_frame_faults", "first_frame_peak_mb", "setup",
@@ -452,7 +456,7 @@ def main(args):
                     if "profile_bytes" in t0 and t0["covered_pixels"] > 0:
                         row["first_profile_bytes_per_covered_pixel"] = "%.2f" % (
                             t0["profile_bytes"] / t0["covered_pixels"])
-                    for c in ("pass1_samples", "opaque_unstopped_tiles"):
+                    for c in FIRST_OPAQUE_COUNTS:
                         row["first_" + c] = "%d" % t0.get(c, 0)
                 # Bands marched without Stop Where Opaque, and again with it, in the later frames.
                 # One rank: tiles pass 1 kept without the stop. On several ranks: pixels the

@@ -399,3 +399,32 @@ TEST(OpaqueCut, TheBoundIsTheNeighbourhoodsLargestCutPlusAMargin)
   EXPECT_EQ(int(moved[2 * 8 + 2]), 10);   // image pixel (14, 22)
   EXPECT_EQ(int(moved[2 * 8 + 7]), none); // image pixel (19, 22): outside the previous one
 }
+
+// A first frame's probe (every step-th pixel from offset) spreads its cuts over the rectangle:
+// each pixel takes the largest cut of the probe pixels on either side of it in each direction,
+// so a pixel between an opaque probe pixel and an open one is bounded by neither's alone.
+TEST(OpaqueCut, TheProbesCutsSpreadToThePixelsAroundThem)
+{
+  constexpr int none = OpaqueBins::kBins - 1;
+  // A 10 x 7 rectangle probed every 4th pixel from 2: probe columns 2, 6 (and 10, past it:
+  // ProbeSize counts 2), rows 2, 6.
+  EXPECT_EQ(apc::ProbeSize(10, 4, 2), 2);
+  EXPECT_EQ(apc::ProbeSize(7, 4, 2), 2);
+  EXPECT_EQ(apc::ProbeSize(1, 4, 2), 1);
+  const std::vector<uint8_t> probe = { 3, 5, // row 2: columns 2, 6
+    7, none };                               // row 6
+  apc::OpaqueCutMemory memory;
+  memory.Begin({ 64, 64 }, 0, 0, 10, 7);
+  apc::SpreadProbeCuts(probe.data(), 2, 2, 4, 2, memory);
+  auto at = [&](int i, int j) { return int(memory.Cut[j * 10 + i]); };
+  EXPECT_EQ(at(0, 0), 3);    // before the first probe pixel: its cut alone
+  EXPECT_EQ(at(2, 2), none); // on a probe pixel: it and the ones after it (PredictOpaqueBound
+                             // reaches them from it anyway)
+  EXPECT_EQ(at(1, 1), 3);
+  EXPECT_EQ(at(0, 3), 7);    // between rows 2 and 6 of column 2
+  EXPECT_EQ(at(4, 1), 5);    // between columns 2 and 6 of row 2 (and before it)
+  EXPECT_EQ(at(4, 4), none); // among all four
+  EXPECT_EQ(at(9, 0), 5);    // past the last probe column: its cut alone
+  EXPECT_EQ(at(9, 6), none);
+  EXPECT_EQ(at(0, 6), 7);
+}

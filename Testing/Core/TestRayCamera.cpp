@@ -94,6 +94,43 @@ TEST(RayCamera, ReducedImageCoversTheSameFrustum)
 // (bit for bit: the pass renders only the data's screen rectangle and must equal a full
 // render), projects onto crop-relative pixels, and knows where its pixels lie in the full
 // image.
+// A decimated camera casts every step-th ray of its crop (the opaque stop's first-frame
+// probe): the same rays, projections onto its own pixels, and image columns and rows.
+TEST(RayCamera, DecimatedCastsEveryStepthRayOfItsCrop)
+{
+  for (bool parallel : { false, true })
+  {
+    const apc::RayCamera full({ 1, 2, 9 }, { 0, 0, 0 }, { 0, 1, 0 }, 30.0, parallel, 2.5, 40, 30,
+      0.1, 100.0, { 0.25, -0.5 }, 1.6);
+    const apc::RayCamera crop = full.Cropped(7, 5, 13, 11);
+    const apc::RayCamera coarse = crop.Decimated(4, 2);
+    EXPECT_EQ(coarse.GetWidth(), 3);                // columns 2, 6, 10 of 13
+    EXPECT_EQ(coarse.GetHeight(), 3);               // rows 2, 6, 10 of 11
+    EXPECT_EQ(crop.Decimated(4, 3).GetWidth(), 3);  // 3, 7, 11
+    EXPECT_EQ(crop.Decimated(4, 3).GetHeight(), 2); // 3, 7
+    for (int j = 0; j < coarse.GetHeight(); ++j)
+    {
+      for (int i = 0; i < coarse.GetWidth(); ++i)
+      {
+        const apc::Ray a = coarse.PixelRay(i, j);
+        const apc::Ray b = crop.PixelRay(4 * i + 2, 4 * j + 2);
+        ASSERT_EQ(a.Origin, b.Origin);
+        ASSERT_EQ(a.Direction, b.Direction);
+        EXPECT_EQ(coarse.ImageColumn(i), 7 + 4 * i + 2);
+        EXPECT_EQ(coarse.ImageRow(j), 5 + 4 * j + 2);
+        const std::array<double, 3> p = { a.Origin[0] + 5 * a.Direction[0],
+          a.Origin[1] + 5 * a.Direction[1], a.Origin[2] + 5 * a.Direction[2] };
+        double px = 0;
+        double py = 0;
+        ASSERT_TRUE(coarse.Project(p, px, py));
+        EXPECT_NEAR(px, i, 1e-9);
+        EXPECT_NEAR(py, j, 1e-9);
+      }
+    }
+    EXPECT_EQ(crop.ImageColumn(3), 10); // undecimated: the crop's offset alone
+  }
+}
+
 TEST(RayCamera, CropIsARectangleOfTheSamePixels)
 {
   for (bool parallel : { false, true })

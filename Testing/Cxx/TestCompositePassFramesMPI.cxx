@@ -52,7 +52,10 @@ int main(int argc, char* argv[])
     const std::vector<float> redone =
       RenderDistributed(controller, opaque, piece, bounds, 48, false, pass);
     const vtkAPCCompositePass::Timings third = pass->GetLastTimings();
+    // A band redone with the stop has no bound (no previous cut, no probe): nor has this
+    // reference, since a bound may move moments by float rounding (docs/sampler.md).
     vtkNew<vtkAPCCompositePass> fresh;
+    fresh->SetOpaqueProbeStep(0);
     const std::vector<float> dense =
       RenderDistributed(controller, opaque, piece, bounds, 48, false, fresh);
     const vtkAPCCompositePass::Timings reference = fresh->GetLastTimings();
@@ -169,8 +172,11 @@ int main(int argc, char* argv[])
       Check(banded->GetLastCompositedPixels() == whole->GetLastCompositedPixels() &&
           banded->GetLastCoveredPixels() == whole->GetLastCoveredPixels(),
         rank, "bands: the same pixels");
-      Check(ranks == 1 || banded->GetLastMessagesSent() >= 3 * whole->GetLastMessagesSent(), rank,
-        "bands: a frame of at least three bands");
+      // Counted, not inferred from the messages: a first frame's opaque probe sends its
+      // messages once a frame, not once a band.
+      Check(
+        ranks == 1 || (banded->GetLastTimings().Bands >= 3 && whole->GetLastTimings().Bands == 1),
+        rank, "bands: a frame of at least three bands");
     }
   }
 

@@ -4,6 +4,8 @@
 // process found on its own, none where their totals stay below the threshold. A faint view
 // must then send 2 bytes a composited pixel more than the stop off (not the whole profile's
 // 32), an opaque one less than half the whole profile, and both must give one process's image.
+// The first frame's probe for a bound (TestOpaqueProbeMPI) is off here: it is what a frame
+// without any bound sends.
 #include "apcCompositePassRenders.h"
 #include "apcMPITest.h"
 #include "apcTestScenes.h"
@@ -36,6 +38,7 @@ Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
   vtkUnstructuredGrid* piece, const double bounds[6], bool stop)
 {
   vtkNew<vtkAPCCompositePass> pass;
+  pass->SetOpaqueProbeStep(0);
   Frame frame;
   frame.RGBA = apctest::RenderDistributed(controller, scene, piece, bounds, 96, false, pass, true,
     vtkAPCVolumeMapper::RENORMALISED, nullptr, stop);
