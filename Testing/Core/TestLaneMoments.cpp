@@ -12,6 +12,7 @@
 #include "apcPowerMoments.h"
 #include "apcRayCamera.h"
 #include "apcRayClip.h"
+#include "apcTestBlock.h"
 #include "apcTransferTable.h"
 #include "apcVolumeRayMarcher.h"
 
@@ -152,83 +153,7 @@ TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
   EXPECT_GT(opaqueQuanta, 100);
 }
 
-// A block of distorted hexahedra and, in every other cell, six pyramids about its centre
-// (twisted bases), random point scalars.
-constexpr int kNx = 8, kNy = 4, kNz = 8;
-constexpr double kH = 0.25;
-constexpr double kLo[3] = { -1.0, -0.5, -1.0 };
 constexpr int kSize = 64;
-
-apc::CellMesh DistortedBlock(std::mt19937& rng)
-{
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::uniform_real_distribution<double> value(0.0, 1.0);
-  apc::CellMesh mesh;
-  for (int k = 0; k <= kNz; ++k)
-  {
-    for (int j = 0; j <= kNy; ++j)
-    {
-      for (int i = 0; i <= kNx; ++i)
-      {
-        mesh.Points.push_back({ kLo[0] + i * kH + 0.15 * kH * u(rng),
-          kLo[1] + j * kH + 0.15 * kH * u(rng), kLo[2] + k * kH + 0.15 * kH * u(rng) });
-        mesh.PointScalars.push_back(static_cast<float>(value(rng)));
-      }
-    }
-  }
-  auto id = [](int i, int j, int k)
-  { return static_cast<int64_t>((k * (kNy + 1) + j) * (kNx + 1) + i); };
-  constexpr int kFaces[6][4] = { { 0, 1, 2, 3 }, { 4, 5, 6, 7 }, { 0, 1, 5, 4 }, { 1, 2, 6, 5 },
-    { 2, 3, 7, 6 }, { 3, 0, 4, 7 } };
-  for (int k = 0; k < kNz; ++k)
-  {
-    for (int j = 0; j < kNy; ++j)
-    {
-      for (int i = 0; i < kNx; ++i)
-      {
-        const int64_t ids[8] = { id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k),
-          id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1) };
-        if ((i + j + k) % 2 == 0)
-        {
-          mesh.AddCell(apc::CellShape::Hexahedron, ids);
-          continue;
-        }
-        std::array<double, 3> centre = { 0, 0, 0 };
-        for (int64_t p : ids)
-        {
-          for (int d = 0; d < 3; ++d)
-          {
-            centre[d] += mesh.Points[p][d] / 8;
-          }
-        }
-        const int64_t apex = static_cast<int64_t>(mesh.Points.size());
-        mesh.Points.push_back(centre);
-        mesh.PointScalars.push_back(static_cast<float>(value(rng)));
-        for (const auto& face : kFaces)
-        {
-          const auto& p0 = mesh.Points[ids[face[0]]];
-          const auto& p1 = mesh.Points[ids[face[1]]];
-          const auto& p3 = mesh.Points[ids[face[3]]];
-          const double a[3] = { p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2] };
-          const double b[3] = { p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2] };
-          const double n[3] = { a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0] };
-          const double towards =
-            n[0] * (centre[0] - p0[0]) + n[1] * (centre[1] - p0[1]) + n[2] * (centre[2] - p0[2]);
-          int64_t pyramid[5];
-          for (int c = 0; c < 4; ++c)
-          {
-            pyramid[c] = ids[face[towards > 0 ? c : 3 - c]];
-          }
-          pyramid[4] = apex;
-          mesh.AddCell(apc::CellShape::Pyramid, pyramid);
-        }
-      }
-    }
-  }
-  EXPECT_TRUE(mesh.Finalize());
-  return mesh;
-}
 
 struct Frame
 {
@@ -289,7 +214,7 @@ TEST(LaneMoments, MarcherLanesTakeTheScalarLoopsSamples)
   std::mt19937 rng(5);
   for (int mesh = 0; mesh < 4; ++mesh)
   {
-    const apc::CellMesh block = DistortedBlock(rng);
+    const apc::CellMesh block = apctest::DistortedBlock(rng);
     const double spacing = mesh < 2 ? 0.1 : 0.02;
     for (bool stop : { false, true })
     {
