@@ -237,7 +237,7 @@ struct VolumeRayMarcher::Walker
                                      allInside || weighted ? nullptr : &this->Grid, c);
     if constexpr (!allInside)
     {
-      if (weighted && clipWeights)
+      if (clipWeights)
       {
         // Hits: the pairs with a lattice point; Ends.MidHits: those without one.
         const walk::ClippedWeights& ends = state.Ends;
