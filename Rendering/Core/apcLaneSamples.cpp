@@ -29,15 +29,11 @@ __attribute__((target("avx2"), always_inline)) inline __m256d StdMax(__m256d a, 
   return _mm256_max_pd(b, a);
 }
 
-// What a twisted pyramid's closed form needs per cell (CellInterpolator::PyramidCoordinates'
-// constants), formed once per call.
-struct Twist
+// One of LaneCellVectors' broadcast constants.
+__attribute__((target("avx2"), always_inline)) inline __m256d V(const double* four)
 {
-  __m256d G[3];
-  __m256d FourA; // 4.0 * A, as B * B + 4.0 * A * C groups it
-  __m256d TwoA;
-  bool Other; // A != 0: the second root may be tried
-};
+  return _mm256_load_pd(four);
+}
 
 // CellInterpolator::PyramidOutside of (q0, q1, q2); sign holds -0.0 (unary minus flips it).
 __attribute__((target("avx2"), always_inline)) inline __m256d Outside(
@@ -52,16 +48,16 @@ __attribute__((target("avx2"), always_inline)) inline __m256d Outside(
 // CellInterpolator::PyramidScalarAt at a = (a0, a1, a2), lane by lane: the same operations
 // in the same order (PyramidCoordinates, PyramidPoint, PyramidOutside, the sum), the choice
 // of root by blends; the other root only where some lane's first lies outside.
-__attribute__((target("avx2"), always_inline)) inline __m256d PyramidScalar(const Twist& twist,
-  const __m256d* c, __m256d a0, __m256d a1, __m256d a2, __m256d one, __m256d zero)
+__attribute__((target("avx2"), always_inline)) inline __m256d PyramidScalar(
+  const LaneCellVectors& cell, __m256d a0, __m256d a1, __m256d a2, __m256d one, __m256d zero)
 {
   const __m256d sign = _mm256_set1_pd(-0.0);
-  const __m256d* g = twist.G;
+  const __m256d g[3] = { V(cell.G[0]), V(cell.G[1]), V(cell.G[2]) };
   const __m256d b = _mm256_add_pd(
     _mm256_add_pd(_mm256_sub_pd(one, a2), _mm256_mul_pd(a0, g[1])), _mm256_mul_pd(a1, g[0]));
   const __m256d cc = _mm256_mul_pd(a0, a1);
   const __m256d root = _mm256_sqrt_pd(
-    StdMax(_mm256_add_pd(_mm256_mul_pd(b, b), _mm256_mul_pd(twist.FourA, cc)), zero));
+    StdMax(_mm256_add_pd(_mm256_mul_pd(b, b), _mm256_mul_pd(V(cell.FourA), cc)), zero));
   const __m256d denom = _mm256_blendv_pd(
     _mm256_sub_pd(b, root), _mm256_add_pd(b, root), _mm256_cmp_pd(b, zero, _CMP_GE_OQ));
   // denom != 0 (true for NaN) ? 2.0 * C / denom : 0.0
@@ -70,7 +66,7 @@ __attribute__((target("avx2"), always_inline)) inline __m256d PyramidScalar(cons
   __m256d q0 = _mm256_sub_pd(a0, _mm256_mul_pd(g[0], w));
   __m256d q1 = _mm256_sub_pd(a1, _mm256_mul_pd(g[1], w));
   __m256d q2 = _mm256_sub_pd(a2, _mm256_mul_pd(g[2], w));
-  if (twist.Other)
+  if (cell.Other)
   {
     const __m256d outside = Outside(q0, q1, q2, one, zero, sign);
     const __m256d far =
@@ -78,7 +74,7 @@ __attribute__((target("avx2"), always_inline)) inline __m256d PyramidScalar(cons
     if (_mm256_movemask_pd(far) != 0)
     {
       // A strongly twisted pyramid: the other root where its point lies nearer.
-      const __m256d other = _mm256_div_pd(_mm256_xor_pd(denom, sign), twist.TwoA);
+      const __m256d other = _mm256_div_pd(_mm256_xor_pd(denom, sign), V(cell.TwoA));
       const __m256d r0 = _mm256_sub_pd(a0, _mm256_mul_pd(g[0], other));
       const __m256d r1 = _mm256_sub_pd(a1, _mm256_mul_pd(g[1], other));
       const __m256d r2 = _mm256_sub_pd(a2, _mm256_mul_pd(g[2], other));
@@ -90,70 +86,43 @@ __attribute__((target("avx2"), always_inline)) inline __m256d PyramidScalar(cons
       q2 = _mm256_blendv_pd(q2, r2, take);
     }
   }
-  __m256d v = _mm256_add_pd(c[0], _mm256_mul_pd(q0, c[1]));
-  v = _mm256_add_pd(v, _mm256_mul_pd(q1, c[2]));
-  v = _mm256_add_pd(v, _mm256_mul_pd(q2, c[3]));
-  return _mm256_add_pd(v, _mm256_mul_pd(w, c[4]));
+  __m256d v = _mm256_add_pd(V(cell.SC[0]), _mm256_mul_pd(q0, V(cell.SC[1])));
+  v = _mm256_add_pd(v, _mm256_mul_pd(q1, V(cell.SC[2])));
+  v = _mm256_add_pd(v, _mm256_mul_pd(q2, V(cell.SC[3])));
+  return _mm256_add_pd(v, _mm256_mul_pd(w, V(cell.SC[4])));
 }
 
 // Only AVX2, no FMA: a fused multiply-add would round once where the scalar loop rounds
 // twice.
 template <Form How>
 __attribute__((target("avx2"), always_inline)) inline int Lanes(
-  const LaneCell& cell, const LaneRays& rays, LaneSteps& steps)
+  const LaneCellVectors& cell, const LaneRays& rays, LaneSteps& steps)
 {
   // The pair's set-up for four rays at once: dp = Inverse d, row by row as
-  // LinearRayDirection sums it.
+  // LinearRayDirection sums it. The cell's constants are read from cell where they are used
+  // (memory operands), not held in registers across the loop.
   const __m256d dx = _mm256_load_pd(rays.D[0]);
   const __m256d dy = _mm256_load_pd(rays.D[1]);
   const __m256d dz = _mm256_load_pd(rays.D[2]);
   __m256d dp[3];
-  __m256d p0[3];
   for (int i = 0; i < 3; ++i)
   {
-    dp[i] = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(cell.Inverse[i][0]), dx),
-                            _mm256_mul_pd(_mm256_set1_pd(cell.Inverse[i][1]), dy)),
-      _mm256_mul_pd(_mm256_set1_pd(cell.Inverse[i][2]), dz));
-    p0[i] = _mm256_set1_pd(cell.P0[i]);
+    dp[i] = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(V(cell.Inverse[i][0]), dx),
+                            _mm256_mul_pd(V(cell.Inverse[i][1]), dy)),
+      _mm256_mul_pd(V(cell.Inverse[i][2]), dz));
   }
-  __m256d a[8];
-  for (int i = 0; i < 8; ++i)
-  {
-    a[i] = _mm256_set1_pd(cell.SC[i]);
-  }
-  const __m256d lo = _mm256_set1_pd(cell.Lo);
-  const __m256d hi = _mm256_set1_pd(cell.Hi);
-  const __m256d spacing = _mm256_set1_pd(cell.Spacing);
-  const __m256d min = _mm256_set1_pd(cell.Table.Min);
-  const __m256d scale = _mm256_set1_pd(cell.Table.Scale);
-  const __m256d last = _mm256_set1_pd(cell.Table.Last);
   const __m256d zero = _mm256_setzero_pd();
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
-  Twist twist{};
-  if (How == Form::PyramidScalarAt)
-  {
-    const double* g = cell.G;
-    const double A = g[2] - g[0] * g[1];
-    for (int i = 0; i < 3; ++i)
-    {
-      twist.G[i] = _mm256_set1_pd(g[i]);
-    }
-    twist.FourA = _mm256_set1_pd(4.0 * A);
-    twist.TwoA = _mm256_set1_pd(2.0 * A);
-    twist.Other = A != 0;
-  }
   const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffLL));
-  const __m128i count = _mm_set1_epi32(cell.Table.Count);
-  const __m128i oneIndex = _mm_set1_epi32(1);
-  // Each 64-bit lane's low half: a double mask as four floats.
-  const __m256i lowHalves = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
-  const float* absorbances = &cell.Table.Entries[0].Absorbance;
-  static_assert(sizeof(TransferSample) == 4 * sizeof(float), "an entry is four floats");
+  // Each 64-bit lane's low halves, then its high halves: a double mask as four floats, and
+  // a pair's two absorbances as two vectors of four.
+  const __m256i halves = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+  const long long* pairs = reinterpret_cast<const long long*>(cell.AbsorbancePairs);
   const __m256d offset = _mm256_load_pd(rays.Offset);
   const __m256d tout = _mm256_load_pd(rays.Tout);
   __m256d k = _mm256_load_pd(rays.K);
-  if (cell.BinEnds)
+  if (cell.Bins)
   {
     // The number of ends at or before K, BinOf's value: the ends and K are integers exact
     // as doubles, so each compare is the integers'.
@@ -161,7 +130,7 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
     for (int b = 0; b < kBinEnds; ++b)
     {
       bin = _mm256_sub_epi64(
-        bin, _mm256_castpd_si256(_mm256_cmp_pd(_mm256_set1_pd(cell.BinEnds[b]), k, _CMP_LE_OQ)));
+        bin, _mm256_castpd_si256(_mm256_cmp_pd(V(cell.BinEnds[b]), k, _CMP_LE_OQ)));
     }
     _mm256_store_si256(reinterpret_cast<__m256i*>(steps.Bin), bin);
   }
@@ -169,18 +138,18 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
   for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
   {
     // Lattice::At.
-    const __m256d t = _mm256_mul_pd(_mm256_add_pd(k, offset), spacing);
+    const __m256d t = _mm256_mul_pd(_mm256_add_pd(k, offset), V(cell.Spacing));
     if (_mm256_movemask_pd(_mm256_cmp_pd(t, tout, _CMP_LT_OQ)) == 0)
     {
       break;
     }
-    const __m256d r = _mm256_add_pd(p0[0], _mm256_mul_pd(t, dp[0]));
-    const __m256d q = _mm256_add_pd(p0[1], _mm256_mul_pd(t, dp[1]));
-    const __m256d u = _mm256_add_pd(p0[2], _mm256_mul_pd(t, dp[2]));
+    const __m256d r = _mm256_add_pd(V(cell.P0[0]), _mm256_mul_pd(t, dp[0]));
+    const __m256d q = _mm256_add_pd(V(cell.P0[1]), _mm256_mul_pd(t, dp[1]));
+    const __m256d u = _mm256_add_pd(V(cell.P0[2]), _mm256_mul_pd(t, dp[2]));
     __m256d v;
     if (How == Form::PyramidScalarAt)
     {
-      v = PyramidScalar(twist, a, r, q, u, one, zero);
+      v = PyramidScalar(cell, r, q, u, one, zero);
     }
     else if (How == Form::LinearPyramid)
     {
@@ -191,47 +160,54 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
       const __m256d ss = _mm256_min_pd(one, _mm256_max_pd(zero, _mm256_div_pd(q, below)));
       const __m256d twist = _mm256_and_pd(
         _mm256_cmp_pd(below, zero, _CMP_GT_OQ), _mm256_mul_pd(_mm256_mul_pd(rr, ss), below));
-      v = _mm256_add_pd(a[0], _mm256_mul_pd(u, a[3]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(r, a[1]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(q, a[2]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(twist, a[4]));
+      v = _mm256_add_pd(V(cell.SC[0]), _mm256_mul_pd(u, V(cell.SC[3])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(r, V(cell.SC[1])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(q, V(cell.SC[2])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(twist, V(cell.SC[4])));
     }
     else
     {
       // ScalarAt, summed left to right.
       const __m256d rq = _mm256_mul_pd(r, q);
-      v = _mm256_add_pd(a[0], _mm256_mul_pd(r, a[1]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(q, a[2]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(u, a[3]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(rq, a[4]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(r, u), a[5]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(q, u), a[6]));
-      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(rq, u), a[7]));
+      v = _mm256_add_pd(V(cell.SC[0]), _mm256_mul_pd(r, V(cell.SC[1])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(q, V(cell.SC[2])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(u, V(cell.SC[3])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(rq, V(cell.SC[4])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(r, u), V(cell.SC[5])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(q, u), V(cell.SC[6])));
+      v = _mm256_add_pd(v, _mm256_mul_pd(_mm256_mul_pd(rq, u), V(cell.SC[7])));
     }
     // std::min(std::max(v, Lo), Hi): max_pd(Lo, v) is (Lo > v ? Lo : v), NaN kept, as
     // std::max(v, Lo); likewise min_pd(Hi, w) and std::min(w, Hi).
-    const __m256d scalar = _mm256_min_pd(hi, _mm256_max_pd(lo, v));
+    const __m256d scalar = _mm256_min_pd(V(cell.Hi), _mm256_max_pd(V(cell.Lo), v));
     // TransferTable::Lookup: a scalar that is not finite gives 0 (its lane reads entry 0).
     const __m256d finite = _mm256_cmp_pd(_mm256_and_pd(scalar, absMask), inf, _CMP_LT_OQ);
-    const __m256d position = _mm256_mul_pd(_mm256_sub_pd(scalar, min), scale);
+    const __m256d position = _mm256_mul_pd(_mm256_sub_pd(scalar, V(cell.Min)), V(cell.Scale));
     const __m256d above =
-      _mm256_blendv_pd(position, last, _mm256_cmp_pd(position, last, _CMP_GT_OQ));
+      _mm256_blendv_pd(position, V(cell.Last), _mm256_cmp_pd(position, V(cell.Last), _CMP_GT_OQ));
     __m256d x = _mm256_blendv_pd(above, zero, _mm256_cmp_pd(position, zero, _CMP_LT_OQ));
     x = _mm256_and_pd(x, finite);
     const __m128i i = _mm256_cvttpd_epi32(x);
-    const __m128i i1 = _mm_add_epi32(i, oneIndex);
-    const __m128i j = _mm_blendv_epi8(i, i1, _mm_cmplt_epi32(i1, count));
     const __m128 f = _mm256_cvtpd_ps(_mm256_sub_pd(x, _mm256_cvtepi32_pd(i)));
-    const __m128 ea = _mm_i32gather_ps(absorbances, _mm_slli_epi32(i, 2), 4);
-    const __m128 eb = _mm_i32gather_ps(absorbances, _mm_slli_epi32(j, 2), 4);
+    // Entry i's and entry j's absorbance (j = i + 1, or i for the last entry), one pair each.
+    const __m256 e =
+      _mm256_permutevar8x32_ps(_mm256_castsi256_ps(_mm256_i32gather_epi64(pairs, i, 8)), halves);
+    const __m128 ea = _mm256_castps256_ps128(e);
+    const __m128 eb = _mm256_extractf128_ps(e, 1);
     const __m128 absorbance = _mm_add_ps(ea, _mm_mul_ps(f, _mm_sub_ps(eb, ea)));
     const __m128 keep =
-      _mm256_castps256_ps128(_mm256_permutevar8x32_ps(_mm256_castpd_ps(finite), lowHalves));
+      _mm256_castps256_ps128(_mm256_permutevar8x32_ps(_mm256_castpd_ps(finite), halves));
     _mm256_store_pd(steps.T[s], t);
     _mm256_store_pd(steps.Scalar[s], scalar);
     _mm_store_ps(steps.Absorbance[s], _mm_and_ps(absorbance, keep));
   }
   return s;
+}
+
+// value in each of four lanes.
+__attribute__((target("avx2"), always_inline)) inline void Broadcast(double value, double* four)
+{
+  _mm256_store_pd(four, _mm256_set1_pd(value));
 }
 
 __attribute__((target("avx2"), always_inline)) inline __m256d Four(
@@ -264,7 +240,7 @@ __attribute__((target("avx2"))) void GatherLaneRays(
 }
 
 __attribute__((target("avx2"))) int LaneSamplesAvx2(
-  const LaneCell& cell, const LaneRays& rays, LaneSteps& steps)
+  const LaneCellVectors& cell, const LaneRays& rays, LaneSteps& steps)
 {
   if (cell.Twisted)
   {
@@ -272,6 +248,55 @@ __attribute__((target("avx2"))) int LaneSamplesAvx2(
   }
   return cell.Pyramid ? Lanes<Form::LinearPyramid>(cell, rays, steps)
                       : Lanes<Form::ScalarAt>(cell, rays, steps);
+}
+
+__attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors)
+{
+  for (int i = 0; i < 3; ++i)
+  {
+    for (int j = 0; j < 3; ++j)
+    {
+      Broadcast(cell.Inverse[i][j], vectors.Inverse[i][j]);
+    }
+    Broadcast(cell.P0[i], vectors.P0[i]);
+  }
+  // Twisted or not, only the coefficients the cell's form reads.
+  const int coefficients = cell.Pyramid || cell.Twisted ? 5 : 8;
+  for (int i = 0; i < coefficients; ++i)
+  {
+    Broadcast(cell.SC[i], vectors.SC[i]);
+  }
+  vectors.Twisted = cell.Twisted;
+  vectors.Pyramid = cell.Pyramid;
+  vectors.Other = false;
+  if (cell.Twisted)
+  {
+    // CellInterpolator::PyramidCoordinates' constants.
+    const double* g = cell.G;
+    const double A = g[2] - g[0] * g[1];
+    for (int i = 0; i < 3; ++i)
+    {
+      Broadcast(g[i], vectors.G[i]);
+    }
+    Broadcast(4.0 * A, vectors.FourA);
+    Broadcast(2.0 * A, vectors.TwoA);
+    vectors.Other = A != 0;
+  }
+  Broadcast(cell.Lo, vectors.Lo);
+  Broadcast(cell.Hi, vectors.Hi);
+  Broadcast(cell.Spacing, vectors.Spacing);
+  Broadcast(cell.Table.Min, vectors.Min);
+  Broadcast(cell.Table.Scale, vectors.Scale);
+  Broadcast(cell.Table.Last, vectors.Last);
+  vectors.AbsorbancePairs = cell.Table.AbsorbancePairs;
+  vectors.Bins = cell.BinEnds != nullptr;
+  if (vectors.Bins)
+  {
+    for (int b = 0; b < kBinEnds; ++b)
+    {
+      Broadcast(cell.BinEnds[b], vectors.BinEnds[b]);
+    }
+  }
 }
 
 } // namespace walk

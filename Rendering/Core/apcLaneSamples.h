@@ -64,12 +64,41 @@ struct LaneSteps
   alignas(32) int64_t Bin[4];
 };
 
-// Fills steps 0 .. n - 1 for the four lanes and returns n: kLaneSteps, or fewer where no
-// lane has a sample at step n (t >= Tout in every lane). Each lane performs the IEEE
-// operations of the scalar loop (LinearRayDirection, p0 + t dp, LinearScalarAt or
-// PyramidScalarAt, the clamp, TransferTable::Lookup's position, entries and interpolation) in
-// the same order and without FMA. Only where HasAvx2() (apcRayClip.h).
-int LaneSamplesAvx2(const LaneCell& cell, const LaneRays& rays, LaneSteps& steps);
+// A LaneCell's constants as the lanes use them, each one already broadcast to four lanes:
+// formed once per cell (SetUpLaneCell) and read by every call of the cell. Formed per call,
+// the thirty-odd broadcasts did not fit the registers and were spilled to the stack on every
+// call (a call takes two or three steps at 1024²), about a fifth of the kernel's time.
+struct LaneCellVectors
+{
+  alignas(32) double Inverse[3][3][4];
+  alignas(32) double P0[3][4];
+  alignas(32) double SC[8][4];
+  alignas(32) double G[3][4];  // with Twisted
+  alignas(32) double FourA[4]; // with Twisted: 4.0 * A, as B * B + 4.0 * A * C groups it
+  alignas(32) double TwoA[4];
+  alignas(32) double Lo[4];
+  alignas(32) double Hi[4];
+  alignas(32) double Spacing[4];
+  alignas(32) double Min[4]; // the table's layout
+  alignas(32) double Scale[4];
+  alignas(32) double Last[4];
+  alignas(32) double BinEnds[kBinEnds][4]; // with Bins
+  const float* AbsorbancePairs;            // the table's (TransferTable::Layout)
+  bool Pyramid;
+  bool Twisted;
+  bool Other; // with Twisted: A != 0, the second root may be tried
+  bool Bins;  // LaneCell::BinEnds was set
+};
+
+// Forms vectors from cell. Only where HasAvx2() (apcRayClip.h).
+void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors);
+
+// Fills steps 0 .. n - 1 for the four lanes of the cell set up in vectors and returns n:
+// kLaneSteps, or fewer where no lane has a sample at step n (t >= Tout in every lane). Each
+// lane performs the IEEE operations of the scalar loop (LinearRayDirection, p0 + t dp,
+// LinearScalarAt or PyramidScalarAt, the clamp, TransferTable::Lookup's position, entries and
+// interpolation) in the same order and without FMA. Only where HasAvx2().
+int LaneSamplesAvx2(const LaneCellVectors& cell, const LaneRays& rays, LaneSteps& steps);
 
 // Fills rays with the tile's rays list[0 .. n - 1] (n <= 4; directions and offsets from packed,
 // first lattice indices and interval ends from clipped), lanes n .. 3 unused (Tout = -inf),

@@ -26,6 +26,12 @@ TransferTable::TransferTable(double scalarMin, double scalarMax,
     const double alpha = opacities.empty() ? 0.0 : opacities[o];
     e.Absorbance = static_cast<float>(std::min(kAbsorbanceMax, AbsorbanceFromAlpha(alpha) * scale));
   }
+  this->AbsorbancePairs.resize(2 * n);
+  for (size_t i = 0; i < n; ++i)
+  {
+    this->AbsorbancePairs[2 * i] = this->Entries[i].Absorbance;
+    this->AbsorbancePairs[2 * i + 1] = this->Entries[std::min(i + 1, n - 1)].Absorbance;
+  }
   this->VisibleBefore.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i)
   {

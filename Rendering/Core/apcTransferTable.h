@@ -49,10 +49,15 @@ public:
     double Min;
     double Scale;
     double Last;
+    // By entry i: the absorbances Lookup interpolates between, entry i's and entry j's (i + 1,
+    // or i for the last), side by side, so that a vectorised lookup reads both with one 64-bit
+    // gather instead of two gathers of floats (pass 1's lanes).
+    const float* AbsorbancePairs;
   };
   Layout GetLayout() const
   {
-    return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last };
+    return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last,
+      this->AbsorbancePairs.data() };
   }
   // Lookup from a layout held in registers: a loop that stores samples between its look-ups
   // (the marcher's) otherwise reloads the table's fields through the table for every one.
@@ -114,6 +119,7 @@ private:
   double Last;
   double Spacing;
   std::vector<TransferSample> Entries;
+  std::vector<float> AbsorbancePairs; // Layout::AbsorbancePairs
   // VisibleBefore[i]: how many of the first i entries have a positive absorbance.
   std::vector<int> VisibleBefore;
 };

@@ -150,6 +150,8 @@ struct VolumeRayMarcher::Walker
     // With end weights where the lanes are on: each kept pair's weights, found by the
     // clipping (walk::ClipRaysWeighted).
     walk::ClippedWeights Ends;
+    // With the lanes: the cell's constants as they read them.
+    walk::LaneCellVectors Vectors;
   };
 
   // Sets state up for cell; false if the cell adds nothing to what the visitor makes.
@@ -504,6 +506,9 @@ struct VolumeRayMarcher::Walker
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
     static_assert(walk::kBinEnds == RayProgress::kBins - 1, "the lanes compare every bin end");
     cell.BinEnds = own ? progress.BinEnds : nullptr;
+    // Broadcast once here for all the cell's calls.
+    walk::LaneCellVectors& vectors = state.Vectors;
+    walk::SetUpLaneCell(cell, vectors);
     walk::LaneRays lanes;
     walk::LaneSteps steps;
     walk::LaneMoments across;
@@ -565,7 +570,7 @@ struct VolumeRayMarcher::Walker
       }
       for (bool more = true; more;)
       {
-        const int taken = walk::LaneSamplesAvx2(cell, lanes, steps);
+        const int taken = walk::LaneSamplesAvx2(vectors, lanes, steps);
         more = false;
         // Four pixels' sums at once: each step's warp, moments and quanta across the lanes.
         constexpr bool acrossLanes = !Weighted && LaneMomentsVisitor<Visitor>::value;

@@ -118,43 +118,6 @@ void CheckLanes(double distortion, bool jitter, bool overflow, bool twisted = fa
     cell.Table = layout;
     cell.Spacing = lattice.Spacing;
 
-    apc::walk::LaneRays rays;
-    for (int i = 0; i < 4; ++i)
-    {
-      double k = std::floor(40.0 + 60.0 * unit(rng));
-      double through[3] = { 0, 0, 0 };
-      if (twisted)
-      {
-        // Towards a point in or near the cell (corners at about 50 to 53), from a few steps
-        // before it.
-        double length = 0;
-        for (int d = 0; d < 3; ++d)
-        {
-          through[d] = 50.0 + 3.0 * unit(rng) - eye[d];
-          length += through[d] * through[d];
-        }
-        length = std::sqrt(length);
-        for (auto& d : through)
-        {
-          d /= length;
-        }
-        k = std::floor(length / lattice.Spacing - 8.0 * unit(rng));
-      }
-      rays.K[i] = k;
-      rays.Offset[i] = jitter ? unit(rng) : 0.0;
-      const double t0 = lattice.At(static_cast<int64_t>(k), rays.Offset[i]);
-      // Up to 12 samples (past a call's kLaneSteps), none, or an unused lane.
-      const double r = unit(rng);
-      rays.Tout[i] = r < 0.1 ? -inf : t0 + lattice.Spacing * 12.0 * unit(rng);
-      for (int d = 0; d < 3; ++d)
-      {
-        rays.D[d][i] = twisted ? through[d] : u(rng);
-      }
-      if (overflow && i == trial % 4)
-      {
-        rays.D[trial % 3][i] = (trial % 2 ? 1 : -1) * 1e307;
-      }
-    }
     // Pass 1's own stop on every other trial: bins around the rays' indices (a bin or two
     // per call's steps, so that some lanes start past the last end and some before the
     // first).
@@ -168,70 +131,114 @@ void CheckLanes(double distortion, bool jitter, bool overflow, bool twisted = fa
       progress->Begin(1, &bins);
       cell.BinEnds = progress->BinEnds;
     }
-    apc::walk::LaneSteps steps;
-    const int n = apc::walk::LaneSamplesAvx2(cell, rays, steps);
-    if (cell.BinEnds)
+    // The cell's constants formed once, then read by several calls with other rays (as the
+    // walker's calls of one cell do).
+    apc::walk::LaneCellVectors vectors;
+    apc::walk::SetUpLaneCell(cell, vectors);
+    for (int call = 0; call < 3; ++call)
     {
+      apc::walk::LaneRays rays;
       for (int i = 0; i < 4; ++i)
       {
-        const int64_t k = static_cast<int64_t>(rays.K[i]);
-        ASSERT_EQ(steps.Bin[i], progress->BinOf(k)) << "trial " << trial << " lane " << i;
-        binsCompared += 1;
-        binsAboveZero += steps.Bin[i] > 0 && steps.Bin[i] < apc::OpaqueBins::kBins - 1 ? 1 : 0;
+        double k = std::floor(40.0 + 60.0 * unit(rng));
+        double through[3] = { 0, 0, 0 };
+        if (twisted)
+        {
+          // Towards a point in or near the cell (corners at about 50 to 53), from a few steps
+          // before it.
+          double length = 0;
+          for (int d = 0; d < 3; ++d)
+          {
+            through[d] = 50.0 + 3.0 * unit(rng) - eye[d];
+            length += through[d] * through[d];
+          }
+          length = std::sqrt(length);
+          for (auto& d : through)
+          {
+            d /= length;
+          }
+          k = std::floor(length / lattice.Spacing - 8.0 * unit(rng));
+        }
+        rays.K[i] = k;
+        rays.Offset[i] = jitter ? unit(rng) : 0.0;
+        const double t0 = lattice.At(static_cast<int64_t>(k), rays.Offset[i]);
+        // Up to 12 samples (past a call's kLaneSteps), none, or an unused lane.
+        const double r = unit(rng);
+        rays.Tout[i] = r < 0.1 ? -inf : t0 + lattice.Spacing * 12.0 * unit(rng);
+        for (int d = 0; d < 3; ++d)
+        {
+          rays.D[d][i] = twisted ? through[d] : u(rng);
+        }
+        if (overflow && i == trial % 4)
+        {
+          rays.D[trial % 3][i] = (trial % 2 ? 1 : -1) * 1e307;
+        }
       }
-    }
+      apc::walk::LaneSteps steps;
+      const int n = apc::walk::LaneSamplesAvx2(vectors, rays, steps);
+      if (cell.BinEnds)
+      {
+        for (int i = 0; i < 4; ++i)
+        {
+          const int64_t k = static_cast<int64_t>(rays.K[i]);
+          ASSERT_EQ(steps.Bin[i], progress->BinOf(k)) << "trial " << trial << " lane " << i;
+          binsCompared += 1;
+          binsAboveZero += steps.Bin[i] > 0 && steps.Bin[i] < apc::OpaqueBins::kBins - 1 ? 1 : 0;
+        }
+      }
 
-    // The walker's scalar loop, lane by lane.
-    int expected = 0;
-    for (int s = 0; s < apc::walk::kLaneSteps; ++s)
-    {
-      bool any = false;
-      for (int i = 0; i < 4; ++i)
+      // The walker's scalar loop, lane by lane.
+      int expected = 0;
+      for (int s = 0; s < apc::walk::kLaneSteps; ++s)
       {
-        const int64_t k = static_cast<int64_t>(rays.K[i]) + s;
-        any = any || lattice.At(k, rays.Offset[i]) < rays.Tout[i];
-      }
-      if (!any)
-      {
-        break;
-      }
-      ++expected;
-    }
-    ASSERT_EQ(n, expected) << "trial " << trial;
-    for (int i = 0; i < 4; ++i)
-    {
-      const double d[3] = { rays.D[0][i], rays.D[1][i], rays.D[2][i] };
-      double dp[3];
-      interpolator.LinearRayDirection(d, dp);
-      for (int s = 0; s < n; ++s)
-      {
-        const double t = lattice.At(static_cast<int64_t>(rays.K[i]) + s, rays.Offset[i]);
-        if (!(t < rays.Tout[i]))
+        bool any = false;
+        for (int i = 0; i < 4; ++i)
+        {
+          const int64_t k = static_cast<int64_t>(rays.K[i]) + s;
+          any = any || lattice.At(k, rays.Offset[i]) < rays.Tout[i];
+        }
+        if (!any)
         {
           break;
         }
-        double pcoords[3];
-        for (int a = 0; a < 3; ++a)
+        ++expected;
+      }
+      ASSERT_EQ(n, expected) << "trial " << trial;
+      for (int i = 0; i < 4; ++i)
+      {
+        const double d[3] = { rays.D[0][i], rays.D[1][i], rays.D[2][i] };
+        double dp[3];
+        interpolator.LinearRayDirection(d, dp);
+        for (int s = 0; s < n; ++s)
         {
-          pcoords[a] = p0[a] + t * dp[a];
+          const double t = lattice.At(static_cast<int64_t>(rays.K[i]) + s, rays.Offset[i]);
+          if (!(t < rays.Tout[i]))
+          {
+            break;
+          }
+          double pcoords[3];
+          for (int a = 0; a < 3; ++a)
+          {
+            pcoords[a] = p0[a] + t * dp[a];
+          }
+          const double interpolated =
+            twisted ? interpolator.PyramidScalarAt(pcoords) : interpolator.LinearScalarAt(pcoords);
+          const double scalar = std::min(std::max(interpolated, cell.Lo), cell.Hi);
+          if (twisted)
+          {
+            otherRoots += TookOtherRoot(interpolator, pcoords) ? 1 : 0;
+          }
+          const apc::TransferSample sample = apc::TransferTable::Lookup(layout, scalar);
+          ASSERT_TRUE(SameBits(steps.T[s][i], t)) << "trial " << trial << " lane " << i;
+          ASSERT_TRUE(SameBits(steps.Scalar[s][i], scalar) ||
+            (std::isnan(steps.Scalar[s][i]) && std::isnan(scalar)))
+            << "trial " << trial << " lane " << i << ": " << steps.Scalar[s][i] << " vs " << scalar;
+          ASSERT_TRUE(SameBits(steps.Absorbance[s][i], sample.Absorbance))
+            << "trial " << trial << " lane " << i << ": " << steps.Absorbance[s][i] << " vs "
+            << sample.Absorbance;
+          ++compared;
+          visible += sample.Absorbance > 0 ? 1 : 0;
         }
-        const double interpolated =
-          twisted ? interpolator.PyramidScalarAt(pcoords) : interpolator.LinearScalarAt(pcoords);
-        const double scalar = std::min(std::max(interpolated, cell.Lo), cell.Hi);
-        if (twisted)
-        {
-          otherRoots += TookOtherRoot(interpolator, pcoords) ? 1 : 0;
-        }
-        const apc::TransferSample sample = apc::TransferTable::Lookup(layout, scalar);
-        ASSERT_TRUE(SameBits(steps.T[s][i], t)) << "trial " << trial << " lane " << i;
-        ASSERT_TRUE(SameBits(steps.Scalar[s][i], scalar) ||
-          (std::isnan(steps.Scalar[s][i]) && std::isnan(scalar)))
-          << "trial " << trial << " lane " << i << ": " << steps.Scalar[s][i] << " vs " << scalar;
-        ASSERT_TRUE(SameBits(steps.Absorbance[s][i], sample.Absorbance))
-          << "trial " << trial << " lane " << i << ": " << steps.Absorbance[s][i] << " vs "
-          << sample.Absorbance;
-        ++compared;
-        visible += sample.Absorbance > 0 ? 1 : 0;
       }
     }
   }
