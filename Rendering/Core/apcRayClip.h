@@ -70,7 +70,8 @@ struct ClippedRays
 };
 
 // The rays of rect clipped against one cell: [Tin, Tout) is what CellPlanes::Clip gives from
-// [0, min(End, stop)), bit for bit, and nothing (Tout = -inf) where near >= stop (the cell
+// [0, min(End, stop)), bit for bit where that is not empty (an empty one may be held by other
+// empty values), and nothing where near >= stop (the cell
 // lies behind where the ray is opaque); stop (by ray) may be null. Without a lattice the rays
 // kept are those with Tin < Tout; with one, those whose interval holds a lattice point, whose
 // first index goes to Lattice. Returns how many rays were kept. Four rays per AVX2
