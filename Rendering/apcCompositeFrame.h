@@ -20,6 +20,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 class vtkFloatArray;
@@ -157,6 +158,7 @@ struct FrameRecord
   int Bands = 0; // APC mode: bands of rows rendered
   SegmentStatistics Segments;
   bool Failed = false;
+  std::string Problem; // why a frame failed after the agreement (Failed), for the error message
 };
 
 // The display process's final image of the volumes (the frame's Rect, premultiplied RGBA)
@@ -236,8 +238,18 @@ bool PredictOpaqueBand(
 // (buffers.Cuts.Image): every process probes the rays of every OpaqueProbeStep-th pixel with
 // its own stop, their profiles are summed, and their agreed cuts spread over the rectangle
 // into buffers.PreviousCuts, for PredictOpaqueBand. Every process makes the same calls.
-void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, MomentBuffers& buffers,
-  FrameRecord& record);
+// Bounded: some probe ray turned opaque and buffers.PreviousCuts holds the spread cuts.
+// NoneOpaque: no probe ray did (nothing is bounded). Failed: some process's probe threw (agreed:
+// every process returns Failed, record.Failed and record.Problem set), before any profile was
+// summed.
+enum class ProbeResult
+{
+  Bounded,
+  NoneOpaque,
+  Failed
+};
+ProbeResult ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame,
+  MomentBuffers& buffers, FrameRecord& record);
 // After pass 1 of band (pixels of it): every volume's opaque profile summed over the covered
 // tiles of every process, then each volume's own moments (own[e], or moments with one volume)
 // cut where the sum is opaque and summed into moments. bounded: pass 1 took buffers.Bound,

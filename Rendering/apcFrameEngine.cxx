@@ -26,6 +26,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <new>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -457,6 +459,11 @@ void FrameEngine::RedoOpaqueTiles(const MomentParameters& parameters, const uint
   this->Clock.Lap("moments");
 }
 
+namespace
+{
+int ProbeFailuresForTesting = 0; // FrameEngine::FailProbesForTesting
+}
+
 int64_t FrameEngine::ProbeOpaqueProfile(
   const MomentParameters& parameters, int step, int offset, uint16_t* profile)
 {
@@ -479,9 +486,15 @@ int64_t FrameEngine::ProbeOpaqueProfile(
         fine < ends.size() ? ends[fine] : std::numeric_limits<float>::infinity();
     }
   }
-  // A marcher of its own: the frame's keeps its view and cache for the frame's passes.
-  this->Probe.reset(new VolumeRayMarcher);
-  VolumeRayMarcher& probe = *this->Probe;
+  if (ProbeFailuresForTesting > 0)
+  {
+    --ProbeFailuresForTesting;
+    throw std::bad_alloc();
+  }
+  // A marcher of its own (the frame's keeps its view and cache for the frame's passes), freed
+  // on return, also when the probe throws.
+  const std::unique_ptr<VolumeRayMarcher> marcher(new VolumeRayMarcher);
+  VolumeRayMarcher& probe = *marcher;
   probe.SetNumberOfThreads(this->Settings.NumberOfThreads);
   probe.SetLatticeJitter(this->Settings.LatticeJitter);
   probe.SetSampleEndWeights(this->Settings.SampleEndWeights);
@@ -496,9 +509,13 @@ int64_t FrameEngine::ProbeOpaqueProfile(
   const VolumeRayMarcher::OpaqueProfile own = probe.GetOpaqueProfile();
   AddProfiles(profile, own.data(), own.size());
   const int64_t samples = probe.GetLastSampleCount();
-  this->Probe.reset();
   this->Clock.Lap("opaque_prepass");
   return samples;
+}
+
+void FrameEngine::FailProbesForTesting(int count)
+{
+  ProbeFailuresForTesting = count;
 }
 
 //------------------------------------------------------------------------------

@@ -192,6 +192,9 @@ public:
   /// taken (0 if the volume does not stop where opaque or is not prepared).
   int64_t ProbeOpaqueProfile(
     const MomentParameters& parameters, int step, int offset, uint16_t* profile);
+  /// Tests only: the next count calls of ProbeOpaqueProfile in this process throw
+  /// std::bad_alloc (as a probe whose memory runs out), before they march anything.
+  static void FailProbesForTesting(int count);
   /// Samples marched again by the cuts since Prepare (tiles the sample cache did not hold).
   int64_t GetCutSampleCount() const { return this->CutSamples; }
   /// Marcher tiles pass 1 kept as marched without the stop since Prepare (alone only).
@@ -222,7 +225,6 @@ private:
   InputReport Report;
   bool ReportPending = false;
   VolumeRayMarcher Marcher;
-  std::unique_ptr<VolumeRayMarcher> Probe; // ProbeOpaqueProfile's, only while it runs
 
   bool Ready = false;
   int X0 = 0;

@@ -375,8 +375,10 @@ private:
 // One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
 // agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
 // display process resolves the band into result at its rows.
+// tryWithoutStop: pass 1 marches without the stop first (agreed: frame.TryWithoutOpaqueStop,
+// or a probe that found no ray near opaque).
 void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
-  MomentBuffers& buffers, FrameRecord& record, FrameResult& result)
+  bool tryWithoutStop, MomentBuffers& buffers, FrameRecord& record, FrameResult& result)
 {
   const MomentParameters& parameters = frame.Moments;
   const int stride = parameters.Moments + 1;
@@ -387,7 +389,7 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   // Agreed, not this process's own volumes: a process without volumes (or with the stop off
   // where others have it on) still joins the profile's allreduce.
   const bool stopping = frame.StopsWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
-  bool stops = stopping && !frame.TryWithoutOpaqueStop;
+  bool stops = stopping && !tryWithoutStop;
   double* moments = Hold(buffers.Moments, pixels * stride);
   std::vector<unsigned char> covered;
   vtkIdType ownCovered = 0;
@@ -496,11 +498,26 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
   }
   // Without a previous cut for this image (a first frame), a probe of a few rays gives one.
   // Agreed: the cuts every process remembers, the frame's settings and its try without the stop.
+  bool tryWithoutStop = frame.TryWithoutOpaqueStop;
   if (buffers.Cuts.Valid && frame.Settings.OpaqueProbeStep > 0 && !frame.TryWithoutOpaqueStop &&
     !(buffers.PreviousCuts.Valid && buffers.PreviousCuts.Image == buffers.Cuts.Image))
   {
     record.Clock.Lap("pass1"); // the engines' set-up, in pass 1 as without the probe
-    ProbeOpaqueCuts(group, frame, buffers, record);
+    const ProbeResult probe = ProbeOpaqueCuts(group, frame, buffers, record);
+    if (probe == ProbeResult::Failed)
+    {
+      // Agreed: every process gives the frame up here, before any other collective.
+      buffers.Cuts.Valid = false;
+      result.RGBA.clear();
+      result.Moments.clear();
+      result.ColourSums.clear();
+      return;
+    }
+    // No probe ray near opaque: the frame is marched as one after a faint frame, without the
+    // stop, and a band whose global absorbance reaches the threshold after all is marched again
+    // with it (CompositeBand), so its image is the stop's. The double wire's sums may round
+    // differently on each process: no retry decided from them (as for TryWithoutOpaqueStop).
+    tryWithoutStop = probe == ProbeResult::NoneOpaque && !frame.Settings.CompositeInDouble;
   }
   // The same bands on every process: they follow from the agreed rectangle and band size.
   // One process has no collective to pay per band: its bands are small (apcAloneBands.h).
@@ -518,7 +535,7 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     "one process's bands must keep its pass 1's tiles without the stop");
   for (const RowBand& band : MomentBands(frame.RectWidth(), frame.RectHeight(), bandPixels))
   {
-    CompositeBand(group, frame, band, buffers, record, result);
+    CompositeBand(group, frame, band, tryWithoutStop, buffers, record, result);
     ++record.Bands;
   }
   for (const FrameEngine* engine : frame.Engines)

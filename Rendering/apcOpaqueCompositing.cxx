@@ -17,6 +17,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <exception>
+#include <string>
 #include <vector>
 
 namespace apc
@@ -299,8 +301,8 @@ bool PredictOpaqueBand(
       Hold(buffers.Bound, pixels));
 }
 
-void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, MomentBuffers& buffers,
-  FrameRecord& record)
+ProbeResult ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame,
+  MomentBuffers& buffers, FrameRecord& record)
 {
   constexpr int bins = OpaqueBins::kBins;
   const int step = frame.Settings.OpaqueProbeStep;
@@ -308,14 +310,43 @@ void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, Mom
   const int width = ProbeSize(frame.RectWidth(), step, offset);
   const int height = ProbeSize(frame.RectHeight(), step, offset);
   const size_t pixels = static_cast<size_t>(width) * height;
-  std::vector<uint16_t> profile(pixels * bins, uint16_t(0));
-  for (FrameEngine* engine : frame.Engines)
+  std::vector<uint16_t> profile;
+  // A process whose probe throws (memory for the probe's marcher or profile) must not leave
+  // the others waiting in the profiles' allreduce: every process says whether its probe
+  // failed, and all give the frame up alike.
+  std::string failure;
+  try
   {
-    if (engine->GetWidth() == frame.RectWidth() && engine->GetHeight() == frame.RectHeight())
+    profile.assign(pixels * bins, uint16_t(0));
+    for (FrameEngine* engine : frame.Engines)
     {
-      record.OpaquePrepassSamples +=
-        engine->ProbeOpaqueProfile(frame.Moments, step, offset, profile.data());
+      if (engine->GetWidth() == frame.RectWidth() && engine->GetHeight() == frame.RectHeight())
+      {
+        record.OpaquePrepassSamples +=
+          engine->ProbeOpaqueProfile(frame.Moments, step, offset, profile.data());
+      }
     }
+  }
+  catch (const std::exception& e)
+  {
+    failure = e.what();
+  }
+  int failed = failure.empty() ? 0 : 1;
+  if (group.Parallel)
+  {
+    int anyFailed = 0;
+    group.Collective("opaque_prepass",
+      [&] { group.Controller->AllReduce(&failed, &anyFailed, 1, vtkCommunicator::MAX_OP); });
+    failed = anyFailed;
+  }
+  if (failed)
+  {
+    record.Failed = true;
+    record.Problem = failure.empty() ? "Stop Where Opaque's probe failed on another process"
+                                     : "Stop Where Opaque's probe failed on process " +
+        std::to_string(group.Rank) + ": " + failure;
+    record.Clock.Lap("opaque_prepass");
+    return ProbeResult::Failed;
   }
   // The probe's rays are a complete set of rays: their own stops and the summaries give
   // their exact cut, as in a first frame without a bound. Every process joins, with zeros if
@@ -329,18 +360,19 @@ void ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& frame, Mom
   {
     cuts[p] = static_cast<uint8_t>(CutBin(profile.data() + p * bins));
   }
-  // No probe ray turned opaque: a bound of "none" everywhere would bound nothing and cost the
-  // bounded frame's bookkeeping, so the frame goes on as one without a previous cut.
+  // No probe ray turned opaque: a bound of "none" everywhere would bound nothing, so the frame
+  // goes on without a bound, and its caller may march it without the stop.
   if (std::all_of(
         cuts.begin(), cuts.end(), [](uint8_t cut) { return cut == OpaqueBins::kBins - 1; }))
   {
     record.Clock.Lap("opaque_prepass");
-    return;
+    return ProbeResult::NoneOpaque;
   }
   buffers.PreviousCuts.Begin(
     buffers.Cuts.Image, frame.Rect.I0, frame.Rect.J0, frame.RectWidth(), frame.RectHeight());
   SpreadProbeCuts(cuts.data(), width, height, step, offset, buffers.PreviousCuts);
   record.Clock.Lap("opaque_prepass");
+  return ProbeResult::Bounded;
 }
 
 } // namespace apc

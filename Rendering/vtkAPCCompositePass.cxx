@@ -319,9 +319,15 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       break;
     default:
       apc::RunMomentCompositing(group, frame, internal.Record, result, internal.Buffers);
+      if (internal.Record.Failed)
+      {
+        // Agreed: every process left the frame at the same point, with nothing to blend.
+        vtkErrorMacro("APC frame skipped: " << internal.Record.Problem);
+        break;
+      }
       internal.Opaque = internal.Record.OpaquePixels > 0;
   }
-  if (frame.Settings.CompositeMode == AUTO)
+  if (frame.Settings.CompositeMode == AUTO && !internal.Record.Failed)
   {
     // Interactive frames render another lattice and image: only still frames are timed.
     this->RecordForAuto(

@@ -3,9 +3,10 @@
 // APC volume, viewports of different sizes, different compositing modes or wire precisions)
 // is skipped on every process instead of leaving one waiting in a collective; settings one
 // process alone changes that can be agreed (Stop Where Opaque) still render, and so does a
-// 1x1 window.
+// 1x1 window. A process whose Stop Where Opaque probe throws makes every process skip the frame.
 
 #include "apcCompositePassRenders.h"
+#include "apcFrameEngine.h"
 #include "apcMPITest.h"
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCVolumeMapper.h"
@@ -48,6 +49,28 @@ int main(int argc, char* argv[])
     vtkNew<vtkAPCCompositePass> pass;
     RenderDistributed(controller, puzzle, stripped, bounds, 32, false, pass);
     Check(pass->GetLastFrameFailed(), rank, "missing scalars: the frame is skipped everywhere");
+  }
+
+  // Stop Where Opaque's probe of a first frame throwing on one process (its memory ran out):
+  // every process must give the frame up with an error instead of waiting in the probe's
+  // allreduce, and the next first frame renders.
+  if (ranks > 1)
+  {
+    if (rank == ranks - 1)
+    {
+      apc::FrameEngine::FailProbesForTesting(1);
+    }
+    vtkNew<vtkAPCCompositePass> pass;
+    pass->KeepLastImageOn();
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+    Check(pass->GetLastFrameFailed(), rank, "a probe that throws: frame skipped everywhere");
+    Check(
+      pass->GetLastTimings().OpaquePrepassSamples == 0 || pass->GetLastTimings().Pass1Samples == 0,
+      rank, "a probe that throws: no pass 1 after it");
+    vtkNew<vtkAPCCompositePass> again;
+    RenderDistributed(controller, puzzle, piece, bounds, 32, false, again);
+    Check(!again->GetLastFrameFailed() && again->GetLastTimings().OpaquePrepassSamples > 0, rank,
+      "after a probe that threw: the next first frame probes and renders");
   }
 
   // A process without any APC volume (a misconfigured in-situ code): every process must skip

@@ -62,8 +62,10 @@ int main(int argc, char* argv[])
     vtkNew<vtkAPCCompositePass> off; // the stop off: what the frame would be without the redo
     const std::vector<float> unstopped = RenderDistributed(controller, opaque, piece, bounds, 48,
       false, off, true, vtkAPCVolumeMapper::RENORMALISED, nullptr, false);
-    Check(
-      first.OpaqueStopSkipped == 0 && second.OpaqueStopSkipped == 1 && second.OpaqueStopRedone == 0,
+    // The first frame has no last frame to ask: on several processes its probe finds no ray
+    // near opaque and it skips the stop too; one process keeps it (and its tiles without it).
+    Check(first.OpaqueStopSkipped == (ranks > 1 ? 1 : 0) && first.OpaqueStopRedone == 0 &&
+        second.OpaqueStopSkipped == 1 && second.OpaqueStopRedone == 0,
       rank, "a faint frame after a faint one skips the stop");
     Check(third.OpaqueStopSkipped == 0 && third.OpaqueStopRedone == 1 &&
         reference.OpaqueStopRedone == 0,

@@ -1,9 +1,13 @@
 // Run under mpirun -np N. Stop Where Opaque on a first frame (no last frame to say whether it
 // cuts anything): on one process with one volume, pass 1 keeps the tiles no ray of which comes
-// near the threshold as marched without the stop. A faint first frame must give the image of
-// the stop off, bit for bit, with its tiles marched without the stop on one process (none on
-// several, where a process's own absorbance is not the global one); an opaque first frame
-// must still be cut (fewer pass-1 samples than with the stop off).
+// near the threshold as marched without the stop; on several, a probe of every
+// OpaqueProbeStep-th ray that finds none near opaque lets pass 1 march the whole frame without
+// the stop, marching a band again with it if some pixel's global absorbance reaches the
+// threshold after all. A faint first frame must give the image of the stop off, bit for bit,
+// with its tiles (one process) or its band (several) marched without the stop; an opaque first
+// frame must still be cut (fewer pass-1 samples than with the stop off); and a first frame
+// whose few opaque rays the probe misses must be marched again with the stop and give the
+// stop's image.
 #include "apcCompositePassRenders.h"
 #include "apcMPITest.h"
 #include "apcTestCompositePass.h"
@@ -31,18 +35,24 @@ namespace
 {
 using apctest::Check;
 
+// A transfer function under which some rays of the spheres reach the threshold but not the
+// probe's at a step of 64 (at 128^2 on 2 ranks: 0.02-0.08 do; 0.15 leaves every ray open).
+constexpr double kBarelyOpaqueUnit = 0.05;
+
 struct Frame
 {
   std::vector<float> RGBA; // the display rank's float image
   vtkAPCCompositePass::Timings Timings;
 };
 
-// The first frame of a fresh pass over each rank's piece, with the stop on or off.
+// The first frame of a fresh pass over each rank's piece, with the stop on or off, and the
+// probe's step (0: no probe).
 Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
-  vtkUnstructuredGrid* piece, const double bounds[6], bool stop)
+  vtkUnstructuredGrid* piece, const double bounds[6], bool stop, int probeStep = 8)
 {
   constexpr int size = 128; // 64 tiles, for one thread (kTilesPerThreadWithoutStop)
   vtkNew<vtkAPCCompositePass> pass;
+  pass->SetOpaqueProbeStep(probeStep);
   vtkNew<vtkRenderWindow> window;
   vtkNew<vtkRenderer> renderer;
   apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
@@ -82,7 +92,11 @@ int main(int argc, char* argv[])
     scene.TF = apctest::BlueToRedTF(0.0, 1.0, 20.0); // absorbance along a ray below 0.2
     const Frame on = RenderFirst(controller, scene, piece, bounds, true);
     const Frame off = RenderFirst(controller, scene, piece, bounds, false);
-    Check(on.Timings.OpaqueStopSkipped == 0, rank, "faint first frame: the stop is on");
+    // One process keeps its tiles without the stop; several, whose probe finds no ray near
+    // opaque, march the whole band without it.
+    Check(ranks == 1 ? on.Timings.OpaqueStopSkipped == 0 : on.Timings.OpaqueStopSkipped > 0, rank,
+      "faint first frame: several processes march the band without the stop");
+    Check(on.Timings.OpaqueStopRedone == 0, rank, "faint first frame: nothing marched again");
     Check(ranks == 1 ? on.Timings.OpaqueUnstoppedTiles > 0 : on.Timings.OpaqueUnstoppedTiles == 0,
       rank, "faint first frame: tiles marched without the stop on one process only");
     Check(on.Timings.Pass1Samples == off.Timings.Pass1Samples, rank,
@@ -102,12 +116,38 @@ int main(int argc, char* argv[])
     double all[2];
     controller->AllReduce(mine, all, 2, vtkCommunicator::SUM_OP);
     Check(all[0] < 0.9 * all[1], rank, "opaque first frame: the stop still cuts");
+    Check(on.Timings.OpaqueStopSkipped == 0 && on.Timings.OpaqueStopRedone == 0, rank,
+      "opaque first frame: the probe keeps the stop");
     if (rank == 0)
     {
       Check(!on.RGBA.empty() && on.RGBA != off.RGBA, rank, "opaque first frame: stop's image");
     }
     std::printf("rank %d: opaque first frame, tiles without the stop %g, pass-1 samples %g of %g\n",
       rank, on.Timings.OpaqueUnstoppedTiles, all[0], all[1]);
+  }
+  if (ranks > 1)
+  {
+    // Rays near opaque only where the spheres are thickest, and a probe of one ray in 64 in
+    // each direction that meets none of them: the band is marched without the stop, then
+    // again with it, and gives the stop's image (that of a frame without the probe).
+    scene.TF = apctest::BlueToRedTF(0.0, 1.0, kBarelyOpaqueUnit);
+    const Frame missed = RenderFirst(controller, scene, piece, bounds, true, 64);
+    const Frame plain = RenderFirst(controller, scene, piece, bounds, true, 0);
+    std::printf("rank %d: probe of one ray in 64: skipped %g, marched again %g, probe samples %g\n",
+      rank, missed.Timings.OpaqueStopSkipped, missed.Timings.OpaqueStopRedone,
+      missed.Timings.OpaquePrepassSamples);
+    Check(missed.Timings.OpaqueStopSkipped == 0 && missed.Timings.OpaqueStopRedone > 0 &&
+        missed.Timings.OpaquePrepassSamples > 0,
+      rank, "opaque rays the probe missed: the band marched again with the stop");
+    Check(plain.Timings.OpaqueStopSkipped == 0 && plain.Timings.OpaqueStopRedone == 0, rank,
+      "without the probe: the stop throughout");
+    if (rank == 0)
+    {
+      // The band marched again with the stop and no bound takes the samples of the frame
+      // without the probe: the same image, bit for bit.
+      Check(!missed.RGBA.empty() && missed.RGBA == plain.RGBA, rank,
+        "opaque rays the probe missed: the stop's image");
+    }
   }
   return apctest::FinishMPITest(controller);
 }
