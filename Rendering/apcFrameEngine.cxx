@@ -325,7 +325,8 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
   this->Marcher.SetLatticeJitter(this->Settings.LatticeJitter);
-  this->Marcher.SetSampleEndWeights(this->Settings.SampleEndWeights);
+  this->Marcher.SetEndWeightsMode(
+    static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   this->SetOpaqueStopActive(this->OpaqueStopActive);
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
   this->Marcher.SetMesh(&this->Mesh);
@@ -484,7 +485,8 @@ int64_t FrameEngine::ProbeOpaqueProfile(
   VolumeRayMarcher& probe = *this->Probe;
   probe.SetNumberOfThreads(this->Settings.NumberOfThreads);
   probe.SetLatticeJitter(this->Settings.LatticeJitter);
-  probe.SetSampleEndWeights(this->Settings.SampleEndWeights);
+  probe.SetEndWeightsMode(
+    static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   probe.SetOpaqueAbsorbance(VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   probe.SetMaxSampleCacheBytes(0);
   probe.SetMesh(&this->Mesh);
