@@ -329,6 +329,10 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
     static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   this->SetOpaqueStopActive(this->OpaqueStopActive);
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
+  if (this->Settings.SampleEndWeights == 2) // EndWeightsMode::Boundary: once per data change
+  {
+    this->Mesh.FindBoundaryPlanes();
+  }
   this->Marcher.SetMesh(&this->Mesh);
   depth = std::vector<float>();
   this->Marcher.SetView(*this->Camera, std::move(rayEnds));
@@ -489,6 +493,10 @@ int64_t FrameEngine::ProbeOpaqueProfile(
     static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   probe.SetOpaqueAbsorbance(VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   probe.SetMaxSampleCacheBytes(0);
+  if (this->Settings.SampleEndWeights == 2)
+  {
+    this->Mesh.FindBoundaryPlanes();
+  }
   probe.SetMesh(&this->Mesh);
   probe.SetView(coarse, std::move(coarseEnds));
   std::vector<double> moments(

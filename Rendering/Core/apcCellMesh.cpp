@@ -198,13 +198,17 @@ bool CellMesh::Finalize(std::string* error)
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
   }
-  this->FindBoundaryPlanes();
+  this->BoundaryPlanes.clear();
   return true;
 }
 
 //------------------------------------------------------------------------------
 void CellMesh::FindBoundaryPlanes()
 {
+  if (this->HasBoundaryPlanes())
+  {
+    return;
+  }
   // Each face with a plane as its distinct corners in Precedes order (a collapsed quad is its
   // triangle), hashed by their coordinates' bits into buckets; a face whose corners no other
   // face of its bucket has is on the boundary.

@@ -103,8 +103,16 @@ public:
   // rendered cell of this mesh shares (matched by the face's corner coordinates, so pieces
   // appended without merging their points still match). Both cells of an inner face see it
   // unset, and the one cell of a boundary face set: the end weights of Sample End Weights =
-  // Boundary apply at such faces only. Found by Finalize, once per data change.
-  uint8_t GetBoundaryPlanes(int64_t cell) const { return this->BoundaryPlanes[cell]; }
+  // Boundary apply at such faces only. Found by FindBoundaryPlanes, once per data change
+  // (Finalize forgets them; new scalars keep them); until then every plane counts as boundary.
+  uint8_t GetBoundaryPlanes(int64_t cell) const
+  {
+    return this->BoundaryPlanes.empty() ? uint8_t(0xFF) : this->BoundaryPlanes[cell];
+  }
+  // Finds the boundary planes after Finalize (nothing if found already). It costs more than
+  // Finalize itself (docs/sampler.md), so it runs only where a frame asks for the planes.
+  void FindBoundaryPlanes();
+  bool HasBoundaryPlanes() const { return !this->BoundaryPlanes.empty() || this->Shapes.empty(); }
   // xmin, xmax, ymin, ymax, zmin, zmax of one cell (from its corners: nothing reads them
   // per frame, so they are not stored) / of the whole mesh.
   std::array<double, 6> GetCellBounds(int64_t cell) const;
@@ -150,8 +158,6 @@ private:
   // added to summary: independent of every other cell, so cells are derived in parallel.
   CellFate DeriveCell(int64_t cell, Summary& summary);
   std::array<float, 2> ScalarRangeOf(int64_t cell) const;
-  // Fills BoundaryPlanes from the rendered cells' faces (FaceOfPlane).
-  void FindBoundaryPlanes();
 
   UninitializedVector<CellShape> Shapes;
   UninitializedVector<int64_t> Offsets{ 0 };

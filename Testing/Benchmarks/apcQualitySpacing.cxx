@@ -320,8 +320,8 @@ std::vector<Case> Cases(double diagonal, double cell)
 }
 } // namespace
 
-int SpacingStudy(
-  const std::string& data, const std::string& out, int size, const std::string& wanted)
+int SpacingStudy(const std::string& data, const std::string& out, int size,
+  const std::string& wanted, const std::string& wantedCases)
 {
   std::ofstream csv(out + "/spacing.csv");
   const std::string header =
@@ -377,10 +377,19 @@ int SpacingStudy(
     row("reference", "exact", false, exact);
     for (const Case& c : cases)
     {
+      if (!wantedCases.empty() &&
+        ("," + wantedCases + ",").find("," + c.Name + ",") == std::string::npos)
+      {
+        continue;
+      }
       row(c.Name, c.Mode == vtkAPCVolumeMapper::EXACT ? "exact" : "mboit", c.Jitter,
         stage.Render(c.Mode, c.Spacing, c.Jitter, c.EndWeights), c.EndWeights);
     }
-    row("projected-tetra", "pt", false, RenderProjectedTetra(scene));
+    if (wantedCases.empty() ||
+      ("," + wantedCases + ",").find(",projected-tetra,") != std::string::npos)
+    {
+      row("projected-tetra", "pt", false, RenderProjectedTetra(scene));
+    }
   }
   return csv ? 0 : 1;
 }

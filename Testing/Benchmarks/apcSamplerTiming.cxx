@@ -316,6 +316,14 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   start = WallSeconds();
   mesh.Finalize();
   result.FinalizeSeconds = WallSeconds() - start;
+  if (endWeights == 2) // Sample End Weights = Boundary: the faces on the mesh's boundary
+  {
+    start = WallSeconds();
+    const double cpu = CpuSeconds();
+    mesh.FindBoundaryPlanes();
+    std::cerr << "   sampler: boundary planes " << WallSeconds() - start << " s wall, "
+              << CpuSeconds() - cpu << " s CPU\n";
+  }
   result.Cells = mesh.GetNumberOfCells();
   const auto& b = mesh.GetBounds();
   if (!(spacing > 0))

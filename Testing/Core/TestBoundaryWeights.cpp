@@ -198,6 +198,7 @@ apc::CellMesh Block(int nx, int ny, int nz, double h, const double lo[3], bool s
     }
   }
   EXPECT_TRUE(mesh.Finalize());
+  mesh.FindBoundaryPlanes();
   return mesh;
 }
 
