@@ -380,6 +380,10 @@ struct VolumeRayMarcher::Walker
   {
     visitor.Segment(local, tin, tout);
     const walk::EndWeights w = this->PairWeights<Visitor>(local, ray, tin, tout, state, progress);
+    if (w.Last < w.First && !w.Mid)
+    {
+      return 0; // no sample (Boundary: no lattice point and no weighted end): no set-up
+    }
     return this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
   }
 
