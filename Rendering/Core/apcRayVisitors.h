@@ -211,6 +211,10 @@ struct Moments : NoSegments
       this->Buffer = &this->Cache->Buffers.local();
       this->Buffer->Used = 0;
       this->Buffer->Counts.assign(tile.Pixels(), 0);
+      if (this->Weighted)
+      {
+        this->Buffer->ResetWeights();
+      }
     }
   }
   // The walker passes only visible samples (absorbance > 0; StopsWhenOpaque visitors take
@@ -273,10 +277,7 @@ struct Moments : NoSegments
     {
       // The weights' room follows the records' (RecordBuffer::Weigh).
       RecordBuffer& buffer = *this->Buffer;
-      if (buffer.Weights.size() < buffer.Recorded.size())
-      {
-        buffer.Weights.resize(buffer.Recorded.size());
-      }
+      buffer.WeighUpTo(buffer.Recorded.size());
       run.Weight = buffer.Weights.data() + buffer.Used;
     }
     run.Kept = 0;
@@ -364,6 +365,10 @@ struct Moments : NoSegments
     {
       if (this->Cache->Record)
       {
+        if (this->Weighted)
+        {
+          this->Buffer->WeighUpTo(this->Buffer->Used);
+        }
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
         this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Used,
           this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder,

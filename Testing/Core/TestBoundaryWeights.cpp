@@ -9,6 +9,7 @@
 #include "apcCellMesh.h"
 #include "apcDepthWarp.h"
 #include "apcEndWeights.h"
+#include "apcMomentParameters.h"
 #include "apcRayCamera.h"
 #include "apcTransferTable.h"
 #include "apcVolumeRayMarcher.h"
@@ -344,6 +345,38 @@ TEST(BoundaryWeights, InnerCellsTakeThePlainLatticesSamples)
   }
   EXPECT_EQ(same, static_cast<int>(plain.Values.size()));
   EXPECT_LT(allSame, static_cast<int>(plain.Values.size()));
+}
+
+TEST(BoundaryWeights, PassTwoReplaysWhatItWouldMarch)
+{
+  // The cache keeps a weight for every sample once any is weighted: 1 for the samples of the
+  // cells without a boundary face, which take the plain path and weigh nothing themselves.
+  // Pass 2 from the cache takes what a pass 2 marching again takes.
+  const double lo[3] = { -1.0, -0.5, -1.0 };
+  const apc::CellMesh mesh = Block(8, 4, 8, 0.25, lo, true, nullptr);
+  const apc::TransferTable table(
+    0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.4, 0.4 }, kSpacing, 1.0);
+  const apc::LogDepthWarp warp(2.0, 7.0);
+  const size_t pixels = static_cast<size_t>(kSize) * kSize;
+  std::vector<double> colour[2];
+  for (int cache = 0; cache < 2; ++cache)
+  {
+    apc::VolumeRayMarcher marcher;
+    marcher.SetMesh(&mesh);
+    marcher.SetView(Camera(), nullptr);
+    marcher.SetEndWeightsMode(Mode::Boundary);
+    marcher.SetMaxSampleCacheBytes(cache ? size_t(1) << 30 : 0);
+    std::vector<double> moments(pixels * 5, 0.0);
+    marcher.AccumulateMoments<4>(table, warp, moments.data());
+    colour[cache].assign(pixels * 4, 0.0);
+    marcher.AccumulateColour<4>(
+      table, warp, moments.data(), apc::MomentSettings<4>(), colour[cache].data());
+    EXPECT_EQ(marcher.GetLastColourCacheShare(), cache ? 1.0 : 0.0);
+  }
+  for (size_t v = 0; v < colour[0].size(); ++v)
+  {
+    EXPECT_NEAR(colour[1][v], colour[0][v], 1e-9 + 1e-6 * colour[0][v]) << "value " << v;
+  }
 }
 
 } // namespace
