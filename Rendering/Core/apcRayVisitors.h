@@ -211,10 +211,6 @@ struct Moments : NoSegments
       this->Buffer = &this->Cache->Buffers.local();
       this->Buffer->Used = 0;
       this->Buffer->Counts.assign(tile.Pixels(), 0);
-      if (this->Weighted)
-      {
-        this->Buffer->ResetWeights();
-      }
     }
   }
   // The walker passes only visible samples (absorbance > 0; StopsWhenOpaque visitors take
@@ -278,6 +274,7 @@ struct Moments : NoSegments
       // The weights' room follows the records' (RecordBuffer::Weigh).
       RecordBuffer& buffer = *this->Buffer;
       buffer.WeighUpTo(buffer.Recorded.size());
+      buffer.WeighedEnd = std::max(buffer.WeighedEnd, buffer.Used + static_cast<size_t>(n));
       run.Weight = buffer.Weights.data() + buffer.Used;
     }
     run.Kept = 0;
@@ -378,6 +375,10 @@ struct Moments : NoSegments
       {
         // Another tile found the budget spent: this one is not kept (and keeps no memory).
         this->Cache->Tiles[tile.Index].Free();
+      }
+      if (this->Weighted)
+      {
+        this->Buffer->ResetWeights();
       }
     }
     for (int p = 0; p < tile.Pixels(); ++p)

@@ -152,6 +152,7 @@ struct RecordBuffer
   {
     this->WeighUpTo(this->Used + 1);
     this->Weights[this->Used] = weight;
+    this->WeighedEnd = std::max(this->WeighedEnd, this->Used + 1);
   }
   // Weights for at least the first n records, those not weighed yet 1: with Sample End
   // Weights = Boundary the cells away from the boundary record plain samples (weight 1,
@@ -166,8 +167,17 @@ struct RecordBuffer
         this->Weights.begin() + static_cast<std::ptrdiff_t>(old), this->Weights.end(), 1.0f);
     }
   }
-  // A new tile's weights: all 1 until weighed.
-  void ResetWeights() { std::fill(this->Weights.begin(), this->Weights.end(), 1.0f); }
+  // After a tile: the weights it wrote 1 again for the next.
+  void ResetWeights()
+  {
+    std::fill(this->Weights.begin(),
+      this->Weights.begin() +
+        static_cast<std::ptrdiff_t>(std::min(this->WeighedEnd, this->Weights.size())),
+      1.0f);
+    this->WeighedEnd = 0;
+  }
+  // One past the last weight written since ResetWeights.
+  size_t WeighedEnd = 0;
 
   // Room for n records past the Used ones (grown, keeping those, where there is less).
   RecordedSample* Room(size_t n)
