@@ -327,9 +327,14 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
   this->Marcher.SetLatticeJitter(this->Settings.LatticeJitter);
-  this->Marcher.SetSampleEndWeights(this->Settings.SampleEndWeights);
+  this->Marcher.SetEndWeightsMode(
+    static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   this->SetOpaqueStopActive(this->OpaqueStopActive);
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
+  if (this->Settings.SampleEndWeights == 2) // EndWeightsMode::Boundary: once per data change
+  {
+    this->Mesh.FindBoundaryPlanes();
+  }
   this->Marcher.SetMesh(&this->Mesh);
   depth = std::vector<float>();
   this->Marcher.SetView(*this->Camera, std::move(rayEnds));
@@ -497,9 +502,14 @@ int64_t FrameEngine::ProbeOpaqueProfile(
   VolumeRayMarcher& probe = *marcher;
   probe.SetNumberOfThreads(this->Settings.NumberOfThreads);
   probe.SetLatticeJitter(this->Settings.LatticeJitter);
-  probe.SetSampleEndWeights(this->Settings.SampleEndWeights);
+  probe.SetEndWeightsMode(
+    static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   probe.SetOpaqueAbsorbance(VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   probe.SetMaxSampleCacheBytes(0);
+  if (this->Settings.SampleEndWeights == 2)
+  {
+    this->Mesh.FindBoundaryPlanes();
+  }
   probe.SetMesh(&this->Mesh);
   probe.SetView(coarse, std::move(coarseEnds));
   std::vector<double> moments(

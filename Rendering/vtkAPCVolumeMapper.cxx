@@ -137,12 +137,14 @@ bool vtkAPCVolumeMapper::GetLatticeJitter() const
   return this->Internal->Settings.LatticeJitter;
 }
 
-void vtkAPCVolumeMapper::SetSampleEndWeights(bool weights)
+void vtkAPCVolumeMapper::SetSampleEndWeights(int mode)
 {
-  apc::Assign(this, this->Internal->Settings.SampleEndWeights, weights);
+  // Out of range: off (a boolean true is 1, all ends).
+  apc::Assign(this, this->Internal->Settings.SampleEndWeights,
+    mode == END_WEIGHTS_ALL || mode == END_WEIGHTS_BOUNDARY ? mode : int(END_WEIGHTS_OFF));
 }
 
-bool vtkAPCVolumeMapper::GetSampleEndWeights() const
+int vtkAPCVolumeMapper::GetSampleEndWeights() const
 {
   return this->Internal->Settings.SampleEndWeights;
 }

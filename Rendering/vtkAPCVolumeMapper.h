@@ -167,10 +167,23 @@ public:
    * the ray: N processes still render what one renders. MBOIT (APC) mode only: the EXACT and
    * segment modes keep the plain lattice, whose sort-last runs need every sample at a lattice
    * point (docs/sampler.md). Off by default.
+   *
+   * END_WEIGHTS_BOUNDARY weights only the ends on the mesh's boundary (faces no other cell of
+   * the mesh shares): the staircase is there, while at an inner face the plain lattice
+   * already covers the ray exactly, so inner cells keep the plain lattice's samples and
+   * cost. The boundary is this process's piece's: on several processes the faces between
+   * pieces count as boundary too (exact still, but not the samples one process takes).
+   * true / 1 is END_WEIGHTS_ALL.
    */
-  void SetSampleEndWeights(bool weights);
-  bool GetSampleEndWeights() const;
-  vtkBooleanMacro(SampleEndWeights, bool);
+  enum
+  {
+    END_WEIGHTS_OFF = 0,
+    END_WEIGHTS_ALL = 1,
+    END_WEIGHTS_BOUNDARY = 2
+  };
+  void SetSampleEndWeights(int mode);
+  int GetSampleEndWeights() const;
+  vtkBooleanMacro(SampleEndWeights, int);
   ///@}
 
   ///@{

@@ -256,9 +256,9 @@ void vtkAPCVolumeRepresentation::SetLatticeJitter(bool jitter)
   this->MarkModified();
 }
 
-void vtkAPCVolumeRepresentation::SetSampleEndWeights(bool weights)
+void vtkAPCVolumeRepresentation::SetSampleEndWeights(int mode)
 {
-  this->Mapper->SetSampleEndWeights(weights);
+  this->Mapper->SetSampleEndWeights(mode);
   this->MarkModified();
 }
 

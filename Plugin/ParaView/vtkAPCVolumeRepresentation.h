@@ -64,7 +64,7 @@ public:
   void SetSampleDistance(double distance);
   void SetNumberOfMoments(int moments);
   void SetLatticeJitter(bool jitter);
-  void SetSampleEndWeights(bool weights);
+  void SetSampleEndWeights(int mode);
   void SetStopWhereOpaque(bool stop);
   void SetSampleCacheSize(int megabytes);
   void SetOverestimation(double beta);

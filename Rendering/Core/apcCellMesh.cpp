@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <utility>
 
@@ -163,6 +164,7 @@ bool CellMesh::Finalize(std::string* error)
   }
   this->Planes.resize(static_cast<size_t>(this->PlaneOffsets[numCells]));
   this->PlaneCounts.resize(numCells);
+  this->PlaneFaces.resize(numCells);
   this->ScalarRanges.resize(numCells);
   // Cells are independent: fixed blocks of them derived in parallel, each block summed on
   // its own, the sums joined in block order (counts and min / max: the same whatever the
@@ -196,7 +198,150 @@ bool CellMesh::Finalize(std::string* error)
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
   }
+  this->BoundaryPlanes.clear();
   return true;
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::FindBoundaryPlanes()
+{
+  if (this->HasBoundaryPlanes())
+  {
+    return;
+  }
+  // Each face with a plane as its distinct corners in Precedes order (a collapsed quad is its
+  // triangle), hashed by their coordinates' bits into buckets; a face whose corners no other
+  // face of its bucket has is on the boundary.
+  const int64_t numCells = this->GetNumberOfCells();
+  const int64_t slots = static_cast<int64_t>(this->Planes.size());
+  struct Face
+  {
+    int64_t Ids[4];
+    int Count;
+    uint64_t Hash;
+  };
+  UninitializedVector<Face> faces(static_cast<size_t>(slots));
+  const auto& points = this->Points;
+  ParallelFor(0, numCells, 4096,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t cell = begin; cell < end; ++cell)
+      {
+        const int64_t* ids = this->GetCellPoints(cell);
+        const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+        Face* out = faces.data() + this->PlaneOffsets[cell];
+        int n = 0;
+        for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
+        {
+          if (!(this->PlaneFaces[cell] & (1u << f)))
+          {
+            continue;
+          }
+          Face& face = out[n++];
+          face.Count = 0;
+          for (int i = 0; i < shapeFaces.Size[f]; ++i)
+          {
+            face.Ids[face.Count++] = ids[shapeFaces.Corner[f][i]];
+          }
+          std::sort(face.Ids, face.Ids + face.Count,
+            [&](int64_t a, int64_t b) { return Precedes(points, a, b); });
+          face.Count =
+            static_cast<int>(std::unique(face.Ids, face.Ids + face.Count,
+                               [&](int64_t a, int64_t b) { return points[a] == points[b]; }) -
+              face.Ids);
+          uint64_t h = 1469598103934665603ull;
+          for (int i = 0; i < face.Count; ++i)
+          {
+            for (double x : points[face.Ids[i]])
+            {
+              uint64_t bits;
+              std::memcpy(&bits, &x, sizeof bits);
+              h = (h ^ bits) * 1099511628211ull;
+              h ^= h >> 29;
+            }
+          }
+          face.Hash = h;
+        }
+      }
+    });
+  // Buckets by hash (a counting sort of the faces' slots).
+  int64_t faceCount = 0;
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    faceCount += this->PlaneCounts[cell];
+  }
+  uint64_t buckets = 1;
+  while (buckets < static_cast<uint64_t>(faceCount))
+  {
+    buckets <<= 1;
+  }
+  UninitializedVector<int64_t> starts(static_cast<size_t>(buckets) + 1);
+  std::fill(starts.begin(), starts.end(), 0);
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+    {
+      ++starts[(faces[this->PlaneOffsets[cell] + n].Hash & (buckets - 1)) + 1];
+    }
+  }
+  for (uint64_t b = 0; b < buckets; ++b)
+  {
+    starts[b + 1] += starts[b];
+  }
+  UninitializedVector<int64_t> slotsByBucket(static_cast<size_t>(faceCount));
+  {
+    UninitializedVector<int64_t> next(starts.begin(), starts.end() - 1);
+    for (int64_t cell = 0; cell < numCells; ++cell)
+    {
+      for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+      {
+        const int64_t slot = this->PlaneOffsets[cell] + n;
+        slotsByBucket[next[faces[slot].Hash & (buckets - 1)]++] = slot;
+      }
+    }
+  }
+  // Shared[slot]: another face has the same corners.
+  UninitializedVector<uint8_t> shared(static_cast<size_t>(slots));
+  ParallelFor(0, static_cast<int64_t>(buckets), 4096,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t b = begin; b < end; ++b)
+      {
+        for (int64_t i = starts[b]; i < starts[b + 1]; ++i)
+        {
+          const Face& a = faces[slotsByBucket[i]];
+          bool match = false;
+          for (int64_t j = starts[b]; j < starts[b + 1] && !match; ++j)
+          {
+            const Face& c = faces[slotsByBucket[j]];
+            if (j == i || c.Hash != a.Hash || c.Count != a.Count)
+            {
+              continue;
+            }
+            match = true;
+            for (int k = 0; k < a.Count && match; ++k)
+            {
+              match = points[a.Ids[k]] == points[c.Ids[k]];
+            }
+          }
+          shared[slotsByBucket[i]] = match ? 1 : 0;
+        }
+      }
+    });
+  this->BoundaryPlanes.resize(numCells);
+  ParallelFor(0, numCells, 8192,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t cell = begin; cell < end; ++cell)
+      {
+        uint8_t mask = 0;
+        for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+        {
+          mask |= shared[this->PlaneOffsets[cell] + n] ? 0 : static_cast<uint8_t>(1u << n);
+        }
+        this->BoundaryPlanes[cell] = mask;
+      }
+    });
 }
 
 //------------------------------------------------------------------------------
@@ -207,6 +352,7 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
   const double inf = std::numeric_limits<double>::infinity();
   this->ScalarRanges[cell] = this->ScalarRangeOf(cell);
   this->PlaneCounts[cell] = 0;
+  this->PlaneFaces[cell] = 0;
   std::array<double, 6> b = { inf, -inf, inf, -inf, inf, -inf };
   double centroid[3] = { 0, 0, 0 };
   bool finite = true;
@@ -255,6 +401,7 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
       static_cast<double>(n[1]) * centroid[1] + static_cast<double>(n[2]) * centroid[2] - offset;
     const float sign = side > 0 ? -1.0f : 1.0f;
     planes[count++] = { { sign * n[0], sign * n[1], sign * n[2] }, sign * offset };
+    this->PlaneFaces[cell] |= static_cast<uint8_t>(1u << f);
   }
   // A cell needs at least four faces with area to enclose anything; with fewer (collapsed
   // corners, a flat cell) its planes would leave rays unbounded, so it is left out.

@@ -99,6 +99,20 @@ public:
     count = this->PlaneCounts[cell];
     return this->Planes.data() + this->PlaneOffsets[cell];
   }
+  // Bit p: the cell's plane p (GetPlanes) is a face on the mesh's boundary, one that no other
+  // rendered cell of this mesh shares (matched by the face's corner coordinates, so pieces
+  // appended without merging their points still match). Both cells of an inner face see it
+  // unset, and the one cell of a boundary face set: the end weights of Sample End Weights =
+  // Boundary apply at such faces only. Found by FindBoundaryPlanes, once per data change
+  // (Finalize forgets them; new scalars keep them); until then every plane counts as boundary.
+  uint8_t GetBoundaryPlanes(int64_t cell) const
+  {
+    return this->BoundaryPlanes.empty() ? uint8_t(0xFF) : this->BoundaryPlanes[cell];
+  }
+  // Finds the boundary planes after Finalize (nothing if found already). It costs more than
+  // Finalize itself (docs/sampler.md), so it runs only where a frame asks for the planes.
+  void FindBoundaryPlanes();
+  bool HasBoundaryPlanes() const { return !this->BoundaryPlanes.empty() || this->Shapes.empty(); }
   // xmin, xmax, ymin, ymax, zmin, zmax of one cell (from its corners: nothing reads them
   // per frame, so they are not stored) / of the whole mesh.
   std::array<double, 6> GetCellBounds(int64_t cell) const;
@@ -154,6 +168,10 @@ private:
   UninitializedVector<FacePlane> Planes;
   UninitializedVector<int64_t> PlaneOffsets;
   UninitializedVector<uint8_t> PlaneCounts;
+  // Bit f: face f of the cell's shape has a plane (in face order, so the n-th set bit is
+  // plane n); BoundaryPlanes: see GetBoundaryPlanes.
+  UninitializedVector<uint8_t> PlaneFaces;
+  UninitializedVector<uint8_t> BoundaryPlanes;
   UninitializedVector<std::array<float, 2>> ScalarRanges;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
   int64_t SkippedCells = 0;

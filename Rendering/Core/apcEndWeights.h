@@ -70,6 +70,67 @@ struct EndWeights
   return w;
 }
 
+// The weights of the pair [tin, tout) with only some of its ends weighted (Sample End Weights
+// = Boundary: the ends on the mesh's boundary, CellMesh::GetBoundaryPlanes). A weighted end
+// counts exactly from the face, a plain one covers half a spacing past its last lattice
+// point, as the plain lattice does, so that it meets a plain neighbour's first sample exactly
+// at the half way point between their lattice points. Both ends weighted: EndWeightsOf, bit
+// for bit; neither: the plain lattice's samples, each of weight 1, none without a lattice
+// point. A pair without a lattice point and one weighted end is the only one whose exact
+// weight can be negative: entered at tin through the boundary, left through a plain face
+// before the next lattice point t_next, whose sample (in the next cell) already covers from
+// t_next - s/2, so the pair's exact weight is (t_next - s/2 - tin) / s, down to -1/2. A
+// negative weight is clamped to no sample (the marcher takes no sample of non-positive
+// absorbance either): the ray then counts up to s/2 more than its length there.
+[[gnu::always_inline]] inline EndWeights EndWeightsAt(
+  const Lattice& lattice, double tin, double tout, double offset, bool weightedIn, bool weightedOut)
+{
+  if (weightedIn && weightedOut)
+  {
+    return EndWeightsOf(lattice, tin, tout, offset);
+  }
+  EndWeights w;
+  w.First = lattice.First(tin, offset);
+  w.Last = lattice.First(tout, offset) - 1;
+  if (!weightedIn && !weightedOut)
+  {
+    return w;
+  }
+  if (w.Last < w.First)
+  {
+    // The half spacing before the next lattice point / after the previous one belongs to
+    // the plain end's neighbour.
+    const double weight = weightedIn
+      ? (lattice.At(w.First, offset) - tin) * lattice.InverseSpacing - 0.5
+      : (tout - lattice.At(w.First - 1, offset)) * lattice.InverseSpacing - 0.5;
+    if (!(weight > 0))
+    {
+      w.Last = w.First - 1; // no sample
+      return w;
+    }
+    w.Mid = true;
+    w.First -= 1;
+    w.MidOffset = 0.5 * (tin + tout) * lattice.InverseSpacing - static_cast<double>(w.First);
+    w.MidT = lattice.At(w.First, w.MidOffset);
+    w.MidWeight = weight;
+    return w;
+  }
+  const double first =
+    weightedIn ? (lattice.At(w.First, offset) - tin) * lattice.InverseSpacing + 0.5 : 1.0;
+  const double last =
+    weightedOut ? (tout - lattice.At(w.Last, offset)) * lattice.InverseSpacing + 0.5 : 1.0;
+  if (w.Last == w.First)
+  {
+    // One lattice point: its weight counts the weighted end exactly and the plain one as
+    // the plain lattice does.
+    w.FirstWeight = w.LastWeight = first + last - 1.0;
+    return w;
+  }
+  w.FirstWeight = first;
+  w.LastWeight = last;
+  return w;
+}
+
 } // namespace walk
 } // namespace apc
 

@@ -273,10 +273,8 @@ struct Moments : NoSegments
     {
       // The weights' room follows the records' (RecordBuffer::Weigh).
       RecordBuffer& buffer = *this->Buffer;
-      if (buffer.Weights.size() < buffer.Recorded.size())
-      {
-        buffer.Weights.resize(buffer.Recorded.size());
-      }
+      buffer.WeighUpTo(buffer.Recorded.size());
+      buffer.WeighedEnd = std::max(buffer.WeighedEnd, buffer.Used + static_cast<size_t>(n));
       run.Weight = buffer.Weights.data() + buffer.Used;
     }
     run.Kept = 0;
@@ -364,6 +362,10 @@ struct Moments : NoSegments
     {
       if (this->Cache->Record)
       {
+        if (this->Weighted)
+        {
+          this->Buffer->WeighUpTo(this->Buffer->Used);
+        }
         // Own moments mean a Hybrid pass 2, which orders tied depths by the lattice bits.
         this->Cache->Keep(tile.Index, this->Buffer->Recorded.data(), this->Buffer->Used,
           this->Buffer->Counts.data(), tile.Pixels(), this->Own != nullptr || this->KeepOrder,
@@ -373,6 +375,10 @@ struct Moments : NoSegments
       {
         // Another tile found the budget spent: this one is not kept (and keeps no memory).
         this->Cache->Tiles[tile.Index].Free();
+      }
+      if (this->Weighted)
+      {
+        this->Buffer->ResetWeights();
       }
     }
     for (int p = 0; p < tile.Pixels(); ++p)

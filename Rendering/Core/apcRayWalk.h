@@ -56,6 +56,9 @@ struct CellPlanes
   double Num[kMaxPlanes];
   // 1 where a ray running inside the plane is kept (see Clip), else 0.
   double KeepsParallelRays[kMaxPlanes];
+  // Bit p: plane p lies on the mesh's boundary (CellMesh::GetBoundaryPlanes); set by the
+  // caller after Set where the end weights ask for it (ClipEnds), else 0.
+  unsigned BoundaryMask = 0;
 
   void Set(const FacePlane* planes, int count, const RaySetup& anyRay, bool sharedOrigin)
   {
@@ -147,6 +150,62 @@ struct CellPlanes
     tin = lo;
     tout = out ? -std::numeric_limits<double>::infinity() : hi;
 #endif
+  }
+
+  // Clip, and whether the interval's ends lie on a boundary plane (BoundaryMask): in / out
+  // say that a boundary plane's quotient is the interval's tin / tout. The quotients are
+  // Clip's, with its operations, so an end on a boundary plane is found exactly; where a
+  // boundary plane and another one give the same quotient (the ray through their edge) the
+  // end counts as on the boundary.
+  void ClipEnds(const RaySetup& ray, double& tin, double& tout, bool& in, bool& out) const
+  {
+    this->Clip(ray, tin, tout);
+    const double inf = std::numeric_limits<double>::infinity();
+    double loB = -inf;
+    double hiB = inf;
+    for (int p = 0; p < this->Count; ++p)
+    {
+      if (!(this->BoundaryMask & (1u << p)))
+      {
+        continue;
+      }
+#ifdef __SSE2__
+      // Clip's expression for lane p (no contraction into FMA in intrinsics).
+      const __m128d denomV =
+        _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set_sd(this->Nx[p]), _mm_set_sd(ray.D[0])),
+                     _mm_mul_pd(_mm_set_sd(this->Ny[p]), _mm_set_sd(ray.D[1]))),
+          _mm_mul_pd(_mm_set_sd(this->Nz[p]), _mm_set_sd(ray.D[2])));
+      __m128d numV;
+      if (this->SharedOrigin)
+      {
+        numV = _mm_set_sd(this->Num[p]);
+      }
+      else
+      {
+        const __m128d dot =
+          _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set_sd(this->Nx[p]), _mm_set_sd(ray.O[0])),
+                       _mm_mul_pd(_mm_set_sd(this->Ny[p]), _mm_set_sd(ray.O[1]))),
+            _mm_mul_pd(_mm_set_sd(this->Nz[p]), _mm_set_sd(ray.O[2])));
+        numV = _mm_sub_pd(_mm_set_sd(this->Offset[p]), dot);
+      }
+      const double denom = _mm_cvtsd_f64(denomV);
+      const double q = _mm_cvtsd_f64(_mm_div_pd(numV, denomV));
+#else
+      const double denom = this->Nx[p] * ray.D[0] + this->Ny[p] * ray.D[1] + this->Nz[p] * ray.D[2];
+      const double num = this->SharedOrigin ? this->Num[p] : this->Numerator(p, ray);
+      const double q = num / denom;
+#endif
+      if (denom < 0)
+      {
+        loB = std::max(loB, q);
+      }
+      else if (denom > 0)
+      {
+        hiB = std::min(hiB, q);
+      }
+    }
+    in = loB >= tin;
+    out = hiB <= tout;
   }
 
 #ifdef __SSE2__

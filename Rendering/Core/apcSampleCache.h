@@ -150,12 +150,34 @@ struct RecordBuffer
   // Record Used's weight (before Room(1) takes it).
   void Weigh(float weight)
   {
-    if (this->Weights.size() <= this->Used)
-    {
-      this->Weights.resize(std::max(this->Recorded.size(), this->Used + 1));
-    }
+    this->WeighUpTo(this->Used + 1);
     this->Weights[this->Used] = weight;
+    this->WeighedEnd = std::max(this->WeighedEnd, this->Used + 1);
   }
+  // Weights for at least the first n records, those not weighed yet 1: with Sample End
+  // Weights = Boundary the cells away from the boundary record plain samples (weight 1,
+  // never weighed) between the weighted ones.
+  void WeighUpTo(size_t n)
+  {
+    if (this->Weights.size() < n)
+    {
+      const size_t old = this->Weights.size();
+      this->Weights.resize(std::max(this->Recorded.size(), n));
+      std::fill(
+        this->Weights.begin() + static_cast<std::ptrdiff_t>(old), this->Weights.end(), 1.0f);
+    }
+  }
+  // After a tile: the weights it wrote 1 again for the next.
+  void ResetWeights()
+  {
+    std::fill(this->Weights.begin(),
+      this->Weights.begin() +
+        static_cast<std::ptrdiff_t>(std::min(this->WeighedEnd, this->Weights.size())),
+      1.0f);
+    this->WeighedEnd = 0;
+  }
+  // One past the last weight written since ResetWeights.
+  size_t WeighedEnd = 0;
 
   // Room for n records past the Used ones (grown, keeping those, where there is less).
   RecordedSample* Room(size_t n)

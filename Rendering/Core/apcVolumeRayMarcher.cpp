@@ -133,7 +133,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
     Lattice(table.GetSampleSpacing()),
     this->LinearTolerance > 0 ? this->LinearTolerance * table.GetBinWidth() : 0.0 };
   walker.BandWidth = this->Width();
-  walker.EndWeights = this->SampleEndWeights;
+  walker.EndWeights = this->SampleEndWeights != EndWeightsMode::Off;
+  walker.BoundaryWeights = this->SampleEndWeights == EndWeightsMode::Boundary;
   walker.Lanes = walker.Lanes && this->SampleLanes;
   if (walker.Opaque && this->CutSet)
   {
@@ -266,7 +267,7 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
     static_cast<size_t>(last));
   const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
   visitors::Moments<N> visitor(moments, this->Width(), &latticeWarp, &cache);
-  visitor.Weighted = this->SampleEndWeights; // the cache keeps the weights
+  visitor.Weighted = this->SampleEndWeights != EndWeightsMode::Off; // the cache keeps the weights
   this->OwnMomentsOrder = 0;
   // Hybrid (keepOwn) promises the exact ordered blend of a rank's own samples: every sample
   // is marched. Pass 2 stops where this pass did, or at the cut ApplyOpaqueCut agreed.
@@ -377,7 +378,7 @@ void VolumeRayMarcher::ApplyOpaqueCut(const TransferTable& table, const LogDepth
   {
     const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
     visitors::Moments<N> visitor(moments, width, &latticeWarp, nullptr);
-    visitor.Weighted = this->SampleEndWeights;
+    visitor.Weighted = this->SampleEndWeights != EndWeightsMode::Off;
     this->March(visitor, table, &skip, rows);
     this->LastCutSamples = this->LastSamples;
   }
@@ -447,7 +448,7 @@ void VolumeRayMarcher::RedoOpaqueTiles(const TransferTable& table, const LogDept
   cache.Record = caching && cache.Arena.Capacity() > 0;
   const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
   visitors::Moments<N> visitor(moments, width, &latticeWarp, caching ? &cache : nullptr);
-  visitor.Weighted = this->SampleEndWeights;
+  visitor.Weighted = this->SampleEndWeights != EndWeightsMode::Off;
   visitor.KeepOrder = true;
   const uint8_t* bound = this->Bound;
   this->Bound = nullptr;

@@ -89,8 +89,23 @@ public:
   // the same weighted samples, on every partition; the sample cache keeps each one's weight
   // for pass 2. The exact blend and the segments keep the plain lattice
   // (visitors::PixelSampleLists says why). Off by default. Set it before a frame's passes.
-  void SetSampleEndWeights(bool weights) { this->SampleEndWeights = weights; }
-  bool GetSampleEndWeights() const { return this->SampleEndWeights; }
+  void SetSampleEndWeights(bool weights)
+  {
+    this->SampleEndWeights = weights ? EndWeightsMode::All : EndWeightsMode::Off;
+  }
+  bool GetSampleEndWeights() const { return this->SampleEndWeights != EndWeightsMode::Off; }
+  // Which ends SetSampleEndWeights weights: every (cell, ray) pair's (All), or only those on
+  // the mesh's boundary (Boundary, CellMesh::GetBoundaryPlanes; apcEndWeights.h EndWeightsAt):
+  // there the staircase is, while at an inner face the plain lattice already covers the ray
+  // exactly, so the cells without a boundary face keep the plain lattice's samples and cost.
+  enum class EndWeightsMode : uint8_t
+  {
+    Off = 0,
+    All = 1,
+    Boundary = 2
+  };
+  void SetEndWeightsMode(EndWeightsMode mode) { this->SampleEndWeights = mode; }
+  EndWeightsMode GetEndWeightsMode() const { return this->SampleEndWeights; }
 
   // Take nearly affine cells' and twisted pyramids' samples four rays at a time where the
   // processor has AVX2 (on by default); off, every pair goes through the scalar loop, with
@@ -271,7 +286,7 @@ private:
   double HiddenSampleWeight = kDefaultHiddenSampleWeight;
   int Threads = 0;
   bool LatticeJitter = false;
-  bool SampleEndWeights = false;
+  EndWeightsMode SampleEndWeights = EndWeightsMode::Off;
   bool SampleLanes = true;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
   double LinearTolerance = kDefaultLinearTolerance;

@@ -106,6 +106,10 @@ struct VolumeRayMarcher::Walker
   // lattice point, and every pair of a cell the lanes do not take, goes through the scalar
   // loop (WeightedRay).
   bool EndWeights = false;
+  // With EndWeights: weight only the ends on the mesh's boundary (EndWeightsMode::Boundary).
+  // A cell without a boundary plane takes the plain lattice's path; one with takes the
+  // scalar weighted loop, which finds each pair's ends by CellPlanes::ClipEnds.
+  bool BoundaryWeights = false;
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
   // in its own coordinates, LinearPyramid), a twisted pyramid's closed-form inverse, or by
@@ -190,6 +194,7 @@ struct VolumeRayMarcher::Walker
       return false; // a cell the mesh left out (see CellMesh::GetNumberOfSkippedCells)
     }
     state.Planes.Set(planes, planeCount, anyRay, this->SharedOrigin);
+    state.Planes.BoundaryMask = this->BoundaryWeights ? this->Mesh.GetBoundaryPlanes(cell) : 0;
     state.Cell = cell;
     state.Interpolate = visible && !cellScalars;
     state.HaveCorners = false;
@@ -227,12 +232,13 @@ struct VolumeRayMarcher::Walker
     // A visitor of segments sees every ray inside, with a sample or not; so do the end
     // weights, which sample a pair without a lattice point too.
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
-    const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights;
+    const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights &&
+      (!this->BoundaryWeights || state.Planes.BoundaryMask != 0);
     walk::ClippedRays& c = state.Clipped;
     const double* stop = Visitor::StopsWhenOpaque ? progress.Stop : nullptr;
     // Where the lanes are on, the clipping finds the pairs' end weights four rays at a time;
     // else PairWeights finds them ray by ray (the form the lanes' weights are tested against).
-    const bool clipWeights = weighted && this->Lanes;
+    const bool clipWeights = weighted && this->Lanes && !this->BoundaryWeights;
     const int hits = clipWeights ? walk::ClipRaysWeighted(state.Planes, packed, rect, stop,
                                      state.Near, this->Grid, c, state.Ends)
                                  : walk::ClipRays(state.Planes, packed, rect, stop, state.Near,
@@ -376,6 +382,10 @@ struct VolumeRayMarcher::Walker
   {
     visitor.Segment(local, tin, tout);
     const walk::EndWeights w = this->PairWeights<Visitor>(local, ray, tin, tout, state, progress);
+    if (w.Last < w.First && !w.Mid)
+    {
+      return 0; // no sample (Boundary: no lattice point and no weighted end): no set-up
+    }
     return this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
   }
 
@@ -387,6 +397,17 @@ struct VolumeRayMarcher::Walker
     // The weights are the whole pair's: where ClipRays cut it at the stop, its end is found
     // again, with ClipRays' own arithmetic (CellPlanes::Clip from [0, min(End, far))).
     double end = tout;
+    if (this->BoundaryWeights)
+    {
+      // Which ends lie on the boundary, and the pair's end without the stop, with ClipRays'
+      // own arithmetic.
+      double start = 0;
+      end = std::min(ray.End, this->FarLimit);
+      bool in = false;
+      bool out = false;
+      state.Planes.ClipEnds(ray, start, end, in, out);
+      return walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
+    }
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
     {
       double start = 0;

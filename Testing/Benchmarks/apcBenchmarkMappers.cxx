@@ -9,7 +9,7 @@
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
 //     [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] [--end-weights]
-//     [--no-lanes]
+//     [--boundary-weights] [--no-lanes]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -151,10 +151,10 @@ struct Options
   double LinearTolerance = NAN;   // sampler: the linear inverse's tolerance in bins (NaN: default)
   bool Lower60 = false;        // --setup paraview: the ramp with the lower 60 % of the range clear
   std::string WindField = "p"; // --field: the wind's point array (paraview_vs_apc.py: U_mag)
-  bool Stop = true; // sampler: time with the recommended opaque stop (off: as ParaView renders)
-  bool EndWeights = false; // APC and sampler: vtkAPCVolumeMapper::SetSampleEndWeights
-  bool Lanes = true;       // sampler: VolumeRayMarcher::SetSampleLanes (--no-lanes: scalar loops)
-  int Moments = 4;         // APC's MBOIT moments
+  bool Stop = true;   // sampler: time with the recommended opaque stop (off: as ParaView renders)
+  int EndWeights = 0; // APC and sampler: vtkAPCVolumeMapper::SetSampleEndWeights (2: boundary)
+  bool Lanes = true;  // sampler: VolumeRayMarcher::SetSampleLanes (--no-lanes: scalar loops)
+  int Moments = 4;    // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
   bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
@@ -1005,7 +1005,7 @@ void Usage()
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
                "  [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] "
-               "[--end-weights] [--no-lanes]\n";
+               "[--end-weights] [--boundary-weights] [--no-lanes]\n";
 }
 
 } // namespace
@@ -1092,7 +1092,11 @@ int main(int argc, char* argv[])
     }
     else if (arg == "--end-weights")
     {
-      options.EndWeights = true;
+      options.EndWeights = 1;
+    }
+    else if (arg == "--boundary-weights")
+    {
+      options.EndWeights = 2;
     }
     else if (arg == "--no-lanes")
     {

@@ -207,7 +207,7 @@ public:
     this->View.Window->Render();
   }
 
-  Picture Render(int mode, double spacing, bool jitter, bool endWeights = false)
+  Picture Render(int mode, double spacing, bool jitter, int endWeights = 0)
   {
     this->Mapper->SetMode(mode);
     this->Mapper->SetSampleDistance(spacing);
@@ -271,7 +271,7 @@ struct Case
   int Mode = vtkAPCVolumeMapper::MBOIT;
   double Spacing = 0; // 0: the mapper's default
   bool Jitter = false;
-  bool EndWeights = false; // vtkAPCVolumeMapper::SetSampleEndWeights
+  int EndWeights = 0; // vtkAPCVolumeMapper::SetSampleEndWeights (1 all, 2 boundary)
 };
 
 std::vector<Case> Cases(double diagonal, double cell)
@@ -307,19 +307,21 @@ std::vector<Case> Cases(double diagonal, double cell)
   cases.push_back({ "mboit-default", vtkAPCVolumeMapper::MBOIT, 0.0, false });
   // The end weights (no lattice staircase on grazing silhouettes; MBOIT only, EXACT keeps the
   // plain lattice) at the default and at coarser spacings.
-  cases.push_back({ "mboit-default-weights", vtkAPCVolumeMapper::MBOIT, 0.0, false, true });
+  cases.push_back({ "mboit-default-weights", vtkAPCVolumeMapper::MBOIT, 0.0, false, 1 });
+  // Only the ends on the mesh's boundary weighted (end_weights 2).
+  cases.push_back({ "mboit-default-boundary", vtkAPCVolumeMapper::MBOIT, 0.0, false, 2 });
   for (double f : { 1.0, 1.25, 1.5, 2.0 })
   {
     std::ostringstream name;
     name << "cell" << f << "-weights";
-    cases.push_back({ "mboit-" + name.str(), vtkAPCVolumeMapper::MBOIT, f * cell, false, true });
+    cases.push_back({ "mboit-" + name.str(), vtkAPCVolumeMapper::MBOIT, f * cell, false, 1 });
   }
   return cases;
 }
 } // namespace
 
-int SpacingStudy(
-  const std::string& data, const std::string& out, int size, const std::string& wanted)
+int SpacingStudy(const std::string& data, const std::string& out, int size,
+  const std::string& wanted, const std::string& wantedCases)
 {
   std::ofstream csv(out + "/spacing.csv");
   const std::string header =
@@ -358,7 +360,7 @@ int SpacingStudy(
     const Picture exact = stage.Render(vtkAPCVolumeMapper::EXACT, finest / 4, false);
     WritePicture(exact.RGB, size, size, out + "/spacing_" + scene.Name + "_reference.png");
     auto row = [&](const std::string& name, const char* mode, bool jitter, const Picture& p,
-                 bool endWeights = false)
+                 int endWeights = 0)
     {
       const apc::ImageComparison c =
         apc::CompareImages(p.RGB.data(), exact.RGB.data(), size, size, 3, 1.0, 16.0 / 255);
@@ -367,7 +369,7 @@ int SpacingStudy(
       line << scene.Name << "," << name << "," << mode << "," << (jitter ? 1 : 0) << ","
            << p.Spacing << "," << (p.Spacing > 0 ? p.Spacing / cell : 0) << ","
            << (p.Spacing > 0 ? diagonal / p.Spacing : 0) << "," << c.Ssim << "," << c.Psnr << ","
-           << c.MaxAbsDiff << "," << p.CpuSeconds << "," << cell << "," << (endWeights ? 1 : 0);
+           << c.MaxAbsDiff << "," << p.CpuSeconds << "," << cell << "," << endWeights;
       csv << line.str() << std::endl;
       std::cout << line.str() << std::endl;
       WritePicture(p.RGB, size, size, out + "/spacing_" + scene.Name + "_" + name + ".png");
@@ -375,10 +377,19 @@ int SpacingStudy(
     row("reference", "exact", false, exact);
     for (const Case& c : cases)
     {
+      if (!wantedCases.empty() &&
+        ("," + wantedCases + ",").find("," + c.Name + ",") == std::string::npos)
+      {
+        continue;
+      }
       row(c.Name, c.Mode == vtkAPCVolumeMapper::EXACT ? "exact" : "mboit", c.Jitter,
         stage.Render(c.Mode, c.Spacing, c.Jitter, c.EndWeights), c.EndWeights);
     }
-    row("projected-tetra", "pt", false, RenderProjectedTetra(scene));
+    if (wantedCases.empty() ||
+      ("," + wantedCases + ",").find(",projected-tetra,") != std::string::npos)
+    {
+      row("projected-tetra", "pt", false, RenderProjectedTetra(scene));
+    }
   }
   return csv ? 0 : 1;
 }

@@ -8,9 +8,11 @@
 namespace apcbench
 {
 // Writes out/spacing.csv and out/spacing_<scene>_<case>.png; scenes: a comma list of
-// wind, wind-close, flange, spheres, gearteeth (empty: all). Returns the exit status.
-int SpacingStudy(
-  const std::string& data, const std::string& out, int size, const std::string& scenes);
+// wind, wind-close, flange, spheres, gearteeth (empty: all); cases: a comma list of the cases'
+// names to render (empty: all; the reference's spacing still comes from every case, so the
+// rows match a full run's). Returns the exit status.
+int SpacingStudy(const std::string& data, const std::string& out, int size,
+  const std::string& scenes, const std::string& cases = std::string());
 }
 
 #endif

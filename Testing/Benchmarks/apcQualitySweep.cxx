@@ -445,6 +445,7 @@ int main(int argc, char* argv[])
   std::string out = ".";
   std::string data = APC_SOURCE_DIR "/Data";
   std::string wanted;
+  std::string cases; // --cases: the spacing study's cases to render (all if empty)
   bool lattice = false;
   bool ranks = false;
   bool defaults = false;
@@ -472,6 +473,10 @@ int main(int argc, char* argv[])
     {
       (arg == "--out" ? out : arg == "--data" ? data : wanted) = argv[++i];
     }
+    else if (arg == "--cases" && i + 1 < argc)
+    {
+      cases = argv[++i];
+    }
     else if (arg == "--size" && i + 1 < argc && std::atoi(argv[i + 1]) >= 16)
     {
       kSize = std::atoi(argv[++i]);
@@ -481,7 +486,8 @@ int main(int argc, char* argv[])
       std::cerr << "usage: apcQualitySweep [--lattice | --ranks | --spacing | --defaults] [--out "
                    "DIR] [--data "
                    "DIR] [--size S >= 16] "
-                   "[--scenes spheres,spheres-close,sandwich,gearteeth,wind]\n";
+                   "[--scenes spheres,spheres-close,sandwich,gearteeth,wind] [--cases "
+                   "mboit-default,...]\n";
       return 1;
     }
   }
@@ -501,7 +507,7 @@ int main(int argc, char* argv[])
   }
   if (spacing)
   {
-    return apcbench::SpacingStudy(data, out, kSize, wanted);
+    return apcbench::SpacingStudy(data, out, kSize, wanted, cases);
   }
 
   std::ofstream csv(out + "/quality.csv");

@@ -301,7 +301,7 @@ std::vector<float> MboitImage(apc::VolumeRayMarcher& marcher, const apc::Transfe
 
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
-  double linearTolerance, bool withStop, bool endWeights, bool lanes)
+  double linearTolerance, bool withStop, int endWeights, bool lanes)
 {
   SamplerTiming result;
   apc::CellMesh mesh;
@@ -316,6 +316,14 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   start = WallSeconds();
   mesh.Finalize();
   result.FinalizeSeconds = WallSeconds() - start;
+  if (endWeights == 2) // Sample End Weights = Boundary: the faces on the mesh's boundary
+  {
+    start = WallSeconds();
+    const double cpu = CpuSeconds();
+    mesh.FindBoundaryPlanes();
+    std::cerr << "   sampler: boundary planes " << WallSeconds() - start << " s wall, "
+              << CpuSeconds() - cpu << " s CPU\n";
+  }
   result.Cells = mesh.GetNumberOfCells();
   const auto& b = mesh.GetBounds();
   if (!(spacing > 0))
@@ -342,7 +350,7 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   {
     SetLinearTolerance(marcher, linearTolerance);
   }
-  marcher.SetSampleEndWeights(endWeights);
+  marcher.SetEndWeightsMode(static_cast<apc::VolumeRayMarcher::EndWeightsMode>(endWeights));
   marcher.SetSampleLanes(lanes);
   marcher.SetMesh(&mesh);
   std::vector<double> view, pass1, pass2, cpu1, cpu2;

@@ -70,11 +70,11 @@ struct SamplerTiming
 // the non-stopping images for the two errors (one untimed frame each).
 // linearTolerance: the marcher's linear-inverse tolerance in table bins (NaN: its default).
 // withStop false: timed without the opaque stop, as the mapper renders by default (pass 2 then
-// finds hidden depths where rays are opaque). endWeights: VolumeRayMarcher::SetSampleEndWeights.
-// lanes: VolumeRayMarcher::SetSampleLanes (off: every pair in the scalar loop).
+// finds hidden depths where rays are opaque). endWeights: VolumeRayMarcher::EndWeightsMode (0 off,
+// 1 all, 2 boundary). lanes: VolumeRayMarcher::SetSampleLanes (off: every pair in the scalar loop).
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
-  double linearTolerance = NAN, bool withStop = true, bool endWeights = false, bool lanes = true);
+  double linearTolerance = NAN, bool withStop = true, int endWeights = 0, bool lanes = true);
 
 } // namespace apcbench
 

@@ -383,8 +383,9 @@ def main():
     if args.stop is not None:
         display.APCStopWhereOpaque = args.stop
     if args.end_weights:
-        check(display.APCSampleEndWeights == 0, "APCSampleEndWeights is off by default")
-        display.APCSampleEndWeights = 1
+        # An enumeration (Off / All / Boundary): Python sees its text.
+        check(display.APCSampleEndWeights in (0, "Off"), "APCSampleEndWeights is off by default")
+        display.APCSampleEndWeights = "All"
     if args.band_megapixels > 0:
         display.APCBandMegapixels = args.band_megapixels
     display.APCResolveMode = args.resolve

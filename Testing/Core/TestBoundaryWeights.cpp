@@ -1,0 +1,382 @@
+// Sample End Weights = Boundary (VolumeRayMarcher::EndWeightsMode::Boundary, walk::EndWeightsAt,
+// CellMesh::GetBoundaryPlanes): only the ends of (cell, ray) pairs on the mesh's boundary are
+// weighted. The mesh finds its boundary faces by their corners' coordinates; a ray's weights
+// sum to its exact length along a run of pairs whose outer ends are weighted and inner ones
+// plain (but where a sliver's weight is clamped); on a slab of constant absorbance seen at a
+// grazing angle pass 1's optical depth is sigma times the exact length where the plain lattice
+// is off by up to a sample; and the cells without a boundary face take the plain lattice's
+// samples bit for bit.
+#include "apcCellMesh.h"
+#include "apcDepthWarp.h"
+#include "apcEndWeights.h"
+#include "apcMomentParameters.h"
+#include "apcRayCamera.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <iostream>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace
+{
+
+using apc::walk::EndWeights;
+using apc::walk::EndWeightsAt;
+using apc::walk::EndWeightsOf;
+using apc::walk::Lattice;
+using Mode = apc::VolumeRayMarcher::EndWeightsMode;
+
+double Sum(const EndWeights& w)
+{
+  if (w.Mid)
+  {
+    return w.MidWeight;
+  }
+  double sum = 0;
+  for (int64_t k = w.First; k <= w.Last; ++k)
+  {
+    sum += w.Of(k);
+  }
+  return sum;
+}
+
+bool SameBits(double a, double b)
+{
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+TEST(BoundaryWeights, RunsOfPairsSumToTheirLength)
+{
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double offset = 0.29;
+  const Lattice lattice(0.013);
+  int exact = 0;
+  int clamped = 0;
+  int slivers = 0;
+  for (int i = 0; i < 20000; ++i)
+  {
+    // A ray through 1 to 5 cells, some shorter than the spacing: entered and left through the
+    // boundary (weighted), plain between cells.
+    const int cells = 1 + static_cast<int>(5 * u(rng));
+    std::vector<double> t{ 1.0 + 3.0 * u(rng) };
+    for (int c = 0; c < cells; ++c)
+    {
+      t.push_back(t.back() + 0.04 * u(rng) * u(rng));
+    }
+    if (!(t.front() < t.back()))
+    {
+      continue;
+    }
+    double sum = 0;
+    bool anyClamped = false;
+    for (int c = 0; c < cells; ++c)
+    {
+      if (!(t[c] < t[c + 1]))
+      {
+        continue;
+      }
+      const bool in = c == 0;
+      const bool out = c == cells - 1;
+      const EndWeights w = EndWeightsAt(lattice, t[c], t[c + 1], offset, in, out);
+      const EndWeights all = EndWeightsOf(lattice, t[c], t[c + 1], offset);
+      if (in && out)
+      {
+        // Both ends weighted: EndWeightsOf's, bit for bit.
+        EXPECT_EQ(w.First, all.First);
+        EXPECT_EQ(w.Last, all.Last);
+        EXPECT_EQ(w.Mid, all.Mid);
+        EXPECT_TRUE(SameBits(w.FirstWeight, all.FirstWeight));
+        EXPECT_TRUE(SameBits(w.LastWeight, all.LastWeight));
+        EXPECT_TRUE(SameBits(w.MidWeight, all.MidWeight));
+        EXPECT_TRUE(SameBits(w.MidT, all.MidT));
+      }
+      else if (!in && !out)
+      {
+        // Neither: the plain lattice's points, each of weight 1.
+        EXPECT_FALSE(w.Mid);
+        EXPECT_EQ(w.FirstWeight, 1.0);
+        EXPECT_EQ(w.LastWeight, 1.0);
+        EXPECT_EQ(w.First, lattice.First(t[c], offset));
+        EXPECT_EQ(w.Last, lattice.First(t[c + 1], offset) - 1);
+      }
+      if ((in || out) && !(in && out) && all.Mid)
+      {
+        ++slivers;
+        // A sliver against a plain face: its exact weight, clamped at 0.
+        const double exactWeight = in
+          ? (lattice.At(all.First + 1, offset) - t[c]) / lattice.Spacing - 0.5
+          : (t[c + 1] - lattice.At(all.First, offset)) / lattice.Spacing - 0.5;
+        if (exactWeight <= 0)
+        {
+          anyClamped = true;
+          EXPECT_FALSE(w.Mid);
+          EXPECT_LT(w.Last, w.First);
+          EXPECT_GE(exactWeight, -0.5 - 1e-9);
+        }
+        else
+        {
+          EXPECT_TRUE(w.Mid);
+          EXPECT_GT(w.MidT, t[c]);
+          EXPECT_LT(w.MidT, t[c + 1]);
+          EXPECT_NEAR(w.MidWeight, exactWeight, 1e-9);
+        }
+      }
+      sum += Sum(w);
+    }
+    const double length = (t.back() - t.front()) / lattice.Spacing;
+    if (anyClamped)
+    {
+      // Each clamped sliver counts up to half a sample more than the ray's length.
+      ++clamped;
+      EXPECT_GE(sum, length - 1e-9);
+      EXPECT_LE(sum, length + 0.5 * cells + 1e-9);
+    }
+    else
+    {
+      ++exact;
+      EXPECT_NEAR(sum, length, 1e-9);
+    }
+  }
+  EXPECT_GT(slivers, 1000);
+  EXPECT_GT(clamped, 100);
+  EXPECT_GT(exact, 10000);
+}
+
+// A block of nx x ny x nz hexahedra of size h from lo. shared: the cells share their points;
+// else every cell has its own 8 (pieces appended without merging their points). scalar: each
+// cell's scalar (cell scalars), or null for constant point scalars 0.5.
+apc::CellMesh Block(int nx, int ny, int nz, double h, const double lo[3], bool shared,
+  const std::function<float(int, int, int)>& scalar)
+{
+  apc::CellMesh mesh;
+  auto point = [&](int i, int j, int k) -> int64_t
+  {
+    mesh.Points.push_back({ lo[0] + i * h, lo[1] + j * h, lo[2] + k * h });
+    if (!scalar)
+    {
+      mesh.PointScalars.push_back(0.5f);
+    }
+    return static_cast<int64_t>(mesh.Points.size()) - 1;
+  };
+  if (shared)
+  {
+    for (int k = 0; k <= nz; ++k)
+    {
+      for (int j = 0; j <= ny; ++j)
+      {
+        for (int i = 0; i <= nx; ++i)
+        {
+          point(i, j, k);
+        }
+      }
+    }
+  }
+  auto id = [&](int i, int j, int k)
+  { return shared ? static_cast<int64_t>((k * (ny + 1) + j) * (nx + 1) + i) : point(i, j, k); };
+  for (int k = 0; k < nz; ++k)
+  {
+    for (int j = 0; j < ny; ++j)
+    {
+      for (int i = 0; i < nx; ++i)
+      {
+        const int64_t ids[8] = { id(i, j, k), id(i + 1, j, k), id(i + 1, j + 1, k), id(i, j + 1, k),
+          id(i, j, k + 1), id(i + 1, j, k + 1), id(i + 1, j + 1, k + 1), id(i, j + 1, k + 1) };
+        mesh.AddCell(apc::CellShape::Hexahedron, ids);
+        if (scalar)
+        {
+          mesh.CellScalars.push_back(scalar(i, j, k));
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(mesh.Finalize());
+  mesh.FindBoundaryPlanes();
+  return mesh;
+}
+
+int BoundaryPlaneCount(const apc::CellMesh& mesh)
+{
+  int count = 0;
+  for (int64_t c = 0; c < mesh.GetNumberOfCells(); ++c)
+  {
+    for (unsigned m = mesh.GetBoundaryPlanes(c); m != 0; m &= m - 1)
+    {
+      ++count;
+    }
+  }
+  return count;
+}
+
+TEST(BoundaryWeights, TheMeshFindsItsBoundaryFacesByTheirCorners)
+{
+  const double lo[3] = { -1.0, -0.5, -1.0 };
+  for (bool shared : { true, false })
+  {
+    const apc::CellMesh mesh = Block(5, 3, 4, 0.25, lo, shared, nullptr);
+    EXPECT_EQ(BoundaryPlaneCount(mesh), 2 * (5 * 3 + 3 * 4 + 5 * 4)) << shared;
+    // A corner cell has three boundary faces, a cell inside none.
+    auto faces = [&](int i, int j, int k)
+    {
+      const unsigned m = mesh.GetBoundaryPlanes((k * 3 + j) * 5 + i);
+      return __builtin_popcount(m);
+    };
+    EXPECT_EQ(faces(0, 0, 0), 3);
+    EXPECT_EQ(faces(2, 1, 0), 1);
+    EXPECT_EQ(faces(2, 1, 2), 0);
+  }
+}
+
+// Looking down at a slab's top face (y = 0.5) at about 7 degrees: its rays graze it.
+constexpr int kSize = 64;
+constexpr double kSpacing = 0.1;
+apc::RayCamera Camera()
+{
+  return apc::RayCamera(
+    { 0.2, 0.95, 4.0 }, { 0.0, 0.45, 0.0 }, { 0, 1, 0 }, 40.0, false, 1.0, kSize, kSize, 0.1, 20.0);
+}
+
+// Pass 1's moments (5 per pixel) and sample count.
+struct Moments
+{
+  std::vector<double> Values;
+  int64_t Samples = 0;
+};
+
+Moments PassOne(const apc::CellMesh& mesh, const apc::TransferTable& table, Mode mode)
+{
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  marcher.SetView(Camera(), nullptr);
+  marcher.SetEndWeightsMode(mode);
+  Moments out;
+  out.Values.assign(static_cast<size_t>(kSize) * kSize * 5, 0.0);
+  marcher.AccumulateMoments<4>(table, apc::LogDepthWarp(2.0, 7.0), out.Values.data());
+  out.Samples = marcher.GetLastSampleCount();
+  return out;
+}
+
+TEST(BoundaryWeights, GrazingSlabHasTheExactOpticalDepth)
+{
+  // The slab [-1, 1] x [-0.5, 0.5] x [-1, 1] of constant absorbance: every ray's b0 is sigma
+  // times its length inside, but where a clamped sliver adds up to half a sample.
+  const double lo[3] = { -1.0, -0.5, -1.0 };
+  const double hi[3] = { 1.0, 0.5, 1.0 };
+  const apc::CellMesh mesh = Block(8, 4, 8, 0.25, lo, true, nullptr);
+  const apc::TransferTable table(
+    0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.4, 0.4 }, kSpacing, 1.0);
+  const double sample = table.Lookup(0.5).Absorbance;
+  const double sigma = sample / kSpacing;
+  const apc::RayCamera camera = Camera();
+  const Moments boundary = PassOne(mesh, table, Mode::Boundary);
+  const Moments plain = PassOne(mesh, table, Mode::Off);
+  int inside = 0;
+  int exact = 0;
+  int plainExact = 0;
+  for (int p = 0; p < kSize * kSize; ++p)
+  {
+    const apc::Ray ray = camera.PixelRay(p % kSize, p / kSize);
+    double tin = 0;
+    double tout = std::numeric_limits<double>::infinity();
+    for (int d = 0; d < 3; ++d)
+    {
+      const double a = (lo[d] - ray.Origin[d]) / ray.Direction[d];
+      const double b = (hi[d] - ray.Origin[d]) / ray.Direction[d];
+      tin = std::max(tin, std::min(a, b));
+      tout = std::min(tout, std::max(a, b));
+    }
+    const double expected = sigma * std::max(0.0, tout - tin);
+    if (expected == 0)
+    {
+      continue;
+    }
+    ++inside;
+    const double b0 = boundary.Values[5 * p];
+    // Each weighted absorbance is rounded to float once: a few 1e-8 of the depth.
+    const double rounding = 1e-6 * expected + 1e-12;
+    EXPECT_GE(b0, expected - rounding) << "pixel " << p;
+    EXPECT_LE(b0, expected + 0.5 * sample + rounding) << "pixel " << p;
+    exact += std::abs(b0 - expected) <= rounding ? 1 : 0;
+    plainExact += std::abs(plain.Values[5 * p] - expected) <= rounding ? 1 : 0;
+  }
+  EXPECT_GT(inside, 1000);
+  // Most rays exact with the boundary weights (here 1710 of 1797: the others cross a clamped
+  // sliver, up to 0.48 of a sample over, 0.14 in the median); the plain lattice's hardly ever.
+  EXPECT_GE(exact, inside * 9 / 10) << exact << " of " << inside;
+  EXPECT_LT(plainExact, inside / 10) << plainExact << " of " << inside;
+  std::cout << "exact: boundary weights " << exact << ", plain " << plainExact << " of " << inside
+            << "\n";
+}
+
+TEST(BoundaryWeights, InnerCellsTakeThePlainLatticesSamples)
+{
+  // The cells with a boundary face transparent (a NaN scalar), the others of varied
+  // opacity: only cells without a boundary face have samples, and with Boundary they are the
+  // plain lattice's, bit for bit (All weights their ends, and differs).
+  const double lo[3] = { -1.0, -0.5, -1.0 };
+  const apc::CellMesh mesh = Block(8, 4, 8, 0.25, lo, true,
+    [](int i, int j, int k)
+    {
+      const bool skin = i == 0 || i == 7 || j == 0 || j == 3 || k == 0 || k == 7;
+      return skin ? std::numeric_limits<float>::quiet_NaN()
+                  : 0.3f + 0.1f * static_cast<float>((i + 2 * j + 3 * k) % 7);
+    });
+  const apc::TransferTable table(
+    0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.0, 0.8 }, kSpacing, 1.0);
+  const Moments boundary = PassOne(mesh, table, Mode::Boundary);
+  const Moments plain = PassOne(mesh, table, Mode::Off);
+  const Moments all = PassOne(mesh, table, Mode::All);
+  EXPECT_GT(plain.Samples, 1000);
+  EXPECT_EQ(boundary.Samples, plain.Samples);
+  int same = 0;
+  int allSame = 0;
+  for (size_t v = 0; v < plain.Values.size(); ++v)
+  {
+    same += SameBits(boundary.Values[v], plain.Values[v]) ? 1 : 0;
+    allSame += SameBits(all.Values[v], plain.Values[v]) ? 1 : 0;
+  }
+  EXPECT_EQ(same, static_cast<int>(plain.Values.size()));
+  EXPECT_LT(allSame, static_cast<int>(plain.Values.size()));
+}
+
+TEST(BoundaryWeights, PassTwoReplaysWhatItWouldMarch)
+{
+  // The cache keeps a weight for every sample once any is weighted: 1 for the samples of the
+  // cells without a boundary face, which take the plain path and weigh nothing themselves.
+  // Pass 2 from the cache takes what a pass 2 marching again takes.
+  const double lo[3] = { -1.0, -0.5, -1.0 };
+  const apc::CellMesh mesh = Block(8, 4, 8, 0.25, lo, true, nullptr);
+  const apc::TransferTable table(
+    0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.4, 0.4 }, kSpacing, 1.0);
+  const apc::LogDepthWarp warp(2.0, 7.0);
+  const size_t pixels = static_cast<size_t>(kSize) * kSize;
+  std::vector<double> colour[2];
+  for (int cache = 0; cache < 2; ++cache)
+  {
+    apc::VolumeRayMarcher marcher;
+    marcher.SetMesh(&mesh);
+    marcher.SetView(Camera(), nullptr);
+    marcher.SetEndWeightsMode(Mode::Boundary);
+    marcher.SetMaxSampleCacheBytes(cache ? size_t(1) << 30 : 0);
+    std::vector<double> moments(pixels * 5, 0.0);
+    marcher.AccumulateMoments<4>(table, warp, moments.data());
+    colour[cache].assign(pixels * 4, 0.0);
+    marcher.AccumulateColour<4>(
+      table, warp, moments.data(), apc::MomentSettings<4>(), colour[cache].data());
+    EXPECT_EQ(marcher.GetLastColourCacheShare(), cache ? 1.0 : 0.0);
+  }
+  for (size_t v = 0; v < colour[0].size(); ++v)
+  {
+    EXPECT_NEAR(colour[1][v], colour[0][v], 1e-9 + 1e-6 * colour[0][v]) << "value " << v;
+  }
+}
+
+} // namespace
