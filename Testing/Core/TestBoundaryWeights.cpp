@@ -11,6 +11,7 @@
 #include "apcEndWeights.h"
 #include "apcMomentParameters.h"
 #include "apcRayCamera.h"
+#include "apcTestEndWeights.h"
 #include "apcTransferTable.h"
 #include "apcVolumeRayMarcher.h"
 
@@ -34,19 +35,7 @@ using apc::walk::EndWeightsOf;
 using apc::walk::Lattice;
 using Mode = apc::VolumeRayMarcher::EndWeightsMode;
 
-double Sum(const EndWeights& w)
-{
-  if (w.Mid)
-  {
-    return w.MidWeight;
-  }
-  double sum = 0;
-  for (int64_t k = w.First; k <= w.Last; ++k)
-  {
-    sum += w.Of(k);
-  }
-  return sum;
-}
+using apctest::Sum;
 
 bool SameBits(double a, double b)
 {

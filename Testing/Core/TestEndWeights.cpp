@@ -12,6 +12,7 @@
 #include "apcOpaqueBins.h"
 #include "apcRayCamera.h"
 #include "apcTestBlock.h"
+#include "apcTestEndWeights.h"
 #include "apcTransferTable.h"
 #include "apcVolumeRayMarcher.h"
 
@@ -31,19 +32,7 @@ using apc::walk::EndWeights;
 using apc::walk::EndWeightsOf;
 using apc::walk::Lattice;
 
-double Sum(const EndWeights& w)
-{
-  if (w.Mid)
-  {
-    return w.MidWeight;
-  }
-  double sum = 0;
-  for (int64_t k = w.First; k <= w.Last; ++k)
-  {
-    sum += w.Of(k);
-  }
-  return sum;
-}
+using apctest::Sum;
 
 TEST(EndWeights, SumToTheLengthAndToTwoAcrossASharedFace)
 {
