@@ -139,9 +139,10 @@ bool vtkAPCVolumeMapper::GetLatticeJitter() const
 
 void vtkAPCVolumeMapper::SetSampleEndWeights(int mode)
 {
-  // Out of range: off (a boolean true is 1, all ends).
+  // A boolean true is 1, all ends.
   apc::Assign(this, this->Internal->Settings.SampleEndWeights,
-    mode == END_WEIGHTS_ALL || mode == END_WEIGHTS_BOUNDARY ? mode : int(END_WEIGHTS_OFF));
+    apc::CheckedSetting(this, "SampleEndWeights", mode, int(END_WEIGHTS_OFF),
+      int(END_WEIGHTS_BOUNDARY), "0 off, 1 all ends, 2 the ends on the mesh's boundary"));
 }
 
 int vtkAPCVolumeMapper::GetSampleEndWeights() const

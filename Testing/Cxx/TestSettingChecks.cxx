@@ -68,6 +68,12 @@ TEST(SettingChecks, MapperSetters)
     m, log, "ResolveMode", [&] { m->SetResolveMode(-1); }, [&] { return m->GetResolveMode(); },
     vtkAPCVolumeMapper::RENORMALISED);
   ExpectChecked(
+    m, log, "SampleEndWeights", [&] { m->SetSampleEndWeights(5); },
+    [&] { return m->GetSampleEndWeights(); }, vtkAPCVolumeMapper::END_WEIGHTS_BOUNDARY);
+  ExpectChecked(
+    m, log, "SampleEndWeights", [&] { m->SetSampleEndWeights(-1); },
+    [&] { return m->GetSampleEndWeights(); }, vtkAPCVolumeMapper::END_WEIGHTS_OFF);
+  ExpectChecked(
     m, log, "VectorMode", [&] { m->SetVectorMode(9); }, [&] { return m->GetVectorMode(); },
     vtkScalarsToColors::RGBCOLORS);
 
@@ -77,7 +83,10 @@ TEST(SettingChecks, MapperSetters)
   m->SetOverestimation(0.5);
   m->SetSampleCacheSize(0);
   m->SetNumberOfThreads(2);
+  m->SetSampleEndWeights(vtkAPCVolumeMapper::END_WEIGHTS_BOUNDARY);
+  m->SetSampleEndWeights(true);
   EXPECT_TRUE(log->Warnings.empty()) << log->All();
+  EXPECT_EQ(m->GetSampleEndWeights(), vtkAPCVolumeMapper::END_WEIGHTS_ALL);
   EXPECT_EQ(m->GetSampleDistance(), 0.02);
   EXPECT_EQ(m->GetOverestimation(), 0.5);
 }
