@@ -326,51 +326,19 @@ TEST(EndWeights, WithoutThemTheLatticeMissesUpToASample)
   EXPECT_GT(worst, 0.5 * d.SampleAbsorbance);
 }
 
-struct Frame
-{
-  std::vector<double> Moments; // pass 1's, after the cut with the stop
-  std::vector<uint16_t> Profile;
-  std::vector<double> Colour; // pass 2 from the cache
-  int64_t Pass1Samples = 0;
-  int64_t Pass2Samples = 0;
-};
+using Frame = apctest::BlockFrame;
 
 Frame RenderBlock(const apc::CellMesh& mesh, bool lanes, bool weights, bool stop, double spacing)
 {
   const apc::TransferTable table(0.0, 1.0,
     { { 1.f, 0.f, 0.f }, { 0.f, 1.f, 0.f }, { 0.f, 0.f, 1.f }, { 1.f, 1.f, 0.f } },
     { 0.05, 0.6, 0.0, 0.9 }, spacing, stop ? 0.02 : 1.0);
-  const apc::RayCamera camera = Camera();
-  const apc::LogDepthWarp warp(2.0, 7.0);
-  const size_t pixels = static_cast<size_t>(kSize) * kSize;
-  apc::VolumeRayMarcher marcher;
-  marcher.SetMesh(&mesh);
-  marcher.SetView(camera, nullptr);
-  marcher.SetSampleEndWeights(weights);
-  marcher.SetSampleLanes(lanes);
-  marcher.SetMaxSampleCacheBytes(size_t(1) << 30);
-  if (stop)
-  {
-    marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
-  }
-  Frame out;
-  out.Moments.assign(pixels * 5, 0.0);
-  marcher.AccumulateMoments<4>(table, warp, out.Moments.data());
-  out.Pass1Samples = marcher.GetLastSampleCount();
-  if (stop)
-  {
-    const apc::VolumeRayMarcher::OpaqueProfile profile = marcher.GetOpaqueProfile();
-    out.Profile.assign(profile.data(), profile.data() + profile.size());
-    std::vector<double> own = out.Moments;
-    marcher.ApplyOpaqueCut<4>(table, warp, out.Profile.data(), own.data());
-    out.Moments = own;
-  }
-  out.Colour.assign(pixels * 4, 0.0);
-  marcher.AccumulateColour<4>(
-    table, warp, out.Moments.data(), apc::MomentSettings<4>(), out.Colour.data());
-  out.Pass2Samples = marcher.GetLastSampleCount();
-  EXPECT_EQ(marcher.GetLastColourCacheShare(), 1.0);
-  return out;
+  return apctest::RenderBlockFrame(mesh, table, Camera(), static_cast<size_t>(kSize) * kSize, stop,
+    [&](apc::VolumeRayMarcher& marcher)
+    {
+      marcher.SetSampleEndWeights(weights);
+      marcher.SetSampleLanes(lanes);
+    });
 }
 
 TEST(EndWeights, LanesTakeTheScalarLoopsWeightedSamples)

@@ -155,14 +155,7 @@ TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
 
 constexpr int kSize = 64;
 
-struct Frame
-{
-  std::vector<double> Moments; // pass 1's (after the cut with the stop)
-  std::vector<uint16_t> Profile;
-  std::vector<double> Colour; // pass 2 from the cache
-  int64_t Pass1Samples = 0;
-  int64_t Pass2Samples = 0;
-};
+using Frame = apctest::BlockFrame;
 
 Frame Render(const apc::CellMesh& mesh, bool lanes, bool stop, bool jitter, double spacing)
 {
@@ -174,36 +167,12 @@ Frame Render(const apc::CellMesh& mesh, bool lanes, bool stop, bool jitter, doub
     { 0.0, 0.0, 0.6, 0.0, 0.9 }, spacing, stop ? 0.02 : 1.0);
   const apc::RayCamera camera(
     { 0.2, 0.95, 4.0 }, { 0.0, 0.45, 0.0 }, { 0, 1, 0 }, 40.0, false, 1.0, kSize, kSize, 0.1, 20.0);
-  const apc::LogDepthWarp warp(2.0, 7.0);
-  const size_t pixels = static_cast<size_t>(kSize) * kSize;
-  apc::VolumeRayMarcher marcher;
-  marcher.SetMesh(&mesh);
-  marcher.SetView(camera, nullptr);
-  marcher.SetSampleLanes(lanes);
-  marcher.SetLatticeJitter(jitter);
-  marcher.SetMaxSampleCacheBytes(size_t(1) << 30);
-  if (stop)
-  {
-    marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
-  }
-  Frame out;
-  out.Moments.assign(pixels * 5, 0.0);
-  marcher.AccumulateMoments<4>(table, warp, out.Moments.data());
-  out.Pass1Samples = marcher.GetLastSampleCount();
-  if (stop)
-  {
-    const apc::VolumeRayMarcher::OpaqueProfile profile = marcher.GetOpaqueProfile();
-    out.Profile.assign(profile.data(), profile.data() + profile.size());
-    std::vector<double> own = out.Moments;
-    marcher.ApplyOpaqueCut<4>(table, warp, out.Profile.data(), own.data());
-    out.Moments = own;
-  }
-  out.Colour.assign(pixels * 4, 0.0);
-  marcher.AccumulateColour<4>(
-    table, warp, out.Moments.data(), apc::MomentSettings<4>(), out.Colour.data());
-  out.Pass2Samples = marcher.GetLastSampleCount();
-  EXPECT_EQ(marcher.GetLastColourCacheShare(), 1.0);
-  return out;
+  return apctest::RenderBlockFrame(mesh, table, camera, static_cast<size_t>(kSize) * kSize, stop,
+    [&](apc::VolumeRayMarcher& marcher)
+    {
+      marcher.SetSampleLanes(lanes);
+      marcher.SetLatticeJitter(jitter);
+    });
 }
 
 TEST(LaneMoments, MarcherLanesTakeTheScalarLoopsSamples)

@@ -1,15 +1,24 @@
 // A block of distorted hexahedra and twisted pyramids shared by the marcher tests that compare
-// the lanes with the scalar loop (TestEndWeights, TestLaneMoments).
+// the lanes with the scalar loop (TestEndWeights, TestLaneMoments), and the frame they render
+// of it.
 #ifndef apcTestBlock_h
 #define apcTestBlock_h
 
 #include "apcCellMesh.h"
+#include "apcDepthWarp.h"
+#include "apcMomentTransmittance.h"
+#include "apcRayCamera.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
 
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <random>
+#include <vector>
 
 namespace apctest
 {
@@ -90,6 +99,53 @@ inline apc::CellMesh DistortedBlock(std::mt19937& rng)
   }
   EXPECT_TRUE(mesh.Finalize());
   return mesh;
+}
+
+// What a frame of the marcher leaves to compare: pass 1's moments (after the cut with the
+// stop), the opaque profile, pass 2's colour from the cache and both passes' sample counts.
+struct BlockFrame
+{
+  std::vector<double> Moments;
+  std::vector<uint16_t> Profile;
+  std::vector<double> Colour;
+  int64_t Pass1Samples = 0;
+  int64_t Pass2Samples = 0;
+};
+
+// Renders mesh as a frame does, 4 moments, the cache on (pass 2 must replay it all), with the
+// opaque stop where stop is set; configure sets what the test compares (lanes, jitter, weights).
+inline BlockFrame RenderBlockFrame(const apc::CellMesh& mesh, const apc::TransferTable& table,
+  const apc::RayCamera& camera, size_t pixels, bool stop,
+  const std::function<void(apc::VolumeRayMarcher&)>& configure)
+{
+  const apc::LogDepthWarp warp(2.0, 7.0);
+  apc::VolumeRayMarcher marcher;
+  marcher.SetMesh(&mesh);
+  marcher.SetView(camera, nullptr);
+  configure(marcher);
+  marcher.SetMaxSampleCacheBytes(size_t(1) << 30);
+  if (stop)
+  {
+    marcher.SetOpaqueAbsorbance(apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+  }
+  BlockFrame out;
+  out.Moments.assign(pixels * 5, 0.0);
+  marcher.AccumulateMoments<4>(table, warp, out.Moments.data());
+  out.Pass1Samples = marcher.GetLastSampleCount();
+  if (stop)
+  {
+    const apc::VolumeRayMarcher::OpaqueProfile profile = marcher.GetOpaqueProfile();
+    out.Profile.assign(profile.data(), profile.data() + profile.size());
+    std::vector<double> own = out.Moments;
+    marcher.ApplyOpaqueCut<4>(table, warp, out.Profile.data(), own.data());
+    out.Moments = own;
+  }
+  out.Colour.assign(pixels * 4, 0.0);
+  marcher.AccumulateColour<4>(
+    table, warp, out.Moments.data(), apc::MomentSettings<4>(), out.Colour.data());
+  out.Pass2Samples = marcher.GetLastSampleCount();
+  EXPECT_EQ(marcher.GetLastColourCacheShare(), 1.0);
+  return out;
 }
 
 } // namespace apctest
