@@ -1,4 +1,5 @@
 #include "apcCellInterpolation.h"
+#include "apcTestCells.h"
 
 #include <gtest/gtest.h>
 
@@ -16,24 +17,8 @@ using apc::CellCorners;
 using apc::CellInterpolator;
 using apc::CellShape;
 
-constexpr CellShape kShapes[] = { CellShape::Tetra, CellShape::Pyramid, CellShape::Wedge,
-  CellShape::Hexahedron };
-
-const char* Name(CellShape shape)
-{
-  switch (shape)
-  {
-    case CellShape::Tetra:
-      return "tetra";
-    case CellShape::Pyramid:
-      return "pyramid";
-    case CellShape::Wedge:
-      return "wedge";
-    case CellShape::Hexahedron:
-      break;
-  }
-  return "hexahedron";
-}
+using apctest::kSolidShapes;
+using apctest::ShapeName;
 
 // Undistorted model cells with unit-size edges. The pyramid's apex sits over the middle of
 // its base (the parametric apex (0,0,1) would give a skewed, though valid, cell).
@@ -212,7 +197,7 @@ bool InReferenceCell(CellShape shape, const double p[3])
 TEST(CellInterpolation, ShapeFunctionsArePartitionOfUnityAndNodal)
 {
   std::mt19937 rng(1);
-  for (const CellShape shape : kShapes)
+  for (const CellShape shape : kSolidShapes)
   {
     const int n = apc::NumberOfCorners(shape);
     const auto& corners = apc::ReferenceCorners(shape);
@@ -223,7 +208,7 @@ TEST(CellInterpolation, ShapeFunctionsArePartitionOfUnityAndNodal)
       for (int j = 0; j < n; ++j)
       {
         // Exact: the factors are 0 or 1 at a corner.
-        EXPECT_EQ(w[j], i == j ? 1.0 : 0.0) << Name(shape) << " corner " << i << " w" << j;
+        EXPECT_EQ(w[j], i == j ? 1.0 : 0.0) << ShapeName(shape) << " corner " << i << " w" << j;
       }
     }
     for (int k = 0; k < 100; ++k)
@@ -234,11 +219,11 @@ TEST(CellInterpolation, ShapeFunctionsArePartitionOfUnityAndNodal)
       double sum = 0.0;
       for (int j = 0; j < n; ++j)
       {
-        EXPECT_GE(w[j], 0.0) << Name(shape);
+        EXPECT_GE(w[j], 0.0) << ShapeName(shape);
         sum += w[j];
       }
       // 1e-15: a few roundings of numbers in [0,1].
-      EXPECT_NEAR(sum, 1.0, 1e-15) << Name(shape);
+      EXPECT_NEAR(sum, 1.0, 1e-15) << ShapeName(shape);
     }
   }
 }
@@ -247,7 +232,7 @@ TEST(CellInterpolation, CornersGiveCornerScalars)
 {
   std::mt19937 rng(2);
   std::uniform_real_distribution<double> value(-5.0, 5.0);
-  for (const CellShape shape : kShapes)
+  for (const CellShape shape : kSolidShapes)
   {
     for (int trial = 0; trial < 20; ++trial)
     {
@@ -272,9 +257,10 @@ TEST(CellInterpolation, CornersGiveCornerScalars)
         double p[3];
         apc::ParametricCenter(shape, p);
         const double* x = cell.X[i].data();
-        EXPECT_TRUE(interpolator.ParametricCoordinates(x, p)) << Name(shape) << " corner " << i;
+        EXPECT_TRUE(interpolator.ParametricCoordinates(x, p))
+          << ShapeName(shape) << " corner " << i;
         EXPECT_NEAR(interpolator.InterpolateScalar(p), cell.S[i], 1e-12 * (hi - lo))
-          << Name(shape) << " corner " << i;
+          << ShapeName(shape) << " corner " << i;
       }
     }
   }
@@ -286,7 +272,7 @@ TEST(CellInterpolation, AffineFieldReproducedInDistortedCells)
 {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (const CellShape shape : kShapes)
+  for (const CellShape shape : kSolidShapes)
   {
     double worst = 0.0;
     int maxIterations = 0;
@@ -295,7 +281,7 @@ TEST(CellInterpolation, AffineFieldReproducedInDistortedCells)
       CellCorners cell = RandomCell(shape, rng);
       if (shape != CellShape::Tetra)
       {
-        ASSERT_FALSE(apc::IsAffine(cell, 1e-6)) << Name(shape);
+        ASSERT_FALSE(apc::IsAffine(cell, 1e-6)) << ShapeName(shape);
       }
       const double a = 10 * u(rng);
       const double g[3] = { u(rng), u(rng), u(rng) };
@@ -315,19 +301,19 @@ TEST(CellInterpolation, AffineFieldReproducedInDistortedCells)
         double q[3];
         apc::ParametricCenter(shape, q);
         int iterations = -1;
-        ASSERT_TRUE(interpolator.ParametricCoordinates(x, q, &iterations)) << Name(shape);
+        ASSERT_TRUE(interpolator.ParametricCoordinates(x, q, &iterations)) << ShapeName(shape);
         maxIterations = std::max(maxIterations, iterations);
         const double exact = a + g[0] * x[0] + g[1] * x[1] + g[2] * x[2];
         const double error = std::abs(interpolator.InterpolateScalar(q) - exact) / (hi - lo);
         worst = std::max(worst, error);
         // Relative to the scalar range over the cell; the field's offset (~100) costs
         // ~1e-14 of rounding, so 1e-12 leaves two orders of margin.
-        ASSERT_LE(error, 1e-12) << Name(shape) << " trial " << trial;
+        ASSERT_LE(error, 1e-12) << ShapeName(shape) << " trial " << trial;
       }
     }
     // From the parametric center, not from the ray marcher's much closer guess.
-    EXPECT_LE(maxIterations, 7) << Name(shape);
-    std::cout << Name(shape) << ": affine field max rel. error " << worst
+    EXPECT_LE(maxIterations, 7) << ShapeName(shape);
+    std::cout << ShapeName(shape) << ": affine field max rel. error " << worst
               << ", Newton iterations from the center <= " << maxIterations << "\n";
   }
 }
@@ -335,7 +321,7 @@ TEST(CellInterpolation, AffineFieldReproducedInDistortedCells)
 TEST(CellInterpolation, RoundTrip)
 {
   std::mt19937 rng(4);
-  for (const CellShape shape : kShapes)
+  for (const CellShape shape : kSolidShapes)
   {
     double worstX = 0.0, worstP = 0.0;
     for (int trial = 0; trial < 200; ++trial)
@@ -350,23 +336,23 @@ TEST(CellInterpolation, RoundTrip)
         interpolator.WorldPosition(p, x);
         double q[3];
         apc::ParametricCenter(shape, q);
-        ASSERT_TRUE(interpolator.ParametricCoordinates(x, q)) << Name(shape);
+        ASSERT_TRUE(interpolator.ParametricCoordinates(x, q)) << ShapeName(shape);
         double y[3];
         interpolator.WorldPosition(q, y);
         // World: 1e-10 of the cell size (rounding alone is ~1e-14 here).
         const double dx = Distance(x, y) / size;
         worstX = std::max(worstX, dx);
-        ASSERT_LE(dx, 1e-10) << Name(shape);
+        ASSERT_LE(dx, 1e-10) << ShapeName(shape);
         // Parametric: 1e-10, except that a pyramid's r and s count times (1-t), the size of
         // the cross-section they parametrise (they are undetermined at the apex).
         const double section = shape == CellShape::Pyramid ? 1.0 - p[2] : 1.0;
         const double dp = std::max(
           std::abs(q[2] - p[2]), section * std::max(std::abs(q[0] - p[0]), std::abs(q[1] - p[1])));
         worstP = std::max(worstP, dp);
-        ASSERT_LE(dp, 1e-10) << Name(shape) << " p = " << p[0] << " " << p[1] << " " << p[2];
+        ASSERT_LE(dp, 1e-10) << ShapeName(shape) << " p = " << p[0] << " " << p[1] << " " << p[2];
       }
     }
-    std::cout << Name(shape) << ": round trip max world error / size " << worstX
+    std::cout << ShapeName(shape) << ": round trip max world error / size " << worstX
               << ", max parametric error " << worstP << "\n";
   }
 }
@@ -453,9 +439,9 @@ TEST(CellInterpolation, AffineCellsNeedNoIteration)
       {
         cell.S[i] = u(rng);
       }
-      EXPECT_TRUE(apc::IsAffine(cell, 1e-12)) << Name(shape);
+      EXPECT_TRUE(apc::IsAffine(cell, 1e-12)) << ShapeName(shape);
       const CellInterpolator interpolator(cell);
-      ASSERT_TRUE(interpolator.IsAffine()) << Name(shape);
+      ASSERT_TRUE(interpolator.IsAffine()) << ShapeName(shape);
       for (int k = 0; k < 20; ++k)
       {
         double p[3], x[3], q[3] = { 0.1, 0.9, 0.1 };
@@ -463,11 +449,11 @@ TEST(CellInterpolation, AffineCellsNeedNoIteration)
         interpolator.WorldPosition(p, x);
         int iterations = -1;
         ASSERT_TRUE(interpolator.ParametricCoordinates(x, q, &iterations));
-        EXPECT_LE(iterations, 1) << Name(shape);
+        EXPECT_LE(iterations, 1) << ShapeName(shape);
         for (int d = 0; d < 3; ++d)
         {
           // 1e-12: a 3x3 inverse of a well-conditioned cell at coordinates ~100.
-          EXPECT_NEAR(q[d], p[d], 1e-12) << Name(shape);
+          EXPECT_NEAR(q[d], p[d], 1e-12) << ShapeName(shape);
         }
       }
     }
@@ -506,7 +492,7 @@ TEST(CellInterpolation, ExactGuessStopsAfterOneStep)
         double q[3] = { p[0], p[1], p[2] };
         int iterations = -1;
         ASSERT_TRUE(interpolator.ParametricCoordinates(x, q, &iterations));
-        EXPECT_EQ(iterations, 1) << Name(shape);
+        EXPECT_EQ(iterations, 1) << ShapeName(shape);
       }
     }
   }
@@ -554,7 +540,7 @@ TEST(CellInterpolation, RayMarcherGuessConvergesFast)
         int looseIterations = -1;
         ASSERT_TRUE(interpolator.ParametricCoordinates(x, loose, &looseIterations, 1e-6));
         int iterations = -1;
-        ASSERT_TRUE(interpolator.ParametricCoordinates(x, q, &iterations)) << Name(shape);
+        ASSERT_TRUE(interpolator.ParametricCoordinates(x, q, &iterations)) << ShapeName(shape);
         ++histogram[iterations];
         EXPECT_LE(looseIterations, iterations);
         EXPECT_NEAR(interpolator.InterpolateScalar(loose), interpolator.InterpolateScalar(q), 1e-8);
@@ -563,7 +549,7 @@ TEST(CellInterpolation, RayMarcherGuessConvergesFast)
         ASSERT_LE(Distance(x, y), 1e-10 * Diameter(cell));
       }
     }
-    std::cout << Name(shape) << ": Newton iterations from the ray guess:";
+    std::cout << ShapeName(shape) << ": Newton iterations from the ray guess:";
     for (int i = 0; i <= apc::kMaxNewtonIterations; ++i)
     {
       if (histogram[i])
@@ -575,7 +561,7 @@ TEST(CellInterpolation, RayMarcherGuessConvergesFast)
     // Quadratic convergence from a guess within ~0.1: a handful of steps at most.
     for (int i = 6; i <= apc::kMaxNewtonIterations; ++i)
     {
-      EXPECT_EQ(histogram[i], 0) << Name(shape) << " needed " << i << " iterations";
+      EXPECT_EQ(histogram[i], 0) << ShapeName(shape) << " needed " << i << " iterations";
     }
   }
 }
@@ -645,7 +631,7 @@ TEST(CellInterpolation, VoxelThroughHexahedronOrder)
 TEST(CellInterpolation, DegenerateCellsGiveFiniteClampedResults)
 {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (const CellShape shape : kShapes)
+  for (const CellShape shape : kSolidShapes)
   {
     CellCorners point;
     point.Shape = shape;
@@ -655,17 +641,17 @@ TEST(CellInterpolation, DegenerateCellsGiveFiniteClampedResults)
       point.S[i] = i;
     }
     const CellInterpolator collapsed(point);
-    EXPECT_TRUE(collapsed.IsDegenerate()) << Name(shape);
-    EXPECT_FALSE(apc::IsAffine(point, 1e-12)) << Name(shape);
+    EXPECT_TRUE(collapsed.IsDegenerate()) << ShapeName(shape);
+    EXPECT_FALSE(apc::IsAffine(point, 1e-12)) << ShapeName(shape);
     const double x[3] = { 1.0, 2.0, 3.0 };
     for (const double guess : { 0.3, -4.0, 7.0, nan })
     {
       double p[3] = { guess, guess, guess };
       int iterations = -1;
-      EXPECT_FALSE(collapsed.ParametricCoordinates(x, p, &iterations)) << Name(shape);
-      EXPECT_TRUE(AllFinite(p)) << Name(shape);
-      EXPECT_TRUE(InReferenceCell(shape, p)) << Name(shape) << " guess " << guess;
-      EXPECT_TRUE(std::isfinite(collapsed.InterpolateScalar(p))) << Name(shape);
+      EXPECT_FALSE(collapsed.ParametricCoordinates(x, p, &iterations)) << ShapeName(shape);
+      EXPECT_TRUE(AllFinite(p)) << ShapeName(shape);
+      EXPECT_TRUE(InReferenceCell(shape, p)) << ShapeName(shape) << " guess " << guess;
+      EXPECT_TRUE(std::isfinite(collapsed.InterpolateScalar(p))) << ShapeName(shape);
       EXPECT_GE(iterations, 0);
     }
   }
@@ -691,7 +677,7 @@ TEST(CellInterpolation, BadInputsNeverGiveNaN)
   std::mt19937 rng(9);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
-  for (const CellShape shape : kShapes)
+  for (const CellShape shape : kSolidShapes)
   {
     CellCorners cell = RandomCell(shape, rng);
     for (int i = 0; i < 8; ++i)
@@ -707,16 +693,16 @@ TEST(CellInterpolation, BadInputsNeverGiveNaN)
     {
       double p[3] = { nan, 0.5, 0.5 };
       const bool ok = interpolator.ParametricCoordinates(x, p);
-      EXPECT_TRUE(AllFinite(p)) << Name(shape);
+      EXPECT_TRUE(AllFinite(p)) << ShapeName(shape);
       if (!ok)
       {
-        EXPECT_TRUE(InReferenceCell(shape, p)) << Name(shape);
+        EXPECT_TRUE(InReferenceCell(shape, p)) << ShapeName(shape);
       }
-      EXPECT_TRUE(std::isfinite(interpolator.InterpolateScalar(p))) << Name(shape);
+      EXPECT_TRUE(std::isfinite(interpolator.InterpolateScalar(p))) << ShapeName(shape);
     }
     // A NaN or infinite point can never converge.
     double p[3] = { 0.2, 0.2, 0.2 };
-    EXPECT_FALSE(interpolator.ParametricCoordinates(points[0], p)) << Name(shape);
+    EXPECT_FALSE(interpolator.ParametricCoordinates(points[0], p)) << ShapeName(shape);
   }
 }
 

@@ -4,6 +4,7 @@
 // position, and a non-finite scalar (NaN or +-inf) makes its cell transparent.
 #include "apcCellMesh.h"
 #include "apcCellShapeCheck.h"
+#include "apcTestCells.h"
 #include "apcTransferTable.h"
 
 #include <gtest/gtest.h>
@@ -71,24 +72,10 @@ Corners Transform(CellShape shape, Corners c, double scale, double offset)
   return c;
 }
 
-const CellShape kShapes[] = { CellShape::Tetra, CellShape::Pyramid, CellShape::Wedge,
-  CellShape::Hexahedron };
+} // namespace
 
-const char* Name(CellShape shape)
-{
-  switch (shape)
-  {
-    case CellShape::Tetra:
-      return "tetra";
-    case CellShape::Pyramid:
-      return "pyramid";
-    case CellShape::Wedge:
-      return "wedge";
-    default:
-      return "hexahedron";
-  }
-}
-}
+using apctest::kSolidShapes;
+using apctest::ShapeName;
 
 TEST(CellShapeCheck, ReferenceCellsHaveTheirExactThickness)
 {
@@ -103,40 +90,41 @@ TEST(CellShapeCheck, ReferenceCellsHaveTheirExactThickness)
     apc::RelativeThickness(CellShape::Wedge, Reference(CellShape::Wedge)), 0.5 / (r2 * r3), 1e-15);
   EXPECT_NEAR(
     apc::RelativeThickness(CellShape::Hexahedron, Reference(CellShape::Hexahedron)), 1 / r3, 1e-15);
-  for (CellShape shape : kShapes)
+  for (CellShape shape : kSolidShapes)
   {
-    EXPECT_FALSE(apc::IsFlat(shape, Reference(shape))) << Name(shape);
+    EXPECT_FALSE(apc::IsFlat(shape, Reference(shape))) << ShapeName(shape);
     // Inverted corner order (a mirror image) is not flat either: the check takes |V|.
     Corners mirrored = Reference(shape);
     for (int i = 0; i < apc::NumberOfCorners(shape); ++i)
     {
       mirrored[i][0] = -mirrored[i][0];
     }
-    EXPECT_FALSE(apc::IsFlat(shape, mirrored)) << Name(shape) << " mirrored";
+    EXPECT_FALSE(apc::IsFlat(shape, mirrored)) << ShapeName(shape) << " mirrored";
   }
 }
 
 TEST(CellShapeCheck, FlatCellsOfEveryShape)
 {
-  for (CellShape shape : kShapes)
+  for (CellShape shape : kSolidShapes)
   {
     // Distinct corners, all in one plane: the "four distinct coplanar corners".
     const Corners flat = Squash(shape, 0.0);
-    EXPECT_TRUE(apc::IsFlat(shape, flat)) << Name(shape);
-    EXPECT_LE(apc::RelativeThickness(shape, flat), 1e-16) << Name(shape);
+    EXPECT_TRUE(apc::IsFlat(shape, flat)) << ShapeName(shape);
+    EXPECT_LE(apc::RelativeThickness(shape, flat), 1e-16) << ShapeName(shape);
     // Nearly flat, in a tilted plane far from the origin: still flat.
     const Corners nearly = Transform(shape, Squash(shape, 1e-9), 3.0, 1e3);
     EXPECT_TRUE(apc::IsFlat(shape, nearly))
-      << Name(shape) << " " << apc::RelativeThickness(shape, nearly);
+      << ShapeName(shape) << " " << apc::RelativeThickness(shape, nearly);
     // Thin but real (1e-4 of its size): rendered.
     const Corners thin = Transform(shape, Squash(shape, 1e-4), 3.0, 1e3);
     EXPECT_FALSE(apc::IsFlat(shape, thin))
-      << Name(shape) << " " << apc::RelativeThickness(shape, thin);
+      << ShapeName(shape) << " " << apc::RelativeThickness(shape, thin);
     // Every corner at one point, and no extent at all.
     Corners point{};
-    EXPECT_TRUE(apc::IsFlat(shape, point)) << Name(shape);
-    std::cout << Name(shape) << ": reference " << apc::RelativeThickness(shape, Reference(shape))
-              << ", thickness 1e-4 " << apc::RelativeThickness(shape, thin) << ", 1e-9 "
+    EXPECT_TRUE(apc::IsFlat(shape, point)) << ShapeName(shape);
+    std::cout << ShapeName(shape) << ": reference "
+              << apc::RelativeThickness(shape, Reference(shape)) << ", thickness 1e-4 "
+              << apc::RelativeThickness(shape, thin) << ", 1e-9 "
               << apc::RelativeThickness(shape, nearly) << ", flat "
               << apc::RelativeThickness(shape, flat) << "\n";
   }
@@ -192,7 +180,7 @@ TEST(CellShapeCheck, RealCellsAreNotFlat)
 
 TEST(CellShapeCheck, ScaleAndPositionFree)
 {
-  for (CellShape shape : kShapes)
+  for (CellShape shape : kSolidShapes)
   {
     for (double thickness : { 1.0, 1e-3, 1e-5 })
     {
@@ -206,7 +194,7 @@ TEST(CellShapeCheck, ScaleAndPositionFree)
         {
           const double moved =
             apc::RelativeThickness(shape, Transform(shape, c, scale, offset * scale));
-          EXPECT_NEAR(moved / t, 1.0, 1e-3) << Name(shape) << " thickness " << thickness
+          EXPECT_NEAR(moved / t, 1.0, 1e-3) << ShapeName(shape) << " thickness " << thickness
                                             << " scale " << scale << " offset " << offset;
         }
       }

@@ -1,4 +1,5 @@
-// Random cells shared by the interpolation tests (TestLinearInverse, TestLaneSamples).
+// Cells shared by the interpolation tests (TestLinearInverse, TestLaneSamples,
+// TestCellInterpolation, TestCellShapeCheck): the solid shapes, their names, random cells.
 #ifndef apcTestCells_h
 #define apcTestCells_h
 
@@ -8,6 +9,26 @@
 
 namespace apctest
 {
+
+// The four solid shapes, each test's loop over every shape.
+constexpr apc::CellShape kSolidShapes[] = { apc::CellShape::Tetra, apc::CellShape::Pyramid,
+  apc::CellShape::Wedge, apc::CellShape::Hexahedron };
+
+// The shape's name for a failing check's message.
+inline const char* ShapeName(apc::CellShape shape)
+{
+  switch (shape)
+  {
+    case apc::CellShape::Tetra:
+      return "tetra";
+    case apc::CellShape::Pyramid:
+      return "pyramid";
+    case apc::CellShape::Wedge:
+      return "wedge";
+    default:
+      return "hexahedron";
+  }
+}
 
 // The reference cell with every corner moved by up to distortion per axis, then sheared,
 // scaled by about 2 and shifted away from the origin (a fixed shear, so that the affine part
