@@ -98,6 +98,21 @@ int CompleteCut(const OpaqueBins& bins, const std::vector<Sample>& samples)
   return apc::CutBin(complete.data());
 }
 
+// Every process's pass 1 over the ray (each bounded by bound; taken marks what they took),
+// their profiles summed as the profiles' allreduce does.
+std::array<uint16_t, OpaqueBins::kBins> SummedPass1(const OpaqueBins& bins,
+  std::vector<Sample>& samples, int processes, std::vector<bool>& taken,
+  int bound = OpaqueBins::kBins - 1)
+{
+  std::array<uint16_t, OpaqueBins::kBins> summed{};
+  for (int p = 0; p < processes; ++p)
+  {
+    const auto profile = Pass1(bins, samples, p, taken, bound);
+    apc::AddProfiles(summed.data(), profile.data(), summed.size());
+  }
+  return summed;
+}
+
 // Every process's pass 1 over the ray (each bounded by bound) into profiles, and their
 // summaries combined as the summaries' allreduce does.
 uint16_t SummarisedPass1(const OpaqueBins& bins, std::vector<Sample>& samples, int processes,
@@ -167,12 +182,7 @@ TEST(OpaqueCut, ProfilesSummedOverProcessesGiveTheCompleteCut)
     const int expected = CompleteCut(bins, samples);
 
     std::vector<bool> taken(samples.size(), false);
-    std::array<uint16_t, OpaqueBins::kBins> summed{};
-    for (int p = 0; p < processes; ++p)
-    {
-      const auto profile = Pass1(bins, samples, p, taken);
-      apc::AddProfiles(summed.data(), profile.data(), summed.size());
-    }
+    const auto summed = SummedPass1(bins, samples, processes, taken);
     const int cut = apc::CutBin(summed.data());
     ASSERT_EQ(cut, expected) << "trial " << trial;
     for (size_t s = 0; s < samples.size(); ++s)
@@ -213,12 +223,7 @@ TEST(OpaqueCut, APredictedBoundGivesTheCompleteCutOrLeavesItUnresolved)
       static_cast<uint8_t>(std::uniform_int_distribution<int>(0, OpaqueBins::kBins - 1)(rng));
 
     std::vector<bool> taken(samples.size(), false);
-    std::array<uint16_t, OpaqueBins::kBins> summed{};
-    for (int p = 0; p < processes; ++p)
-    {
-      const auto profile = Pass1(bins, samples, p, taken, bound);
-      apc::AddProfiles(summed.data(), profile.data(), summed.size());
-    }
+    auto summed = SummedPass1(bins, samples, processes, taken, bound);
     uint8_t open = 0;
     apc::MarkUnresolved(&bound, summed.data(), 1, &open);
     if (open)
@@ -227,12 +232,7 @@ TEST(OpaqueCut, APredictedBoundGivesTheCompleteCutOrLeavesItUnresolved)
       ASSERT_GT(expected, bound) << "trial " << trial << ": unresolved, yet opaque by the bound";
       wrongWithoutRedo += apc::CutBin(summed.data()) != expected ? 1 : 0;
       std::fill(taken.begin(), taken.end(), false);
-      summed.fill(0);
-      for (int p = 0; p < processes; ++p)
-      {
-        const auto profile = Pass1(bins, samples, p, taken);
-        apc::AddProfiles(summed.data(), profile.data(), summed.size());
-      }
+      summed = SummedPass1(bins, samples, processes, taken);
     }
     else
     {
