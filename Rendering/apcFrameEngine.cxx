@@ -511,7 +511,7 @@ int64_t FrameEngine::ProbeOpaqueProfile(
     this->Mesh.FindBoundaryPlanes();
   }
   probe.SetMesh(&this->Mesh);
-  probe.SetView(coarse, std::move(coarseEnds));
+  probe.SetDecimatedView(this->Marcher, step, offset, std::move(coarseEnds));
   std::vector<double> moments(
     static_cast<size_t>(coarse.GetWidth()) * coarse.GetHeight() * (parameters.Moments + 1), 0.0);
   DispatchMoments(parameters.Moments,

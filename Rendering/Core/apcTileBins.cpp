@@ -145,23 +145,11 @@ std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, 
 }
 }
 
-void BinCells(
-  const CellMesh* mesh, const RayCamera& camera, int tileSize, int threads, TileBins& bins)
+namespace
 {
-  bins.Grid = TileGrid(tileSize, camera.GetWidth(), camera.GetHeight());
-  const int64_t numCells = mesh ? mesh->GetNumberOfCells() : 0;
-  bins.Rects.resize(numCells);
-  bins.Near.resize(numCells);
-  ParallelFor(threads, numCells, 4096,
-    [&](int64_t begin, int64_t end)
-    {
-      for (int64_t cell = begin; cell < end; ++cell)
-      {
-        bins.Rects[cell] = CoveredPixels(*mesh, camera, cell);
-        bins.Near[cell] = NearDepth(*mesh, camera, cell);
-      }
-    });
-
+// Tiles' cell lists from the per-cell Rects and Near already in bins, on bins.Grid.
+void BinByRects(TileBins& bins)
+{
   const TileGrid& grid = bins.Grid;
   const std::vector<int64_t> order = FrontToBackOrder(bins);
   BuildCompressedRows<int64_t>(
@@ -181,6 +169,77 @@ void BinCells(
       }
     },
     bins.Start, bins.Cells);
+}
+
+// The decimated pixels k (k * step + offset in [first, last]) of an inclusive range of
+// undecimated pixel centres, clamped to [0, pixels): floor division, for ranges reaching left
+// of offset.
+std::array<int, 2> DecimatedRange(int first, int last, int step, int offset, int pixels)
+{
+  auto floorDiv = [](int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
+  return { std::max(0, -floorDiv(-(first - offset), step)),
+    std::min(pixels - 1, floorDiv(last - offset, step)) };
+}
+}
+
+void BinCells(
+  const CellMesh* mesh, const RayCamera& camera, int tileSize, int threads, TileBins& bins)
+{
+  bins.Grid = TileGrid(tileSize, camera.GetWidth(), camera.GetHeight());
+  const int64_t numCells = mesh ? mesh->GetNumberOfCells() : 0;
+  bins.Rects.resize(numCells);
+  bins.Near.resize(numCells);
+  ParallelFor(threads, numCells, 4096,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t cell = begin; cell < end; ++cell)
+      {
+        bins.Rects[cell] = CoveredPixels(*mesh, camera, cell);
+        bins.Near[cell] = NearDepth(*mesh, camera, cell);
+      }
+    });
+  BinByRects(bins);
+}
+
+bool DecimateBins(const TileBins& fine, int step, int offset, int width, int height, int tileSize,
+  int threads, TileBins& bins)
+{
+  const TileGrid& from = fine.Grid;
+  // A decimated pixel past the undecimated image (ProbeSize keeps at least one) has a ray no
+  // undecimated rectangle says anything about.
+  if (step < 1 || offset < 0 || width < 1 || height < 1 ||
+    static_cast<int64_t>(width - 1) * step + offset >= from.Width ||
+    static_cast<int64_t>(height - 1) * step + offset >= from.Height)
+  {
+    return false;
+  }
+  bins.Grid = TileGrid(tileSize, width, height);
+  const int64_t numCells = static_cast<int64_t>(fine.Rects.size());
+  bins.Rects.resize(numCells);
+  bins.Near.resize(numCells);
+  ParallelFor(threads, numCells, 4096,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t cell = begin; cell < end; ++cell)
+      {
+        const auto& r = fine.Rects[cell];
+        std::array<int, 4>& to = bins.Rects[cell];
+        if (r[0] > r[2] || r[1] > r[3])
+        {
+          to = { 1, 1, 0, 0 };
+        }
+        else
+        {
+          const std::array<int, 2> i = DecimatedRange(r[0], r[2], step, offset, width);
+          const std::array<int, 2> j = DecimatedRange(r[1], r[3], step, offset, height);
+          to = i[0] <= i[1] && j[0] <= j[1] ? std::array<int, 4>{ i[0], j[0], i[1], j[1] }
+                                            : std::array<int, 4>{ 1, 1, 0, 0 };
+        }
+        bins.Near[cell] = fine.Near[cell];
+      }
+    });
+  BinByRects(bins);
+  return true;
 }
 
 } // namespace apc

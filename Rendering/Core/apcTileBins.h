@@ -77,6 +77,15 @@ struct TileBins
 void BinCells(
   const CellMesh* mesh, const RayCamera& camera, int tileSize, int threads, TileBins& bins);
 
+// The bins BinCells gives camera.Decimated(step, offset) (width x height pixels), from fine,
+// BinCells' bins of camera: the decimated pixel (i, j) casts the ray of camera's pixel
+// (i * step + offset, j * step + offset), so a cell covers the decimated pixels whose
+// undecimated ones it covers, and its Near (the same eye and view direction) is fine's. No
+// corner is projected again: a first frame's probe (apcOpaquePrediction.h) bins no cell twice.
+// False (bins untouched) if a decimated pixel lies past camera's image.
+bool DecimateBins(const TileBins& fine, int step, int offset, int width, int height, int tileSize,
+  int threads, TileBins& bins);
+
 } // namespace apc
 
 #endif

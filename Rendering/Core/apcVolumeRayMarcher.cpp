@@ -81,6 +81,27 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, std::vector<float>&& ray
   BinCells(this->Mesh, camera, kTileSize, this->Threads, *this->Bins);
 }
 
+void VolumeRayMarcher::SetDecimatedView(
+  const VolumeRayMarcher& frame, int step, int offset, std::vector<float>&& rayEnds)
+{
+  const RayCamera camera = frame.Camera->Decimated(step, offset);
+  this->Cache->Clear();
+  this->OwnMomentsOrder = 0;
+  this->Camera.reset(new RayCamera(camera));
+  const size_t pixels = static_cast<size_t>(camera.GetWidth()) * camera.GetHeight();
+  this->RayEnds = std::move(rayEnds);
+  if (this->RayEnds.size() != pixels)
+  {
+    this->RayEnds.assign(pixels, std::numeric_limits<float>::infinity());
+  }
+  if (frame.Mesh != this->Mesh ||
+    !DecimateBins(*frame.Bins, step, offset, camera.GetWidth(), camera.GetHeight(), kTileSize,
+      this->Threads, *this->Bins))
+  {
+    BinCells(this->Mesh, camera, kTileSize, this->Threads, *this->Bins);
+  }
+}
+
 //------------------------------------------------------------------------------
 void VolumeRayMarcher::TilesOf(const RowBand& rows, int64_t& first, int64_t& last) const
 {

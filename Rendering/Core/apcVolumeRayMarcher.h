@@ -72,6 +72,12 @@ public:
   // The same, taking over the W*H ray ends (none: no ray stops), so that they are not held
   // twice while the view is set up.
   void SetView(const RayCamera& camera, std::vector<float>&& rayEnds);
+  // The view of frame's camera decimated (RayCamera::Decimated(step, offset)), for a marcher
+  // of frame's mesh after frame's SetView: its bins are derived from frame's (DecimateBins)
+  // instead of binning every cell again, the same bins. rayEnds: as for SetView, per
+  // decimated pixel.
+  void SetDecimatedView(
+    const VolumeRayMarcher& frame, int step, int offset, std::vector<float>&& rayEnds);
 
   // The distances at which the current view's rays stop (W*H; +inf where nothing stops them).
   const std::vector<float>& GetRayEnds() const { return this->RayEnds; }

@@ -8,7 +8,8 @@
 // sample distance. Prints one CSV row per part: the smallest CPU time (all threads) and wall
 // time over --repeats, and a checksum of the mesh, so that two builds run side by side show
 // both their costs and that they make the same mesh. Uses only interfaces that older builds
-// have, so the same source measures a baseline.
+// have, so the same source measures a baseline, but for "probe_bins_decimated" (a first
+// frame's probe binning, and its bins derived from the frame's: DecimateBins).
 //
 //   apcSetupBenchmark [--data FILE] [--array U_mag] [--size 1024] [--repeats 3] [--no-pass1]
 //                     [--camera fill|overview]
@@ -248,6 +249,27 @@ int main(int argc, char* argv[])
   std::printf("# mesh checksum %016llx, %lld cells, %lld on screen, %zu tile entries\n",
     Checksum(mesh), static_cast<long long>(mesh.GetNumberOfCells()),
     static_cast<long long>(onScreen), bins.Cells.size());
+  // A first frame's probe (every 8th ray, FrameSettings' default step): binning every cell
+  // for its camera, as its marcher's SetView does, against its bins derived from the frame's
+  // (DecimateBins, as SetDecimatedView does: this build's interface).
+  const int step = 8;
+  const apc::RayCamera coarse = camera.Decimated(step, step / 2);
+  apc::TileBins probeBins;
+  Time(
+    "probe_bins", repeats, [&] { apc::BinCells(&mesh, coarse, 16, 0, probeBins); }, cpu, wall);
+  const std::vector<int64_t> probeCells(probeBins.Cells.begin(), probeBins.Cells.end());
+  Time(
+    "probe_bins_decimated", repeats,
+    [&]
+    {
+      apc::DecimateBins(
+        bins, step, step / 2, coarse.GetWidth(), coarse.GetHeight(), 16, 0, probeBins);
+    },
+    cpu, wall);
+  std::printf("# probe bins: %zu tile entries, %s\n", probeCells.size(),
+    std::equal(probeCells.begin(), probeCells.end(), probeBins.Cells.begin(), probeBins.Cells.end())
+      ? "the same derived"
+      : "DIFFERENT derived");
   if (timePass1)
   {
     TimePass1(mesh, camera, 1024);
