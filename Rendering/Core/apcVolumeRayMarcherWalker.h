@@ -279,6 +279,19 @@ struct VolumeRayMarcher::Walker
       }
       if (weighted)
       {
+        if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
+        {
+          // Boundary: a cell with a boundary face in the lanes too (its pairs' weights found
+          // ray by ray first).
+          if (hits > 0 && this->SharedOrigin && this->Lanes)
+          {
+            this->Prepare(rays[c.Hits[0]], state);
+            if (state.Interpolate && (state.Linear || state.Interpolator.HasPyramidInverse()))
+            {
+              return this->BoundaryLaneSamples(rays, packed, hits, visitor, state, progress);
+            }
+          }
+        }
         int64_t samples = 0;
         for (int h = 0; h < hits; ++h)
         {
@@ -400,12 +413,20 @@ struct VolumeRayMarcher::Walker
     if (this->BoundaryWeights)
     {
       // Which ends lie on the boundary, and the pair's end without the stop, with ClipRays'
-      // own arithmetic.
-      double start = 0;
-      end = std::min(ray.End, this->FarLimit);
+      // own arithmetic: clipped again only where the stop cut the pair (else [tin, tout) is
+      // already Clip's interval from [0, min(End, far)), bit for bit).
       bool in = false;
       bool out = false;
-      state.Planes.ClipEnds(ray, start, end, in, out);
+      if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
+      {
+        double start = 0;
+        end = std::min(ray.End, this->FarLimit);
+        state.Planes.ClipEnds(ray, start, end, in, out);
+      }
+      else
+      {
+        state.Planes.BoundaryEnds(ray, tin, tout, in, out);
+      }
       return walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
     }
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
@@ -415,6 +436,53 @@ struct VolumeRayMarcher::Walker
       state.Planes.Clip(ray, start, end);
     }
     return walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
+  }
+
+  // Boundary: the samples of a cell with a boundary face (ClipRays kept hits rays of it,
+  // without the lattice's filter) through LaneSamples<true>. Each pair's weights first
+  // (PairWeights, as WeightedRay finds them), in the form ClipRaysWeighted gives them
+  // (state.Ends): the pairs with a lattice point stay in Clipped.Hits, in order, those with a
+  // middle sample go to Ends.MidHits, those without a sample (no lattice point and no weighted
+  // end, or a clamped sliver) are dropped, as WeightedRay drops them.
+  template <class Visitor>
+  int64_t BoundaryLaneSamples(const std::vector<RaySetup>& rays, const TileRays& packed, int hits,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    walk::ClippedRays& c = state.Clipped;
+    walk::ClippedWeights& ends = state.Ends;
+    int kept = 0;
+    ends.MidCount = 0;
+    for (int h = 0; h < hits; ++h)
+    {
+      const int l = c.Hits[h];
+      const walk::EndWeights w =
+        this->PairWeights<Visitor>(l, rays[l], c.Tin[l], c.Tout[l], state, progress);
+      if (w.Mid)
+      {
+        ends.MidHits[ends.MidCount++] = static_cast<uint16_t>(l);
+      }
+      else if (w.Last >= w.First)
+      {
+        c.Hits[kept++] = static_cast<uint16_t>(l);
+      }
+      else
+      {
+        visitor.Segment(l, c.Tin[l], c.Tout[l]);
+        continue;
+      }
+      ends.First[l] = static_cast<double>(w.First);
+      ends.Last[l] = static_cast<double>(w.Last);
+      ends.FirstWeight[l] = w.Mid ? w.MidWeight : w.FirstWeight;
+      ends.LastWeight[l] = w.Mid ? w.MidWeight : w.LastWeight;
+      ends.MidT[l] = w.MidT;
+      ends.LaneOffset[l] = w.Mid ? w.MidOffset : rays[l].Offset;
+      ends.Mid[l] = w.Mid ? 1.0 : 0.0;
+    }
+    if (kept + ends.MidCount == 0)
+    {
+      return 0;
+    }
+    return this->LaneSamples<true>(rays, packed, kept, visitor, state, progress);
   }
 
   // WeightedRay's samples once the pair's weights w are known.
@@ -685,6 +753,10 @@ struct VolumeRayMarcher::Walker
               {
                 progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, sum, last);
               }
+            }
+            else if constexpr (Weighted)
+            {
+              visitor.RunDrop(run);
             }
           }
           if (kept)
