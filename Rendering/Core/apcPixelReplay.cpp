@@ -165,7 +165,13 @@ struct Looked
   __m256d R, G, B, Absorbance;
 };
 
-APC_AVX2_INLINE Looked Lookup4(const TransferTable::Layout& table, __m256d scalar)
+// Weighted: times the samples' end weights (apcEndWeights.h; lanes of them from weights,
+// none read past), each a float product as pass 1 took it, formed on the float absorbance
+// before it is widened (a product of the widened one, narrowed and widened again, lay on
+// the group's chain of dependent operations).
+template <bool Weighted = false>
+APC_AVX2_INLINE Looked Lookup4(
+  const TransferTable::Layout& table, __m256d scalar, const float* weights = nullptr, int lanes = 4)
 {
   const __m256d zero = _mm256_setzero_pd();
   const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFF));
@@ -200,19 +206,16 @@ APC_AVX2_INLINE Looked Lookup4(const TransferTable::Layout& table, __m256d scala
     e[k] = _mm_add_ps(a, step);
   }
   _MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
+  if (Weighted)
+  {
+    const __m128 w = lanes >= 4
+      ? _mm_loadu_ps(weights)
+      : _mm_maskload_ps(
+          weights, _mm_cmpgt_epi32(_mm_set1_epi32(lanes), _mm_setr_epi32(0, 1, 2, 3)));
+    e[3] = _mm_mul_ps(e[3], w);
+  }
   return { _mm256_cvtps_pd(e[0]), _mm256_cvtps_pd(e[1]), _mm256_cvtps_pd(e[2]),
     _mm256_and_pd(_mm256_cvtps_pd(e[3]), finite) };
-}
-
-// End weights (apcEndWeights.h): up to 4 looked-up absorbances times their samples' weights
-// from weights on (lanes of them; none read past), each a float product as pass 1 took it
-// (the absorbances are floats widened to double, so narrowing them back is exact).
-APC_AVX2_INLINE void Weigh(Looked& s, const float* weights, int lanes)
-{
-  const __m128 w = lanes >= 4
-    ? _mm_loadu_ps(weights)
-    : _mm_maskload_ps(weights, _mm_cmpgt_epi32(_mm_set1_epi32(lanes), _mm_setr_epi32(0, 1, 2, 3)));
-  s.Absorbance = _mm256_cvtps_pd(_mm_mul_ps(_mm256_cvtpd_ps(s.Absorbance), w));
 }
 
 APC_AVX2_INLINE double Total(__m256d v)
@@ -323,11 +326,8 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
     {
       if (_mm256_movemask_pd(first.Visible) != 0)
       {
-        Looked s = Lookup4(table, first.Scalar);
-        if (Weighted)
-        {
-          Weigh(s, weights + at, n - at);
-        }
+        const Looked s =
+          Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, n - at);
         a.Add(Weigh(t, px, first, s), s);
       }
       break;
@@ -338,13 +338,9 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
     {
       continue;
     }
-    Looked s1 = Lookup4(table, first.Scalar);
-    Looked s2 = Lookup4(table, second.Scalar);
-    if (Weighted)
-    {
-      Weigh(s1, weights + at, 4);
-      Weigh(s2, weights + at + 4, n - at - 4);
-    }
+    const Looked s1 = Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, 4);
+    const Looked s2 =
+      Lookup4<Weighted>(table, second.Scalar, Weighted ? weights + at + 4 : nullptr, n - at - 4);
     a.Add(Weigh(t, px, first, s1), s1);
     b.Add(Weigh(t, px, second, s2), s2);
   }

@@ -286,7 +286,9 @@ struct Moments : NoSegments
   {
     if (run.Weight)
     {
-      run.Weight[run.Kept] = weight;
+      // Past the kept records the weights stay 1 (an invisible step's is not kept): with
+      // Boundary a plain sample may be recorded there next, and weighs nothing itself.
+      run.Weight[run.Kept] = absorbance > 0 ? weight : 1.0f;
     }
     this->RunAdd(run, pixel, k, t, scalar, absorbance);
   }
@@ -304,6 +306,15 @@ struct Moments : NoSegments
       record.K16 = static_cast<uint16_t>(k);
     }
     run.Kept += absorbance > 0 ? 1u : 0u;
+  }
+  // A run not kept (RunEnd not called): the weights it wrote 1 again, for the plain samples
+  // that may be recorded there next (Boundary).
+  void RunDrop(const Run& run) const
+  {
+    if (run.Weight)
+    {
+      std::fill(run.Weight, run.Weight + run.Kept, 1.0f);
+    }
   }
   [[gnu::always_inline]] void RunEnd(const Run& run, int pixel)
   {

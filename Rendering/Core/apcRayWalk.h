@@ -160,6 +160,13 @@ struct CellPlanes
   void ClipEnds(const RaySetup& ray, double& tin, double& tout, bool& in, bool& out) const
   {
     this->Clip(ray, tin, tout);
+    this->BoundaryEnds(ray, tin, tout, in, out);
+  }
+
+  // ClipEnds' in / out for the interval [tin, tout) Clip gave this ray (from ClipRays, whose
+  // intervals are Clip's bit for bit), without clipping again.
+  void BoundaryEnds(const RaySetup& ray, double tin, double tout, bool& in, bool& out) const
+  {
     const double inf = std::numeric_limits<double>::infinity();
     double loB = -inf;
     double hiB = inf;

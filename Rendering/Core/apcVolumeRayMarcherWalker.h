@@ -279,6 +279,19 @@ struct VolumeRayMarcher::Walker
       }
       if (weighted)
       {
+        if constexpr (AbsorbanceOnly<Visitor>::value && !Visitor::WantsTransparentSamples)
+        {
+          // Boundary: a cell with a boundary face in the lanes too (its pairs' weights found
+          // ray by ray first).
+          if (hits > 0 && this->SharedOrigin && this->Lanes)
+          {
+            this->Prepare(rays[c.Hits[0]], state);
+            if (state.Interpolate && (state.Linear || state.Interpolator.HasPyramidInverse()))
+            {
+              return this->BoundaryLaneSamples(rays, packed, hits, visitor, state, progress);
+            }
+          }
+        }
         int64_t samples = 0;
         for (int h = 0; h < hits; ++h)
         {
@@ -400,12 +413,20 @@ struct VolumeRayMarcher::Walker
     if (this->BoundaryWeights)
     {
       // Which ends lie on the boundary, and the pair's end without the stop, with ClipRays'
-      // own arithmetic.
-      double start = 0;
-      end = std::min(ray.End, this->FarLimit);
+      // own arithmetic: clipped again only where the stop cut the pair (else [tin, tout) is
+      // already Clip's interval from [0, min(End, far)), bit for bit).
       bool in = false;
       bool out = false;
-      state.Planes.ClipEnds(ray, start, end, in, out);
+      if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
+      {
+        double start = 0;
+        end = std::min(ray.End, this->FarLimit);
+        state.Planes.ClipEnds(ray, start, end, in, out);
+      }
+      else
+      {
+        state.Planes.BoundaryEnds(ray, tin, tout, in, out);
+      }
       return walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
     }
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
@@ -415,6 +436,91 @@ struct VolumeRayMarcher::Walker
       state.Planes.Clip(ray, start, end);
     }
     return walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
+  }
+
+  // Boundary: the samples of a cell with a boundary face (ClipRays kept hits rays of it,
+  // without the lattice's filter) through the lanes. Each pair's ends first (as PairWeights
+  // finds them): a pair with both ends plain and a lattice point takes the plain lattice's
+  // samples, so it goes to LaneSamples<false> (its first index to Clipped.Lattice, as
+  // ClipRays with the lattice gives it); the others' weights go to state.Ends in the form
+  // ClipRaysWeighted gives them, for LaneSamples<true>: those with a lattice point in
+  // Clipped.Hits, those with a middle sample in Ends.MidHits. A pair without a sample (no
+  // lattice point and no weighted end, or a clamped sliver) is dropped, as WeightedRay drops
+  // it. A pixel holds one pair of the cell, so splitting the cell's rays changes no pixel's
+  // order.
+  template <class Visitor>
+  int64_t BoundaryLaneSamples(const std::vector<RaySetup>& rays, const TileRays& packed, int hits,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    walk::ClippedRays& c = state.Clipped;
+    walk::ClippedWeights& ends = state.Ends;
+    uint16_t plain[walk::kTilePixels];
+    int plainCount = 0;
+    int kept = 0;
+    ends.MidCount = 0;
+    for (int h = 0; h < hits; ++h)
+    {
+      const int l = c.Hits[h];
+      const RaySetup& ray = rays[l];
+      const double tin = c.Tin[l];
+      const double tout = c.Tout[l];
+      // PairWeights' Boundary form, with the ends' flags kept.
+      double end = tout;
+      bool in = false;
+      bool out = false;
+      if (Visitor::StopsWhenOpaque && tout == progress.Stop[l])
+      {
+        double start = 0;
+        end = std::min(ray.End, this->FarLimit);
+        state.Planes.ClipEnds(ray, start, end, in, out);
+      }
+      else
+      {
+        state.Planes.BoundaryEnds(ray, tin, tout, in, out);
+      }
+      const walk::EndWeights w = walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
+      if (w.Mid)
+      {
+        ends.MidHits[ends.MidCount++] = static_cast<uint16_t>(l);
+      }
+      else if (w.Last < w.First)
+      {
+        visitor.Segment(l, tin, tout);
+        continue;
+      }
+      else if (!in && !out)
+      {
+        c.Lattice[l] = static_cast<double>(w.First);
+        plain[plainCount++] = static_cast<uint16_t>(l);
+        continue;
+      }
+      else
+      {
+        c.Hits[kept++] = static_cast<uint16_t>(l);
+      }
+      ends.First[l] = static_cast<double>(w.First);
+      ends.Last[l] = static_cast<double>(w.Last);
+      ends.FirstWeight[l] = w.Mid ? w.MidWeight : w.FirstWeight;
+      ends.LastWeight[l] = w.Mid ? w.MidWeight : w.LastWeight;
+      ends.MidT[l] = w.MidT;
+      ends.LaneOffset[l] = w.Mid ? w.MidOffset : ray.Offset;
+      ends.Mid[l] = w.Mid ? 1.0 : 0.0;
+    }
+    int64_t samples = 0;
+    if (plainCount > 0)
+    {
+      // LaneSamples takes its rays from Clipped.Hits: the weighted ones wait meanwhile.
+      uint16_t weighted[walk::kTilePixels];
+      std::copy(c.Hits, c.Hits + kept, weighted);
+      std::copy(plain, plain + plainCount, c.Hits);
+      samples += this->LaneSamples<false>(rays, packed, plainCount, visitor, state, progress);
+      std::copy(weighted, weighted + kept, c.Hits);
+    }
+    if (kept + ends.MidCount > 0)
+    {
+      samples += this->LaneSamples<true>(rays, packed, kept, visitor, state, progress);
+    }
+    return samples;
   }
 
   // WeightedRay's samples once the pair's weights w are known.
@@ -685,6 +791,10 @@ struct VolumeRayMarcher::Walker
               {
                 progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, sum, last);
               }
+            }
+            else if constexpr (Weighted)
+            {
+              visitor.RunDrop(run);
             }
           }
           if (kept)

@@ -203,3 +203,44 @@ TEST(PassOneRuns, MomentRunsAreSamplesOneAtATime)
   EXPECT_GT(visible, 100000);
   EXPECT_GT(dropped, 1000);
 }
+
+TEST(PassOneRuns, WeightedRunsLeavePlainRecordsWeightOne)
+{
+  // Sample End Weights = Boundary: weighted runs (a cell with a boundary face in the lanes)
+  // and plain samples (the other cells, which weigh nothing) share a tile's records. A run's
+  // invisible step and a dropped run (the pixel turns opaque) leave no weight behind where a
+  // plain sample is recorded next.
+  const double spacing = 0.05;
+  const apc::LatticeDepthWarp warp(apc::LogDepthWarp(2.0, 9.0), spacing);
+  const apc::TileRect tile{ 0, 0, 16, 16, 0 };
+  std::vector<double> image(5 * 256, 0.0);
+  apc::SampleCache cache;
+  cache.Record = true;
+  apc::visitors::Moments<4> moments(image.data(), 16, &warp, &cache);
+  moments.Weighted = true;
+  moments.BeginTile(tile);
+  const apc::TransferSample plain{ { 0.f, 0.f, 0.f }, 0.25f };
+  apc::visitors::Moments<4>::Run run;
+  // Kept, its last step invisible: weight 0.3 is not kept.
+  moments.RunBegin(run, 1, 3, true);
+  moments.RunAddWeighted(run, 1, 40, 40 * spacing, 0.5, 0.35f, 0.7f);
+  moments.RunAddWeighted(run, 1, 41, 41 * spacing, 0.5, 0.5f, 1.f);
+  moments.RunAddWeighted(run, 1, 42, 42 * spacing, 0.5, 0.f, 0.3f);
+  moments.RunEnd(run, 1);
+  moments.Sample(2, 40, 40 * spacing, 0.5, plain);
+  // Dropped: weights 0.4 and 0.6 were written.
+  moments.RunBegin(run, 3, 2, true);
+  moments.RunAddWeighted(run, 3, 50, 50 * spacing, 0.5, 0.2f, 0.4f);
+  moments.RunAddWeighted(run, 3, 51, 51 * spacing, 0.5, 0.3f, 0.6f);
+  moments.RunDrop(run);
+  moments.Sample(4, 50, 50 * spacing, 0.5, plain);
+  moments.Sample(4, 51, 51 * spacing, 0.5, plain);
+  const apc::RecordBuffer& buffer = *moments.Buffer;
+  ASSERT_EQ(buffer.Used, 5u);
+  ASSERT_GE(buffer.Weights.size(), 5u);
+  const float expected[5] = { 0.7f, 1.f, 1.f, 1.f, 1.f };
+  for (int i = 0; i < 5; ++i)
+  {
+    EXPECT_EQ(buffer.Weights[i], expected[i]) << "record " << i;
+  }
+}
