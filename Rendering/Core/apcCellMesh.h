@@ -158,6 +158,10 @@ private:
   // added to summary: independent of every other cell, so cells are derived in parallel.
   CellFate DeriveCell(int64_t cell, Summary& summary);
   std::array<float, 2> ScalarRangeOf(int64_t cell) const;
+  // FindBoundaryPlanes' matching: shared[slot] (a plane slot) = 1 where another face of the
+  // mesh has the same corners. Index: the ids' type (32 bits where they fit).
+  template <class Index>
+  void MatchFaces(uint8_t* shared) const;
 
   UninitializedVector<CellShape> Shapes;
   UninitializedVector<int64_t> Offsets{ 0 };
