@@ -331,7 +331,7 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
     static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   this->SetOpaqueStopActive(this->OpaqueStopActive);
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
-  if (this->Settings.SampleEndWeights == 2) // EndWeightsMode::Boundary: once per data change
+  if (this->RendersBoundaryWeights()) // once per data change
   {
     this->Mesh.FindBoundaryPlanes();
   }
@@ -347,6 +347,13 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   this->Ready = true;
   this->Clock.Lap("setup");
   return true;
+}
+
+//------------------------------------------------------------------------------
+bool FrameEngine::RendersBoundaryWeights() const
+{
+  return this->Settings.SampleEndWeights ==
+    static_cast<int>(VolumeRayMarcher::EndWeightsMode::Boundary);
 }
 
 //------------------------------------------------------------------------------
@@ -506,7 +513,7 @@ int64_t FrameEngine::ProbeOpaqueProfile(
     static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
   probe.SetOpaqueAbsorbance(VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   probe.SetMaxSampleCacheBytes(0);
-  if (this->Settings.SampleEndWeights == 2)
+  if (this->RendersBoundaryWeights())
   {
     this->Mesh.FindBoundaryPlanes();
   }

@@ -198,7 +198,7 @@ bool CellMesh::Finalize(std::string* error)
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
   }
-  this->BoundaryPlanes.clear();
+  this->ForgetBoundaryPlanes();
   return true;
 }
 
@@ -356,6 +356,77 @@ void CellMesh::FindBoundaryPlanes()
         this->BoundaryPlanes[cell] = mask;
       }
     });
+}
+
+//------------------------------------------------------------------------------
+std::vector<CellMesh::FaceCorners> CellMesh::GetBoundaryFaces() const
+{
+  std::vector<FaceCorners> faces;
+  const int64_t numCells = this->GetNumberOfCells();
+  if (this->BoundaryPlanes.empty())
+  {
+    return faces;
+  }
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const uint8_t mask = this->BoundaryPlanes[cell];
+    if (mask == 0)
+    {
+      continue;
+    }
+    const int64_t* ids = this->GetCellPoints(cell);
+    const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+    int n = 0;
+    for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
+    {
+      if (!(this->PlaneFaces[cell] & (1u << f)))
+      {
+        continue;
+      }
+      if (mask & (1u << n++))
+      {
+        // The distinct corners (-0 as +0, as the matching in the piece), sorted by
+        // coordinates, padded with +inf (no corner of a rendered cell is infinite).
+        std::array<std::array<double, 3>, 4> corners;
+        int count = 0;
+        for (int i = 0; i < shapeFaces.Size[f]; ++i)
+        {
+          const std::array<double, 3>& p = this->Points[ids[shapeFaces.Corner[f][i]]];
+          corners[count++] = { p[0] + 0.0, p[1] + 0.0, p[2] + 0.0 };
+        }
+        std::sort(corners.begin(), corners.begin() + count);
+        count =
+          static_cast<int>(std::unique(corners.begin(), corners.begin() + count) - corners.begin());
+        FaceCorners face;
+        face.fill(std::numeric_limits<double>::infinity());
+        for (int i = 0; i < count; ++i)
+        {
+          std::copy(corners[i].begin(), corners[i].end(), face.begin() + 3 * i);
+        }
+        faces.push_back(face);
+      }
+    }
+  }
+  return faces;
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::ClearBoundaryFaces(const std::vector<uint8_t>& inner)
+{
+  size_t next = 0;
+  for (int64_t cell = 0; cell < this->GetNumberOfCells() && !this->BoundaryPlanes.empty(); ++cell)
+  {
+    uint8_t mask = this->BoundaryPlanes[cell];
+    for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+    {
+      if ((mask & (1u << n)) && next < inner.size() && inner[next++])
+      {
+        mask = static_cast<uint8_t>(mask & ~(1u << n));
+      }
+    }
+    this->BoundaryPlanes[cell] = mask;
+  }
+  this->BoundaryShared = true;
 }
 
 //------------------------------------------------------------------------------
