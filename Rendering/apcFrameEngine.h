@@ -105,6 +105,8 @@ public:
   /// processes' pieces since its data changed (apcBoundaryExchange.h), which matches them in
   /// the mesh GetMeshForSharing gives.
   bool RendersBoundaryWeights() const;
+  /// The ends the marcher weights: the volume's Sample End Weights, but none for Hybrid.
+  VolumeRayMarcher::EndWeightsMode EndWeightsMode() const;
   bool NeedsSharedBoundary() const
   {
     return this->RendersBoundaryWeights() && !this->Mesh.SharesBoundary();

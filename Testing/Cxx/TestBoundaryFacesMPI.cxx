@@ -1,8 +1,9 @@
 // Run under mpirun -np N. Sample End Weights = Boundary on N processes renders what one
 // process renders: the faces between the ranks' pieces of the wind data (Scotch pieces) are
 // matched over MPI (apcBoundaryExchange.h) and left plain, as inner faces of the whole mesh
-// are. A failure injected on one rank's exchange is agreed: every rank finishes the frame with
-// its own piece's boundary, and the next exchange matches the faces again.
+// are. Hybrid keeps the plain lattice, so that on one rank it is the exact image. A failure
+// injected on one rank's exchange is agreed: every rank finishes the frame with its own piece's
+// boundary, and the next exchange matches the faces again.
 #include "apcBoundaryExchange.h"
 #include "apcCompositePassRenders.h"
 #include "apcMPITest.h"
@@ -87,6 +88,21 @@ int main(int argc, char* argv[])
       std::printf(
         "Boundary on %d ranks: max |distributed - one process| = %g\n", ranks, difference);
       Check(difference <= 1e-5, rank, "Boundary on N ranks equals one process");
+    }
+  }
+
+  {
+    // Hybrid keeps the plain lattice (the exact modes do): on one rank it is the exact blend,
+    // the one-process EXACT image (TestCompositePassMPI's criterion), with Boundary set too.
+    vtkNew<vtkAPCCompositePass> pass;
+    const std::vector<float> hybrid = apctest::RenderDistributed(
+      controller, wind, piece, bounds, size, false, pass, true, vtkAPCVolumeMapper::HYBRID);
+    if (rank == 0 && ranks == 1)
+    {
+      const double difference = apctest::MaxAbsDifference(
+        hybrid, apctest::RenderWhole(wind, size, false, vtkAPCVolumeMapper::EXACT));
+      std::printf("Hybrid with Boundary on one rank: max |Hybrid - EXACT| = %g\n", difference);
+      Check(difference <= 1e-6, rank, "Hybrid with Boundary on one rank equals EXACT");
     }
   }
 
