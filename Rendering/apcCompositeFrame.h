@@ -98,6 +98,9 @@ struct CompositeFrame
   // Some process's volume stops where opaque (agreed): every process joins the profile's
   // allreduce, a process without volumes too.
   bool StopsWhereOpaque = false;
+  // Some process's volume weights the boundary's ends and has not matched its faces with the
+  // other processes' since its data changed (agreed): every process joins ShareBoundaryFaces.
+  bool ShareBoundary = false;
   // ... but no pixel of the last frame reached the stop's threshold (agreed): pass 1 marches
   // without the stop's bookkeeping, and a band where some pixel reaches it after all is
   // marched again with the stop, so the image is the one the stop gives.

@@ -142,6 +142,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   values.Add(local.ReportPending ? 1 : 0);
   values.Add(local.Interactive ? 1 : 0);
   values.Add(local.StopsWhereOpaque ? 1 : 0);
+  values.Add(local.NeedsSharedBoundary ? 1 : 0);
   values.Add(local.Opaque ? 1 : 0);
   ForEachAgreed(
     local.Settings, [&](const char*, const auto& setting, AgreementRule) { values.Add(setting); });
@@ -198,6 +199,7 @@ FrameAgreement FrameAgreement::Agree(const ProcessGroup& group, const LocalFrame
   agreed.AnyReportPending = values.Take().first > 0;
   agreed.Interactive = values.Take().first > 0;
   agreed.AnyStopsWhereOpaque = values.Take().first > 0;
+  agreed.AnyNeedsSharedBoundary = values.Take().first > 0;
   agreed.AnyOpaque = values.Take().first > 0;
   ForEachAgreed(agreed.Settings,
     [&](const char* name, auto& setting, AgreementRule rule)

@@ -47,9 +47,12 @@ struct LocalFrame
   bool ReportPending = false;    // an input report to say (apcInputReport.h)
   bool Interactive = false;      // this process's window asks for a fast frame
   bool StopsWhereOpaque = false; // a volume of this process has Stop Where Opaque on
-  bool Opaque = true;            // its last APC frame had a pixel at the stop's threshold
-  FrameSettings Settings;        // the pass's
-  TransferSignature Transfer;    // of the visible volumes (combined)
+  // A volume of this process weights the boundary's ends and its faces are not matched with
+  // the other processes' yet (apcBoundaryExchange.h).
+  bool NeedsSharedBoundary = false;
+  bool Opaque = true;         // its last APC frame had a pixel at the stop's threshold
+  FrameSettings Settings;     // the pass's
+  TransferSignature Transfer; // of the visible volumes (combined)
 
   LocalFrame();
   // One visible APC volume: its number of moments, if it has cells their bounds, and its
@@ -67,6 +70,8 @@ struct FrameAgreement
   // A volume of some process stops where opaque: every process then joins the profile's
   // allreduce, with volumes or without.
   bool AnyStopsWhereOpaque = false;
+  // Then every process joins ShareBoundaryFaces (apcBoundaryExchange.h).
+  bool AnyNeedsSharedBoundary = false;
   bool AnyOpaque = true;
   int MinVolumes = 0;
   int MaxVolumes = 0;

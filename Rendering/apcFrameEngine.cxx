@@ -327,11 +327,10 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
   this->Marcher.SetLatticeJitter(this->Settings.LatticeJitter);
-  this->Marcher.SetEndWeightsMode(
-    static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
+  this->Marcher.SetEndWeightsMode(this->EndWeightsMode());
   this->SetOpaqueStopActive(this->OpaqueStopActive);
   this->Marcher.SetMaxSampleCacheBytes(this->Settings.SampleCacheBytes());
-  if (this->Settings.SampleEndWeights == 2) // EndWeightsMode::Boundary: once per data change
+  if (this->RendersBoundaryWeights()) // once per data change
   {
     this->Mesh.FindBoundaryPlanes();
   }
@@ -347,6 +346,24 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   this->Ready = true;
   this->Clock.Lap("setup");
   return true;
+}
+
+//------------------------------------------------------------------------------
+VolumeRayMarcher::EndWeightsMode FrameEngine::EndWeightsMode() const
+{
+  // Hybrid is the exact blend on one process (its own samples' product, T_others = 1), and
+  // the exact modes keep the plain lattice: its moments and its own product keep it too, or
+  // one process's Hybrid would blend other samples than the exact image.
+  if (this->Settings.Moments.Resolve == ResolveMode::Hybrid)
+  {
+    return VolumeRayMarcher::EndWeightsMode::Off;
+  }
+  return static_cast<VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights);
+}
+
+bool FrameEngine::RendersBoundaryWeights() const
+{
+  return this->EndWeightsMode() == VolumeRayMarcher::EndWeightsMode::Boundary;
 }
 
 //------------------------------------------------------------------------------
@@ -502,11 +519,10 @@ int64_t FrameEngine::ProbeOpaqueProfile(
   VolumeRayMarcher& probe = *marcher;
   probe.SetNumberOfThreads(this->Settings.NumberOfThreads);
   probe.SetLatticeJitter(this->Settings.LatticeJitter);
-  probe.SetEndWeightsMode(
-    static_cast<apc::VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights));
+  probe.SetEndWeightsMode(this->EndWeightsMode());
   probe.SetOpaqueAbsorbance(VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
   probe.SetMaxSampleCacheBytes(0);
-  if (this->Settings.SampleEndWeights == 2)
+  if (this->RendersBoundaryWeights())
   {
     this->Mesh.FindBoundaryPlanes();
   }

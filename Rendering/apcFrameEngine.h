@@ -100,6 +100,18 @@ public:
   int64_t GetNumberOfCells() const { return this->Mesh.GetNumberOfCells(); }
   /// The threads this volume's passes run on (its setting, or this process's default).
   int GetThreads() const;
+  /// Sample End Weights = Boundary (after BeginFrame): this frame weights the ends on the
+  /// mesh's boundary; on several processes its faces are not yet matched with the other
+  /// processes' pieces since its data changed (apcBoundaryExchange.h), which matches them in
+  /// the mesh GetMeshForSharing gives.
+  bool RendersBoundaryWeights() const;
+  /// The ends the marcher weights: the volume's Sample End Weights, but none for Hybrid.
+  VolumeRayMarcher::EndWeightsMode EndWeightsMode() const;
+  bool NeedsSharedBoundary() const
+  {
+    return this->RendersBoundaryWeights() && !this->Mesh.SharesBoundary();
+  }
+  CellMesh& GetMeshForSharing() { return this->Mesh; }
   /// The renderable cells' total volume, summed exactly (the default sample distance's input).
   const ExactSum& GetCellVolume() const { return this->Mesh.GetCellVolume(); }
 

@@ -57,6 +57,7 @@ void CollectVolumes(const std::vector<VolumeEntry>& volumes, LocalFrame& local,
     local.Cells += static_cast<double>(engine->GetNumberOfCells());
     local.Volume.Add(engine->GetCellVolume());
     local.StopsWhereOpaque = local.StopsWhereOpaque || volumeSettings.StopWhereOpaque;
+    local.NeedsSharedBoundary = local.NeedsSharedBoundary || engine->NeedsSharedBoundary();
     if (mappers.empty())
     {
       // The frame's moment settings: the first volume's beta, bias and resolve.
@@ -134,6 +135,7 @@ bool AgreeOnFrame(vtkObject* self, const ProcessGroup& group,
   frame.Moments.Moments = agreed.MaxMoments;
   frame.Volumes = agreed.MaxVolumes;
   frame.StopsWhereOpaque = agreed.AnyStopsWhereOpaque;
+  frame.ShareBoundary = agreed.AnyNeedsSharedBoundary;
   // The double wire's sums may round differently on each process: no retry decided from them.
   frame.TryWithoutOpaqueStop = !agreed.AnyOpaque && !agreed.Settings.CompositeInDouble;
   std::copy(agreed.Bounds, agreed.Bounds + 6, frame.Bounds);

@@ -14,6 +14,7 @@
 #include "vtkVolume.h"
 
 #include "apcAutoMode.h"
+#include "apcBoundaryExchange.h"
 #include "apcCompositeFrame.h"
 #include "apcFrameEngine.h"
 #include "apcFrameSettings.h"
@@ -293,6 +294,15 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   std::vector<float> depth = apc::ShareDepth(group, frame, internal.DelegateDepth, internal.Record);
   internal.DelegateDepth = nullptr;
   internal.Record.Clock.Lap("depth");
+  std::string boundaryProblem;
+  if (!apc::ShareBoundaryFaces(group, frame, boundaryProblem) && group.IsDisplay())
+  {
+    vtkWarningMacro(<< boundaryProblem);
+  }
+  if (frame.ShareBoundary)
+  {
+    internal.Record.Clock.Lap("boundary");
+  }
   apc::PrepareEngines(group, frame, volumes, depth);
   depth = std::vector<float>(); // the engines hold their rays' ends
 

@@ -198,8 +198,129 @@ bool CellMesh::Finalize(std::string* error)
   {
     this->MeshBounds = { 0, -1, 0, -1, 0, -1 };
   }
-  this->BoundaryPlanes.clear();
+  this->ForgetBoundaryPlanes();
   return true;
+}
+
+//------------------------------------------------------------------------------
+namespace
+{
+// A coordinate's bits with -0 as +0: the key under which coincident points meet (== treats
+// the two zeros as one point, and so does CanonicalPlane).
+uint64_t CoordinateBits(double x)
+{
+  const double y = x + 0.0; // -0 + 0 = +0, every other value unchanged
+  uint64_t bits;
+  std::memcpy(&bits, &y, sizeof bits);
+  return bits;
+}
+
+// Bit for bit but for the zeros' signs (a NaN equals itself: every point finds itself).
+bool SameCoordinates(const std::array<double, 3>& a, const std::array<double, 3>& b)
+{
+  return CoordinateBits(a[0]) == CoordinateBits(b[0]) &&
+    CoordinateBits(a[1]) == CoordinateBits(b[1]) && CoordinateBits(a[2]) == CoordinateBits(b[2]);
+}
+
+uint64_t PointHash(const std::array<double, 3>& p)
+{
+  uint64_t h = 1469598103934665603ull;
+  for (double x : p)
+  {
+    h = (h ^ CoordinateBits(x)) * 1099511628211ull;
+    h ^= h >> 29;
+  }
+  return h;
+}
+
+// Every point's representative: the smallest id with the same coordinates. Faces are then
+// matched by integer ids, and two faces have the same representatives exactly when their
+// corners have the same coordinates: pieces appended without merging their points match as
+// merged ones do. The points are bucketed by a hash of their coordinates (a counting sort,
+// ids ascending within a bucket), a point's representative the first of its bucket it equals.
+UninitializedVector<int64_t> PointRepresentatives(const std::vector<std::array<double, 3>>& points)
+{
+  const int64_t count = static_cast<int64_t>(points.size());
+  UninitializedVector<int64_t> representatives(static_cast<size_t>(count));
+  uint64_t buckets = 1;
+  while (buckets < static_cast<uint64_t>(count))
+  {
+    buckets <<= 1;
+  }
+  UninitializedVector<uint64_t> bucketOf(static_cast<size_t>(count));
+  ParallelFor(0, count, 16384,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t i = begin; i < end; ++i)
+      {
+        bucketOf[i] = PointHash(points[i]) & (buckets - 1);
+      }
+    });
+  UninitializedVector<int64_t> starts(static_cast<size_t>(buckets) + 1);
+  std::fill(starts.begin(), starts.end(), 0);
+  for (int64_t i = 0; i < count; ++i)
+  {
+    ++starts[bucketOf[i] + 1];
+  }
+  for (uint64_t b = 0; b < buckets; ++b)
+  {
+    starts[b + 1] += starts[b];
+  }
+  UninitializedVector<int64_t> order(static_cast<size_t>(count));
+  {
+    UninitializedVector<int64_t> next(starts.begin(), starts.end() - 1);
+    for (int64_t i = 0; i < count; ++i)
+    {
+      order[next[bucketOf[i]]++] = i;
+    }
+  }
+  ParallelFor(0, static_cast<int64_t>(buckets), 16384,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t b = begin; b < end; ++b)
+      {
+        for (int64_t i = starts[b]; i < starts[b + 1]; ++i)
+        {
+          const std::array<double, 3>& p = points[order[i]];
+          int64_t j = starts[b];
+          while (!SameCoordinates(points[order[j]], p))
+          {
+            ++j;
+          }
+          representatives[order[i]] = order[j];
+        }
+      }
+    });
+  return representatives;
+}
+
+// A face as its corners' distinct representatives, ascending, padded with the largest Index
+// (a triangle, or a quad with two corners on one point). Index: 32 bits where the points and
+// face slots fit, which halves the memory the matching writes and reads.
+template <class Index>
+struct FaceIds
+{
+  Index Ids[4];
+};
+
+// A face in its bucket (its smallest id, Ids[0], is the bucket's): the other ids and its slot,
+// side by side, so that a bucket is sorted and compared in place.
+template <class Index>
+struct BucketedFace
+{
+  Index Ids[3];
+  Index Slot;
+  bool SameFace(const BucketedFace& o) const
+  {
+    return this->Ids[0] == o.Ids[0] && this->Ids[1] == o.Ids[1] && this->Ids[2] == o.Ids[2];
+  }
+  bool operator<(const BucketedFace& o) const
+  {
+    return this->Ids[0] != o.Ids[0] ? this->Ids[0] < o.Ids[0]
+      : this->Ids[1] != o.Ids[1]    ? this->Ids[1] < o.Ids[1]
+                                    : this->Ids[2] < o.Ids[2];
+  }
+};
 }
 
 //------------------------------------------------------------------------------
@@ -209,125 +330,18 @@ void CellMesh::FindBoundaryPlanes()
   {
     return;
   }
-  // Each face with a plane as its distinct corners in Precedes order (a collapsed quad is its
-  // triangle), hashed by their coordinates' bits into buckets; a face whose corners no other
-  // face of its bucket has is on the boundary.
-  const int64_t numCells = this->GetNumberOfCells();
   const int64_t slots = static_cast<int64_t>(this->Planes.size());
-  struct Face
-  {
-    int64_t Ids[4];
-    int Count;
-    uint64_t Hash;
-  };
-  UninitializedVector<Face> faces(static_cast<size_t>(slots));
-  const auto& points = this->Points;
-  ParallelFor(0, numCells, 4096,
-    [&](int64_t begin, int64_t end)
-    {
-      for (int64_t cell = begin; cell < end; ++cell)
-      {
-        const int64_t* ids = this->GetCellPoints(cell);
-        const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
-        Face* out = faces.data() + this->PlaneOffsets[cell];
-        int n = 0;
-        for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
-        {
-          if (!(this->PlaneFaces[cell] & (1u << f)))
-          {
-            continue;
-          }
-          Face& face = out[n++];
-          face.Count = 0;
-          for (int i = 0; i < shapeFaces.Size[f]; ++i)
-          {
-            face.Ids[face.Count++] = ids[shapeFaces.Corner[f][i]];
-          }
-          std::sort(face.Ids, face.Ids + face.Count,
-            [&](int64_t a, int64_t b) { return Precedes(points, a, b); });
-          face.Count =
-            static_cast<int>(std::unique(face.Ids, face.Ids + face.Count,
-                               [&](int64_t a, int64_t b) { return points[a] == points[b]; }) -
-              face.Ids);
-          uint64_t h = 1469598103934665603ull;
-          for (int i = 0; i < face.Count; ++i)
-          {
-            for (double x : points[face.Ids[i]])
-            {
-              uint64_t bits;
-              std::memcpy(&bits, &x, sizeof bits);
-              h = (h ^ bits) * 1099511628211ull;
-              h ^= h >> 29;
-            }
-          }
-          face.Hash = h;
-        }
-      }
-    });
-  // Buckets by hash (a counting sort of the faces' slots).
-  int64_t faceCount = 0;
-  for (int64_t cell = 0; cell < numCells; ++cell)
-  {
-    faceCount += this->PlaneCounts[cell];
-  }
-  uint64_t buckets = 1;
-  while (buckets < static_cast<uint64_t>(faceCount))
-  {
-    buckets <<= 1;
-  }
-  UninitializedVector<int64_t> starts(static_cast<size_t>(buckets) + 1);
-  std::fill(starts.begin(), starts.end(), 0);
-  for (int64_t cell = 0; cell < numCells; ++cell)
-  {
-    for (int n = 0; n < this->PlaneCounts[cell]; ++n)
-    {
-      ++starts[(faces[this->PlaneOffsets[cell] + n].Hash & (buckets - 1)) + 1];
-    }
-  }
-  for (uint64_t b = 0; b < buckets; ++b)
-  {
-    starts[b + 1] += starts[b];
-  }
-  UninitializedVector<int64_t> slotsByBucket(static_cast<size_t>(faceCount));
-  {
-    UninitializedVector<int64_t> next(starts.begin(), starts.end() - 1);
-    for (int64_t cell = 0; cell < numCells; ++cell)
-    {
-      for (int n = 0; n < this->PlaneCounts[cell]; ++n)
-      {
-        const int64_t slot = this->PlaneOffsets[cell] + n;
-        slotsByBucket[next[faces[slot].Hash & (buckets - 1)]++] = slot;
-      }
-    }
-  }
-  // Shared[slot]: another face has the same corners.
+  const int64_t numPoints = static_cast<int64_t>(this->Points.size());
   UninitializedVector<uint8_t> shared(static_cast<size_t>(slots));
-  ParallelFor(0, static_cast<int64_t>(buckets), 4096,
-    [&](int64_t begin, int64_t end)
-    {
-      for (int64_t b = begin; b < end; ++b)
-      {
-        for (int64_t i = starts[b]; i < starts[b + 1]; ++i)
-        {
-          const Face& a = faces[slotsByBucket[i]];
-          bool match = false;
-          for (int64_t j = starts[b]; j < starts[b + 1] && !match; ++j)
-          {
-            const Face& c = faces[slotsByBucket[j]];
-            if (j == i || c.Hash != a.Hash || c.Count != a.Count)
-            {
-              continue;
-            }
-            match = true;
-            for (int k = 0; k < a.Count && match; ++k)
-            {
-              match = points[a.Ids[k]] == points[c.Ids[k]];
-            }
-          }
-          shared[slotsByBucket[i]] = match ? 1 : 0;
-        }
-      }
-    });
+  if (numPoints < int64_t(UINT32_MAX) && slots < int64_t(UINT32_MAX))
+  {
+    this->MatchFaces<uint32_t>(shared.data());
+  }
+  else
+  {
+    this->MatchFaces<uint64_t>(shared.data());
+  }
+  const int64_t numCells = this->GetNumberOfCells();
   this->BoundaryPlanes.resize(numCells);
   ParallelFor(0, numCells, 8192,
     [&](int64_t begin, int64_t end)
@@ -340,6 +354,183 @@ void CellMesh::FindBoundaryPlanes()
           mask |= shared[this->PlaneOffsets[cell] + n] ? 0 : static_cast<uint8_t>(1u << n);
         }
         this->BoundaryPlanes[cell] = mask;
+      }
+    });
+}
+
+//------------------------------------------------------------------------------
+std::vector<CellMesh::FaceCorners> CellMesh::GetBoundaryFaces() const
+{
+  std::vector<FaceCorners> faces;
+  const int64_t numCells = this->GetNumberOfCells();
+  if (this->BoundaryPlanes.empty())
+  {
+    return faces;
+  }
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const uint8_t mask = this->BoundaryPlanes[cell];
+    if (mask == 0)
+    {
+      continue;
+    }
+    const int64_t* ids = this->GetCellPoints(cell);
+    const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+    int n = 0;
+    for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
+    {
+      if (!(this->PlaneFaces[cell] & (1u << f)))
+      {
+        continue;
+      }
+      if (mask & (1u << n++))
+      {
+        // The distinct corners (-0 as +0, as the matching in the piece), sorted by
+        // coordinates, padded with +inf (no corner of a rendered cell is infinite).
+        std::array<std::array<double, 3>, 4> corners;
+        int count = 0;
+        for (int i = 0; i < shapeFaces.Size[f]; ++i)
+        {
+          const std::array<double, 3>& p = this->Points[ids[shapeFaces.Corner[f][i]]];
+          corners[count++] = { p[0] + 0.0, p[1] + 0.0, p[2] + 0.0 };
+        }
+        std::sort(corners.begin(), corners.begin() + count);
+        count =
+          static_cast<int>(std::unique(corners.begin(), corners.begin() + count) - corners.begin());
+        FaceCorners face;
+        face.fill(std::numeric_limits<double>::infinity());
+        for (int i = 0; i < count; ++i)
+        {
+          std::copy(corners[i].begin(), corners[i].end(), face.begin() + 3 * i);
+        }
+        faces.push_back(face);
+      }
+    }
+  }
+  return faces;
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::ClearBoundaryFaces(const std::vector<uint8_t>& inner)
+{
+  size_t next = 0;
+  for (int64_t cell = 0; cell < this->GetNumberOfCells() && !this->BoundaryPlanes.empty(); ++cell)
+  {
+    uint8_t mask = this->BoundaryPlanes[cell];
+    for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+    {
+      if ((mask & (1u << n)) && next < inner.size() && inner[next++])
+      {
+        mask = static_cast<uint8_t>(mask & ~(1u << n));
+      }
+    }
+    this->BoundaryPlanes[cell] = mask;
+  }
+  this->BoundaryShared = true;
+}
+
+//------------------------------------------------------------------------------
+template <class Index>
+void CellMesh::MatchFaces(uint8_t* shared) const
+{
+  // Each face with a plane as its distinct corners' representatives (PointRepresentatives),
+  // bucketed by the smallest of them (a counting sort by an integer: cells near each other in
+  // the mesh's order share points, so the buckets fill close together); a bucket, the faces
+  // around one point, sorted by the other ids puts equal faces side by side. Sorted, not
+  // compared pairwise: the wind's mixed cells put up to 126 faces around a point, 30
+  // comparisons a face pairwise.
+  const int64_t numCells = this->GetNumberOfCells();
+  const int64_t numPoints = static_cast<int64_t>(this->Points.size());
+  const UninitializedVector<int64_t> representatives = PointRepresentatives(this->Points);
+  constexpr Index kNone = std::numeric_limits<Index>::max();
+  UninitializedVector<FaceIds<Index>> faces(this->Planes.size());
+  ParallelFor(0, numCells, 4096,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t cell = begin; cell < end; ++cell)
+      {
+        const int64_t* ids = this->GetCellPoints(cell);
+        const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+        FaceIds<Index>* out = faces.data() + this->PlaneOffsets[cell];
+        int n = 0;
+        for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
+        {
+          if (!(this->PlaneFaces[cell] & (1u << f)))
+          {
+            continue;
+          }
+          FaceIds<Index>& face = out[n++];
+          int count = 0;
+          for (int i = 0; i < shapeFaces.Size[f]; ++i)
+          {
+            // Insertion into the sorted distinct ids so far.
+            const Index id = static_cast<Index>(representatives[ids[shapeFaces.Corner[f][i]]]);
+            int at = count;
+            while (at > 0 && face.Ids[at - 1] > id)
+            {
+              --at;
+            }
+            if (at > 0 && face.Ids[at - 1] == id)
+            {
+              continue;
+            }
+            for (int k = count; k > at; --k)
+            {
+              face.Ids[k] = face.Ids[k - 1];
+            }
+            face.Ids[at] = id;
+            ++count;
+          }
+          for (int k = count; k < 4; ++k)
+          {
+            face.Ids[k] = kNone;
+          }
+        }
+      }
+    });
+  // Buckets by the smallest representative (a counting sort of the faces' slots).
+  UninitializedVector<Index> starts(static_cast<size_t>(numPoints) + 1);
+  std::fill(starts.begin(), starts.end(), Index(0));
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const FaceIds<Index>* cellFaces = faces.data() + this->PlaneOffsets[cell];
+    for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+    {
+      ++starts[cellFaces[n].Ids[0] + 1];
+    }
+  }
+  for (int64_t p = 0; p < numPoints; ++p)
+  {
+    starts[p + 1] += starts[p];
+  }
+  UninitializedVector<BucketedFace<Index>> byBucket(static_cast<size_t>(starts[numPoints]));
+  {
+    UninitializedVector<Index> next(starts.begin(), starts.end() - 1);
+    for (int64_t cell = 0; cell < numCells; ++cell)
+    {
+      for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+      {
+        const int64_t slot = this->PlaneOffsets[cell] + n;
+        const FaceIds<Index>& face = faces[slot];
+        byBucket[next[face.Ids[0]]++] = { { face.Ids[1], face.Ids[2], face.Ids[3] },
+          static_cast<Index>(slot) };
+      }
+    }
+  }
+  ParallelFor(0, numPoints, 16384,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t b = begin; b < end; ++b)
+      {
+        BucketedFace<Index>* first = byBucket.data() + starts[b];
+        BucketedFace<Index>* last = byBucket.data() + starts[b + 1];
+        std::sort(first, last);
+        for (BucketedFace<Index>* i = first; i != last; ++i)
+        {
+          const bool match =
+            (i != first && (i - 1)->SameFace(*i)) || (i + 1 != last && (i + 1)->SameFace(*i));
+          shared[i->Slot] = match ? 1 : 0;
+        }
       }
     });
 }

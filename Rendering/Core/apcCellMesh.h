@@ -113,6 +113,21 @@ public:
   // Finalize itself (docs/sampler.md), so it runs only where a frame asks for the planes.
   void FindBoundaryPlanes();
   bool HasBoundaryPlanes() const { return !this->BoundaryPlanes.empty() || this->Shapes.empty(); }
+  // Several processes (apcBoundaryFaces.h): a face on this piece's boundary may be another
+  // piece's face too, and then is inner. GetBoundaryFaces lists the faces FindBoundaryPlanes
+  // left on the boundary, in cell and plane order, by their corners (FaceCorners: the same
+  // numbers on every process that holds the face); ClearBoundaryFaces takes one flag per listed
+  // face back (inner[i] != 0: another process holds face i) and unsets those planes' bits, after
+  // which the flags are the whole mesh's (SharesBoundary). ForgetBoundaryPlanes drops them all.
+  using FaceCorners = std::array<double, 12>;
+  std::vector<FaceCorners> GetBoundaryFaces() const;
+  void ClearBoundaryFaces(const std::vector<uint8_t>& inner);
+  bool SharesBoundary() const { return this->BoundaryShared; }
+  void ForgetBoundaryPlanes()
+  {
+    this->BoundaryPlanes.clear();
+    this->BoundaryShared = false;
+  }
   // xmin, xmax, ymin, ymax, zmin, zmax of one cell (from its corners: nothing reads them
   // per frame, so they are not stored) / of the whole mesh.
   std::array<double, 6> GetCellBounds(int64_t cell) const;
@@ -158,6 +173,10 @@ private:
   // added to summary: independent of every other cell, so cells are derived in parallel.
   CellFate DeriveCell(int64_t cell, Summary& summary);
   std::array<float, 2> ScalarRangeOf(int64_t cell) const;
+  // FindBoundaryPlanes' matching: shared[slot] (a plane slot) = 1 where another face of the
+  // mesh has the same corners. Index: the ids' type (32 bits where they fit).
+  template <class Index>
+  void MatchFaces(uint8_t* shared) const;
 
   UninitializedVector<CellShape> Shapes;
   UninitializedVector<int64_t> Offsets{ 0 };
@@ -172,6 +191,7 @@ private:
   // plane n); BoundaryPlanes: see GetBoundaryPlanes.
   UninitializedVector<uint8_t> PlaneFaces;
   UninitializedVector<uint8_t> BoundaryPlanes;
+  bool BoundaryShared = false;
   UninitializedVector<std::array<float, 2>> ScalarRanges;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };
   int64_t SkippedCells = 0;

@@ -342,8 +342,11 @@ def main(args):
         if apc:
             for setting in args.apc_property:
                 name, value = setting.split("=", 1)
-                setattr(display, name, type(getattr(display, name))(value)
-                        if not isinstance(getattr(display, name), str) else value)
+                current = getattr(display, name)
+                # Numbers keep their type; strings and enumerations (e.g.
+                # APCSampleEndWeights=Boundary) take the text as ParaView does.
+                setattr(display, name, type(current)(value)
+                        if isinstance(current, (int, float)) else value)
             if key in ("apc-stop", "apc-nostop", "apc-nostop-again"):
                 display.APCStopWhereOpaque = 1 if key == "apc-stop" else 0
         if not apc:

@@ -37,7 +37,7 @@ struct Scene
   double SampleDistance = 0.0;
   int Moments = 4; // the MBOIT order, for tests that vary it
   bool LatticeJitter = false;
-  bool SampleEndWeights = false; // vtkAPCVolumeMapper::SetSampleEndWeights
+  int SampleEndWeights = 0; // vtkAPCVolumeMapper::SetSampleEndWeights: 0 off, 1 all, 2 boundary
 };
 
 // Points the renderer's camera as view says; the clipping range is left to the caller, who

@@ -7,6 +7,7 @@
 // is off by up to a sample; and the cells without a boundary face take the plain lattice's
 // samples bit for bit.
 #include "apcCellMesh.h"
+#include "apcCellShapeCheck.h"
 #include "apcDepthWarp.h"
 #include "apcEndWeights.h"
 #include "apcMomentParameters.h"
@@ -23,6 +24,7 @@
 #include <functional>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -221,6 +223,128 @@ TEST(BoundaryWeights, TheMeshFindsItsBoundaryFacesByTheirCorners)
     EXPECT_EQ(faces(0, 0, 0), 3);
     EXPECT_EQ(faces(2, 1, 0), 1);
     EXPECT_EQ(faces(2, 1, 2), 0);
+  }
+}
+
+// The flags by coordinates alone (what FindBoundaryPlanes matched by before it matched faces by
+// their points' representative ids): a face's distinct corner coordinates, sorted, counted over
+// every face of every cell; a face counted once is on the boundary. Every face of the cells
+// below has a plane, so plane n is face n.
+std::vector<uint8_t> BoundaryByCoordinates(const apc::CellMesh& mesh)
+{
+  using Corners = std::vector<std::array<double, 3>>;
+  auto cornersOf = [&](int64_t cell, int f)
+  {
+    const apc::CellFaces& faces = apc::FacesOf(mesh.GetShape(cell));
+    Corners corners;
+    for (int i = 0; i < faces.Size[f]; ++i)
+    {
+      corners.push_back(mesh.Points[mesh.GetCellPoints(cell)[faces.Corner[f][i]]]);
+    }
+    std::sort(corners.begin(), corners.end());
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    return corners;
+  };
+  std::map<Corners, int> counts;
+  for (int64_t c = 0; c < mesh.GetNumberOfCells(); ++c)
+  {
+    for (int f = 0; f < apc::FacesOf(mesh.GetShape(c)).Count; ++f)
+    {
+      ++counts[cornersOf(c, f)];
+    }
+  }
+  std::vector<uint8_t> flags;
+  for (int64_t c = 0; c < mesh.GetNumberOfCells(); ++c)
+  {
+    int planes = 0;
+    mesh.GetPlanes(c, planes);
+    EXPECT_EQ(planes, apc::FacesOf(mesh.GetShape(c)).Count);
+    uint8_t mask = 0;
+    for (int f = 0; f < planes; ++f)
+    {
+      mask |= counts[cornersOf(c, f)] == 1 ? static_cast<uint8_t>(1u << f) : 0;
+    }
+    flags.push_back(mask);
+  }
+  return flags;
+}
+
+TEST(BoundaryWeights, FacesMatchedByPointIdsAsByCoordinates)
+{
+  // A block of hexahedra whose corners are, at random, the block's shared points or copies of
+  // their own (partly unmerged pieces: a face's two cells may name its corners by different
+  // ids, or some by the same), some cells left out (holes: inner boundaries), one cell twice
+  // (its faces are met three times), and the plane z = 0 reached as -0 by some copies.
+  const int n[3] = { 7, 5, 4 };
+  const double h = 0.25;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int trial = 0; trial < 4; ++trial)
+  {
+    apc::CellMesh mesh;
+    auto coordinates = [&](int i, int j, int k) -> std::array<double, 3> {
+      return { -1.0 + i * h, -0.5 + j * h, (k - 2) * h };
+    };
+    for (int k = 0; k <= n[2]; ++k)
+    {
+      for (int j = 0; j <= n[1]; ++j)
+      {
+        for (int i = 0; i <= n[0]; ++i)
+        {
+          mesh.Points.push_back(coordinates(i, j, k));
+        }
+      }
+    }
+    const double unmerged = trial / 3.0; // from none to every corner
+    auto corner = [&](int i, int j, int k) -> int64_t
+    {
+      if (u(rng) < unmerged)
+      {
+        std::array<double, 3> x = coordinates(i, j, k);
+        if (x[2] == 0 && u(rng) < 0.5)
+        {
+          x[2] = -0.0;
+        }
+        mesh.Points.push_back(x);
+        return static_cast<int64_t>(mesh.Points.size()) - 1;
+      }
+      return (k * (n[1] + 1) + j) * (n[0] + 1) + i;
+    };
+    auto addCell = [&](int i, int j, int k)
+    {
+      const int64_t ids[8] = { corner(i, j, k), corner(i + 1, j, k), corner(i + 1, j + 1, k),
+        corner(i, j + 1, k), corner(i, j, k + 1), corner(i + 1, j, k + 1),
+        corner(i + 1, j + 1, k + 1), corner(i, j + 1, k + 1) };
+      mesh.AddCell(apc::CellShape::Hexahedron, ids);
+    };
+    for (int k = 0; k < n[2]; ++k)
+    {
+      for (int j = 0; j < n[1]; ++j)
+      {
+        for (int i = 0; i < n[0]; ++i)
+        {
+          if (u(rng) < 0.1)
+          {
+            continue;
+          }
+          addCell(i, j, k);
+        }
+      }
+    }
+    addCell(3, 2, 1);
+    mesh.PointScalars.assign(mesh.Points.size(), 0.5f);
+    ASSERT_TRUE(mesh.Finalize());
+    mesh.FindBoundaryPlanes();
+    const std::vector<uint8_t> expected = BoundaryByCoordinates(mesh);
+    int boundary = 0;
+    for (int64_t c = 0; c < mesh.GetNumberOfCells(); ++c)
+    {
+      EXPECT_EQ(mesh.GetBoundaryPlanes(c), expected[c]) << "trial " << trial << " cell " << c;
+      boundary += __builtin_popcount(expected[c]);
+    }
+    // Holes and the block's sides: far from every face, far from none.
+    EXPECT_GT(boundary, 2 * (7 * 5 + 5 * 4 + 7 * 4)) << trial;
+    EXPECT_LT(boundary, 6 * mesh.GetNumberOfCells() / 2) << trial;
   }
 }
 

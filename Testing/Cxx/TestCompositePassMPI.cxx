@@ -296,7 +296,7 @@ int main(int argc, char* argv[])
   // The end weights depend only on the cell and the ray: still the one-process image, with the
   // opaque stop (on by default) cutting weighted pairs, and in the exact sort-last mode.
   apctest::Scene weighted = wind;
-  weighted.SampleEndWeights = true;
+  weighted.SampleEndWeights = vtkAPCVolumeMapper::END_WEIGHTS_ALL;
   CompareWithWhole(controller, "wind end weights", weighted, WindPieces(rank, ranks), 96, false);
   CompareWithWhole(
     controller, "segments wind end weights", weighted, WindPieces(rank, ranks), 96, false, true);
