@@ -69,6 +69,12 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, const float* rayEnds)
 
 void VolumeRayMarcher::SetView(const RayCamera& camera, std::vector<float>&& rayEnds)
 {
+  this->SetCamera(camera, std::move(rayEnds));
+  BinCells(this->Mesh, camera, kTileSize, this->Threads, *this->Bins);
+}
+
+void VolumeRayMarcher::SetCamera(const RayCamera& camera, std::vector<float>&& rayEnds)
+{
   this->Cache->Clear();
   this->OwnMomentsOrder = 0;
   this->Camera.reset(new RayCamera(camera));
@@ -78,22 +84,13 @@ void VolumeRayMarcher::SetView(const RayCamera& camera, std::vector<float>&& ray
   {
     this->RayEnds.assign(pixels, std::numeric_limits<float>::infinity());
   }
-  BinCells(this->Mesh, camera, kTileSize, this->Threads, *this->Bins);
 }
 
 void VolumeRayMarcher::SetDecimatedView(
   const VolumeRayMarcher& frame, int step, int offset, std::vector<float>&& rayEnds)
 {
   const RayCamera camera = frame.Camera->Decimated(step, offset);
-  this->Cache->Clear();
-  this->OwnMomentsOrder = 0;
-  this->Camera.reset(new RayCamera(camera));
-  const size_t pixels = static_cast<size_t>(camera.GetWidth()) * camera.GetHeight();
-  this->RayEnds = std::move(rayEnds);
-  if (this->RayEnds.size() != pixels)
-  {
-    this->RayEnds.assign(pixels, std::numeric_limits<float>::infinity());
-  }
+  this->SetCamera(camera, std::move(rayEnds));
   if (frame.Mesh != this->Mesh ||
     !DecimateBins(*frame.Bins, step, offset, camera.GetWidth(), camera.GetHeight(), kTileSize,
       this->Threads, *this->Bins))

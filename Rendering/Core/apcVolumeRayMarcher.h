@@ -257,6 +257,9 @@ public:
   int64_t GetLastSampleCount() const { return this->LastSamples; }
 
 private:
+  // SetView's and SetDecimatedView's camera, ray ends (infinite where absent) and an empty cache;
+  // the bins are theirs.
+  void SetCamera(const RayCamera& camera, std::vector<float>&& rayEnds);
   struct Walker;
   // Marches the tiles of rows (all by default); visitors see them shifted by rows.J0, so that
   // they write into band-sized buffers. skipTiles: tiles t with (*skipTiles)[t] set are left out.

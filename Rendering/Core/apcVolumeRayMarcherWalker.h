@@ -402,6 +402,25 @@ struct VolumeRayMarcher::Walker
     return this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
   }
 
+  // Boundary: which ends of the pair of ray local over [tin, tout) lie on the mesh's boundary
+  // (in, out), and the pair's end without the stop, with ClipRays' own arithmetic: clipped
+  // again only where the stop cut the pair (else [tin, tout) is already Clip's interval from
+  // [0, min(End, far)), bit for bit).
+  template <class Visitor>
+  [[gnu::always_inline]] double BoundaryPairEnds(int local, const RaySetup& ray, double tin,
+    double tout, CellState& state, const RayProgress& progress, bool& in, bool& out) const
+  {
+    if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
+    {
+      double start = 0;
+      double end = std::min(ray.End, this->FarLimit);
+      state.Planes.ClipEnds(ray, start, end, in, out);
+      return end;
+    }
+    state.Planes.BoundaryEnds(ray, tin, tout, in, out);
+    return tout;
+  }
+
   // The end weights of the pair of ray local over [tin, tout) (tout: up to the ray's stop).
   template <class Visitor>
   [[gnu::always_inline]] walk::EndWeights PairWeights(int local, const RaySetup& ray, double tin,
@@ -412,21 +431,9 @@ struct VolumeRayMarcher::Walker
     double end = tout;
     if (this->BoundaryWeights)
     {
-      // Which ends lie on the boundary, and the pair's end without the stop, with ClipRays'
-      // own arithmetic: clipped again only where the stop cut the pair (else [tin, tout) is
-      // already Clip's interval from [0, min(End, far)), bit for bit).
       bool in = false;
       bool out = false;
-      if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
-      {
-        double start = 0;
-        end = std::min(ray.End, this->FarLimit);
-        state.Planes.ClipEnds(ray, start, end, in, out);
-      }
-      else
-      {
-        state.Planes.BoundaryEnds(ray, tin, tout, in, out);
-      }
+      end = this->BoundaryPairEnds<Visitor>(local, ray, tin, tout, state, progress, in, out);
       return walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
     }
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
@@ -465,19 +472,10 @@ struct VolumeRayMarcher::Walker
       const double tin = c.Tin[l];
       const double tout = c.Tout[l];
       // PairWeights' Boundary form, with the ends' flags kept.
-      double end = tout;
       bool in = false;
       bool out = false;
-      if (Visitor::StopsWhenOpaque && tout == progress.Stop[l])
-      {
-        double start = 0;
-        end = std::min(ray.End, this->FarLimit);
-        state.Planes.ClipEnds(ray, start, end, in, out);
-      }
-      else
-      {
-        state.Planes.BoundaryEnds(ray, tin, tout, in, out);
-      }
+      const double end =
+        this->BoundaryPairEnds<Visitor>(l, ray, tin, tout, state, progress, in, out);
       const walk::EndWeights w = walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
       if (w.Mid)
       {
