@@ -356,6 +356,52 @@ void CellMesh::FindBoundaryPlanes()
         this->BoundaryPlanes[cell] = mask;
       }
     });
+  this->CrowdedFaces.clear();
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+    {
+      if (shared[this->PlaneOffsets[cell] + n] == 2)
+      {
+        this->CrowdedFaces.emplace_back(cell, n);
+      }
+    }
+  }
+}
+
+//------------------------------------------------------------------------------
+CellMesh::FaceCorners CellMesh::CornersOfPlane(int64_t cell, int plane) const
+{
+  const int64_t* ids = this->GetCellPoints(cell);
+  const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+  FaceCorners face;
+  face.fill(std::numeric_limits<double>::infinity());
+  int n = 0;
+  for (int f = 0; f < shapeFaces.Count; ++f)
+  {
+    if (!(this->PlaneFaces[cell] & (1u << f)) || n++ != plane)
+    {
+      continue;
+    }
+    // The distinct corners (-0 as +0, as the matching in the piece), sorted by coordinates,
+    // padded with +inf (no corner of a rendered cell is infinite).
+    std::array<std::array<double, 3>, 4> corners;
+    int count = 0;
+    for (int i = 0; i < shapeFaces.Size[f]; ++i)
+    {
+      const std::array<double, 3>& p = this->Points[ids[shapeFaces.Corner[f][i]]];
+      corners[count++] = { p[0] + 0.0, p[1] + 0.0, p[2] + 0.0 };
+    }
+    std::sort(corners.begin(), corners.begin() + count);
+    count =
+      static_cast<int>(std::unique(corners.begin(), corners.begin() + count) - corners.begin());
+    for (int i = 0; i < count; ++i)
+    {
+      std::copy(corners[i].begin(), corners[i].end(), face.begin() + 3 * i);
+    }
+    break;
+  }
+  return face;
 }
 
 //------------------------------------------------------------------------------
@@ -370,42 +416,17 @@ std::vector<CellMesh::FaceCorners> CellMesh::GetBoundaryFaces() const
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
     const uint8_t mask = this->BoundaryPlanes[cell];
-    if (mask == 0)
+    for (int n = 0; mask != 0 && n < this->PlaneCounts[cell]; ++n)
     {
-      continue;
-    }
-    const int64_t* ids = this->GetCellPoints(cell);
-    const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
-    int n = 0;
-    for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
-    {
-      if (!(this->PlaneFaces[cell] & (1u << f)))
+      if (mask & (1u << n))
       {
-        continue;
-      }
-      if (mask & (1u << n++))
-      {
-        // The distinct corners (-0 as +0, as the matching in the piece), sorted by
-        // coordinates, padded with +inf (no corner of a rendered cell is infinite).
-        std::array<std::array<double, 3>, 4> corners;
-        int count = 0;
-        for (int i = 0; i < shapeFaces.Size[f]; ++i)
-        {
-          const std::array<double, 3>& p = this->Points[ids[shapeFaces.Corner[f][i]]];
-          corners[count++] = { p[0] + 0.0, p[1] + 0.0, p[2] + 0.0 };
-        }
-        std::sort(corners.begin(), corners.begin() + count);
-        count =
-          static_cast<int>(std::unique(corners.begin(), corners.begin() + count) - corners.begin());
-        FaceCorners face;
-        face.fill(std::numeric_limits<double>::infinity());
-        for (int i = 0; i < count; ++i)
-        {
-          std::copy(corners[i].begin(), corners[i].end(), face.begin() + 3 * i);
-        }
-        faces.push_back(face);
+        faces.push_back(this->CornersOfPlane(cell, n));
       }
     }
+  }
+  for (const auto& crowded : this->CrowdedFaces)
+  {
+    faces.push_back(this->CornersOfPlane(crowded.first, crowded.second));
   }
   return faces;
 }
@@ -529,7 +550,10 @@ void CellMesh::MatchFaces(uint8_t* shared) const
         {
           const bool match =
             (i != first && (i - 1)->SameFace(*i)) || (i + 1 != last && (i + 1)->SameFace(*i));
-          shared[i->Slot] = match ? 1 : 0;
+          // 2: the first copy of a face three or more cells hold (CrowdedFaces).
+          const bool crowded = (i == first || !(i - 1)->SameFace(*i)) && i + 2 < last &&
+            (i + 1)->SameFace(*i) && (i + 2)->SameFace(*i);
+          shared[i->Slot] = crowded ? 2 : match ? 1 : 0;
         }
       }
     });

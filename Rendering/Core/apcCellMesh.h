@@ -119,6 +119,9 @@ public:
   // numbers on every process that holds the face); ClearBoundaryFaces takes one flag per listed
   // face back (inner[i] != 0: another process holds face i) and unsets those planes' bits, after
   // which the flags are the whole mesh's (SharesBoundary). ForgetBoundaryPlanes drops them all.
+  // After the boundary faces, GetBoundaryFaces also lists once each face that three or more of
+  // this piece's cells hold (inner here, but another piece may hold the same face once: in one
+  // process it is inner, so that piece's copy must learn of it); their flags are not read back.
   using FaceCorners = std::array<double, 12>;
   std::vector<FaceCorners> GetBoundaryFaces() const;
   void ClearBoundaryFaces(const std::vector<uint8_t>& inner);
@@ -126,6 +129,7 @@ public:
   void ForgetBoundaryPlanes()
   {
     this->BoundaryPlanes.clear();
+    this->CrowdedFaces.clear();
     this->BoundaryShared = false;
   }
   // xmin, xmax, ymin, ymax, zmin, zmax of one cell (from its corners: nothing reads them
@@ -177,6 +181,8 @@ private:
   // mesh has the same corners. Index: the ids' type (32 bits where they fit).
   template <class Index>
   void MatchFaces(uint8_t* shared) const;
+  // The face behind plane n of cell: its distinct corners sorted, padded with +inf.
+  FaceCorners CornersOfPlane(int64_t cell, int n) const;
 
   UninitializedVector<CellShape> Shapes;
   UninitializedVector<int64_t> Offsets{ 0 };
@@ -191,6 +197,8 @@ private:
   // plane n); BoundaryPlanes: see GetBoundaryPlanes.
   UninitializedVector<uint8_t> PlaneFaces;
   UninitializedVector<uint8_t> BoundaryPlanes;
+  // (cell, plane) of one copy of each face that three or more cells hold (GetBoundaryFaces).
+  std::vector<std::pair<int64_t, int>> CrowdedFaces;
   bool BoundaryShared = false;
   UninitializedVector<std::array<float, 2>> ScalarRanges;
   std::array<double, 6> MeshBounds{ 0, -1, 0, -1, 0, -1 };

@@ -16,9 +16,10 @@ namespace
 {
 
 // The hexahedra (i, j, k) of an nx x ny x nz block of size h for which keep(i, j, k), each
-// piece with its own points (a rank's piece); cells[c]: cell c's (i, j, k).
+// piece with its own points (a rank's piece), cell (0, 0, 0) copies times; cells[c]: cell c's
+// (i, j, k).
 apc::CellMesh Piece(const int n[3], double h, const std::function<bool(int, int, int)>& keep,
-  std::vector<std::array<int, 3>>& cells)
+  std::vector<std::array<int, 3>>& cells, int copies = 1)
 {
   apc::CellMesh mesh;
   auto point = [&](int i, int j, int k) -> int64_t
@@ -39,8 +40,11 @@ apc::CellMesh Piece(const int n[3], double h, const std::function<bool(int, int,
         const int64_t ids[8] = { point(i, j, k), point(i + 1, j, k), point(i + 1, j + 1, k),
           point(i, j + 1, k), point(i, j, k + 1), point(i + 1, j, k + 1),
           point(i + 1, j + 1, k + 1), point(i, j + 1, k + 1) };
-        mesh.AddCell(apc::CellShape::Hexahedron, ids);
-        cells.push_back({ i, j, k });
+        for (int copy = 0; copy < (i == 0 && j == 0 && k == 0 ? copies : 1); ++copy)
+        {
+          mesh.AddCell(apc::CellShape::Hexahedron, ids);
+          cells.push_back({ i, j, k });
+        }
       }
     }
   }
@@ -162,6 +166,33 @@ TEST(BoundaryFaces, PiecesMatchedAcrossProcessesFlagWhatTheWholeMeshFlags)
         }
       }
     }
+  }
+}
+
+// A face that four cells hold (the wind data has 102: cells of its polyhedra meeting on a
+// triangle), split three to one: inner in one process, so the piece holding one copy must
+// learn of the three the other matched among themselves.
+TEST(BoundaryFaces, AFaceThreeCellsOfAPieceHoldIsInnerForTheOtherPiece)
+{
+  const int n[3] = { 2, 1, 1 };
+  std::vector<std::array<int, 3>> cells;
+  const apc::CellMesh whole = Piece(
+    n, 0.5, [](int, int, int) { return true; }, cells, 3);
+  ASSERT_EQ(whole.GetNumberOfCells(), 4);
+  // Plane order of a hexahedron: the face x = 0.5 between the cells is inner in one process.
+  const uint8_t wholeLast = whole.GetBoundaryPlanes(3);
+  std::vector<apc::CellMesh> pieces;
+  std::vector<std::vector<std::array<int, 3>>> pieceCells(2);
+  pieces.push_back(Piece(
+    n, 0.5, [](int i, int, int) { return i == 0; }, pieceCells[0], 3));
+  pieces.push_back(Piece(
+    n, 0.5, [](int i, int, int) { return i == 1; }, pieceCells[1]));
+  ASSERT_NE(pieces[1].GetBoundaryPlanes(0), wholeLast) << "alone, the shared face is boundary";
+  MatchPieces(pieces);
+  EXPECT_EQ(pieces[1].GetBoundaryPlanes(0), wholeLast);
+  for (int64_t c = 0; c < 3; ++c)
+  {
+    EXPECT_EQ(pieces[0].GetBoundaryPlanes(c), whole.GetBoundaryPlanes(c)) << c;
   }
 }
 
