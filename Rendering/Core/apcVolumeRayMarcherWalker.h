@@ -406,19 +406,30 @@ struct VolumeRayMarcher::Walker
   // (in, out), and the pair's end without the stop, with ClipRays' own arithmetic: clipped
   // again only where the stop cut the pair (else [tin, tout) is already Clip's interval from
   // [0, min(End, far)), bit for bit).
+  //
+  // A pair's end where the ray itself begins (the eye inside the mesh) or ends (an opaque
+  // surface's depth, the far limit) is weighted too. The ray's end is continuous in the depth,
+  // a boundary face is weighted: were the ray's end plain, a depth a rounding away from a
+  // boundary face (processes composite the opaque depth differently) would switch the pair
+  // between the two rules, up to half a sample apart.
   template <class Visitor>
   [[gnu::always_inline]] double BoundaryPairEnds(int local, const RaySetup& ray, double tin,
     double tout, CellState& state, const RayProgress& progress, bool& in, bool& out) const
   {
+    double end = tout;
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
     {
       double start = 0;
-      double end = std::min(ray.End, this->FarLimit);
+      end = std::min(ray.End, this->FarLimit);
       state.Planes.ClipEnds(ray, start, end, in, out);
-      return end;
     }
-    state.Planes.BoundaryEnds(ray, tin, tout, in, out);
-    return tout;
+    else
+    {
+      state.Planes.BoundaryEnds(ray, tin, tout, in, out);
+    }
+    in = in || tin <= 0.0;
+    out = out || end >= std::min(ray.End, this->FarLimit);
+    return end;
   }
 
   // The end weights of the pair of ray local over [tin, tout) (tout: up to the ray's stop).
