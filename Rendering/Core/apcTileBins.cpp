@@ -39,21 +39,24 @@ constexpr int kDepthBins = 1 << 14;
 // The smallest depth of a cell's corners along the view direction: a lower bound of t over
 // the cell (a linear function takes its minimum over a convex cell at a corner, and t is that
 // depth for a parallel camera and at least it for a perspective one, whose rays are unit
-// vectors from the eye).
-double NearDepth(const CellMesh& mesh, const RayCamera& camera, int64_t cell)
+// vectors from the eye). And the largest distance of its corners from the eye: an upper bound
+// of t over the cell (the distance is convex, and at least t for either camera).
+std::array<double, 2> NearFar(const CellMesh& mesh, const RayCamera& camera, int64_t cell)
 {
   const auto& eye = camera.GetPosition();
   const auto& forward = camera.GetViewDirection();
   const int64_t* ids = mesh.GetCellPoints(cell);
   const int corners = static_cast<int>(mesh.GetShape(cell));
   double nearest = std::numeric_limits<double>::infinity();
+  double farthest = 0;
   for (int c = 0; c < corners; ++c)
   {
     const auto& x = mesh.Points[ids[c]];
-    nearest = std::min(nearest,
-      (x[0] - eye[0]) * forward[0] + (x[1] - eye[1]) * forward[1] + (x[2] - eye[2]) * forward[2]);
+    const double d[3] = { x[0] - eye[0], x[1] - eye[1], x[2] - eye[2] };
+    nearest = std::min(nearest, d[0] * forward[0] + d[1] * forward[1] + d[2] * forward[2]);
+    farthest = std::max(farthest, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
   }
-  return nearest;
+  return { nearest, std::sqrt(farthest) };
 }
 
 // The cells that cover a pixel, nearest first (Near binned to kDepthBins depths; a stable
@@ -189,13 +192,16 @@ void BinCells(
   const int64_t numCells = mesh ? mesh->GetNumberOfCells() : 0;
   bins.Rects.resize(numCells);
   bins.Near.resize(numCells);
+  bins.Far.resize(numCells);
   ParallelFor(threads, numCells, 4096,
     [&](int64_t begin, int64_t end)
     {
       for (int64_t cell = begin; cell < end; ++cell)
       {
         bins.Rects[cell] = CoveredPixels(*mesh, camera, cell);
-        bins.Near[cell] = NearDepth(*mesh, camera, cell);
+        const std::array<double, 2> nearFar = NearFar(*mesh, camera, cell);
+        bins.Near[cell] = nearFar[0];
+        bins.Far[cell] = nearFar[1];
       }
     });
   BinByRects(bins);
@@ -217,6 +223,7 @@ bool DecimateBins(const TileBins& fine, int step, int offset, int width, int hei
   const int64_t numCells = static_cast<int64_t>(fine.Rects.size());
   bins.Rects.resize(numCells);
   bins.Near.resize(numCells);
+  bins.Far.resize(numCells);
   ParallelFor(threads, numCells, 4096,
     [&](int64_t begin, int64_t end)
     {
@@ -236,6 +243,7 @@ bool DecimateBins(const TileBins& fine, int step, int offset, int width, int hei
                                             : std::array<int, 4>{ 1, 1, 0, 0 };
         }
         bins.Near[cell] = fine.Near[cell];
+        bins.Far[cell] = fine.Far[cell];
       }
     });
   BinByRects(bins);

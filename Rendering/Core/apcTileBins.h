@@ -62,6 +62,10 @@ struct TileBins
   // and at most t for a perspective one), so that a ray already opaque before it can skip it
   // without clipping.
   UninitializedVector<double> Near;
+  // Per cell: an upper bound of the ray parameter t of any of its points on any ray (the
+  // largest distance of its corners from the eye), so that the marcher knows which cells
+  // may hold a ray's last samples before its end (Sample End Weights = Boundary).
+  UninitializedVector<double> Far;
   // Compressed rows: tile t's cells are Cells[Start[t] .. Start[t + 1]), nearest first (by
   // Near, binned to a few thousand depths): a ray meets its front cells first and is opaque
   // sooner.

@@ -136,6 +136,7 @@ struct VolumeRayMarcher::Walker
     CellInterpolator Interpolator;
     int64_t Cell = -1;
     double Near = 0; // no point of the cell lies at a smaller t (TileBins::Near)
+    double Far = 0;  // nor at a larger one (TileBins::Far)
     double Lo = 0;   // the cell's scalar range
     double Hi = 0;
     bool Interpolate = false; // point scalars of a visible cell
@@ -165,6 +166,7 @@ struct VolumeRayMarcher::Walker
   {
     constexpr bool keepsTransparent = Visitor::WantsSegments || Visitor::WantsTransparentSamples;
     state.Near = this->Bins.Near[cell];
+    state.Far = this->Bins.Far[cell];
     if (Visitor::StopsWhenOpaque && state.Near >= progress.TileStop)
     {
       return false; // behind every ray of the tile, all opaque
@@ -233,7 +235,8 @@ struct VolumeRayMarcher::Walker
     // weights, which sample a pair without a lattice point too.
     constexpr bool allInside = Visitor::WantsSegments || !Visitor::WantsSamples;
     const bool weighted = this->EndWeights && !allInside && Visitor::TakesEndWeights &&
-      (!this->BoundaryWeights || state.Planes.BoundaryMask != 0);
+      (!this->BoundaryWeights || state.Planes.BoundaryMask != 0 ||
+        this->NearRayEnds(state, progress));
     walk::ClippedRays& c = state.Clipped;
     const double* stop = Visitor::StopsWhenOpaque ? progress.Stop : nullptr;
     // Where the lanes are on, the clipping finds the pairs' end weights four rays at a time;
@@ -402,34 +405,75 @@ struct VolumeRayMarcher::Walker
     return this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
   }
 
-  // Boundary: which ends of the pair of ray local over [tin, tout) lie on the mesh's boundary
-  // (in, out), and the pair's end without the stop, with ClipRays' own arithmetic: clipped
-  // again only where the stop cut the pair (else [tin, tout) is already Clip's interval from
-  // [0, min(End, far)), bit for bit).
-  //
-  // A pair's end where the ray itself begins (the eye inside the mesh) or ends (an opaque
-  // surface's depth, the far limit) is weighted too. The ray's end is continuous in the depth,
-  // a boundary face is weighted: were the ray's end plain, a depth a rounding away from a
-  // boundary face (processes composite the opaque depth differently) would switch the pair
-  // between the two rules, up to half a sample apart.
-  template <class Visitor>
-  [[gnu::always_inline]] double BoundaryPairEnds(int local, const RaySetup& ray, double tin,
-    double tout, CellState& state, const RayProgress& progress, bool& in, bool& out) const
+  // Boundary: whether a cell without a boundary face may still hold a pair that
+  // BoundaryPairWeights weights by the ray's own begin or end: one reaching within a spacing
+  // of the eye or of the tile's nearest ray end. The others take the plain lattice.
+  [[gnu::always_inline]] bool NearRayEnds(const CellState& state, const RayProgress& progress) const
   {
+    return state.Near < this->Grid.Spacing || state.Far + this->Grid.Spacing > progress.NearestEnd;
+  }
+
+  // Boundary: the end weights of the pair of ray local over [tin, tout) (tout: up to the ray's
+  // stop), and whether they are the plain lattice's (plain). An end on the mesh's boundary is
+  // weighted (CellPlanes::BoundaryEnds); where the stop cut the pair, its end is found again
+  // with ClipRays' own arithmetic (clipped again only there: else [tin, tout) is already
+  // Clip's interval from [0, min(End, far)), bit for bit).
+  //
+  // The ray's own begin (0: the eye inside the mesh) and end (an opaque surface's depth, the
+  // far bound) count exactly too. A sample stands for the half spacing either side of its
+  // lattice point, and that span is cut where the ray begins or ends, whichever cell the
+  // point lies in: the pair the ray's end cuts, and a pair whose last lattice point lies less
+  // than half a spacing before the ray's end (the ray ends in a later cell before the next
+  // lattice point), weight their end to the ray's end, and a later pair without a lattice
+  // point then adds nothing (EndWeightsAt's clamp); the same at the begin. The ray's integral
+  // is then continuous in its end across every face, shared or on the boundary: processes
+  // composite an opaque depth a rounding apart, and a rule that switched at a face (a plain
+  // end in one cell, a weighted one in the next) turned that rounding into up to half a
+  // sample.
+  template <class Visitor>
+  [[gnu::always_inline]] walk::EndWeights BoundaryPairWeights(int local, const RaySetup& ray,
+    double tin, double tout, CellState& state, const RayProgress& progress, bool& plain) const
+  {
+    bool in = false;
+    bool out = false;
     double end = tout;
+    const double rayEnd = std::min(ray.End, this->FarLimit);
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
     {
       double start = 0;
-      end = std::min(ray.End, this->FarLimit);
+      end = rayEnd;
       state.Planes.ClipEnds(ray, start, end, in, out);
     }
     else
     {
       state.Planes.BoundaryEnds(ray, tin, tout, in, out);
     }
-    in = in || tin <= 0.0;
-    out = out || end >= std::min(ray.End, this->FarLimit);
-    return end;
+    const double half = 0.5 * this->Grid.Spacing;
+    double start = tin;
+    const double own[2] = { tin, end };
+    if (!in &&
+      (tin <= 0.0 || this->Grid.At(this->Grid.First(tin, ray.Offset), ray.Offset) - half < 0.0))
+    {
+      in = true;
+      start = std::min(tin, 0.0);
+    }
+    if (!out &&
+      (end >= rayEnd ||
+        this->Grid.At(this->Grid.First(end, ray.Offset) - 1, ray.Offset) + half > rayEnd))
+    {
+      out = true;
+      end = std::max(end, rayEnd);
+    }
+    plain = !in && !out;
+    walk::EndWeights w = walk::EndWeightsAt(this->Grid, start, end, ray.Offset, in, out);
+    if (w.Mid && (start != own[0] || end != own[1]))
+    {
+      // No lattice point from the ray's begin or to its end: the sample stays in the pair.
+      w.MidOffset =
+        0.5 * (own[0] + own[1]) * this->Grid.InverseSpacing - static_cast<double>(w.First);
+      w.MidT = this->Grid.At(w.First, w.MidOffset);
+    }
+    return w;
   }
 
   // The end weights of the pair of ray local over [tin, tout) (tout: up to the ray's stop).
@@ -442,10 +486,8 @@ struct VolumeRayMarcher::Walker
     double end = tout;
     if (this->BoundaryWeights)
     {
-      bool in = false;
-      bool out = false;
-      end = this->BoundaryPairEnds<Visitor>(local, ray, tin, tout, state, progress, in, out);
-      return walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
+      bool plain = false;
+      return this->BoundaryPairWeights<Visitor>(local, ray, tin, tout, state, progress, plain);
     }
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
     {
@@ -456,12 +498,12 @@ struct VolumeRayMarcher::Walker
     return walk::EndWeightsOf(this->Grid, tin, end, ray.Offset);
   }
 
-  // Boundary: the samples of a cell with a boundary face (ClipRays kept hits rays of it,
-  // without the lattice's filter) through the lanes. Each pair's ends first (as PairWeights
-  // finds them): a pair with both ends plain and a lattice point takes the plain lattice's
-  // samples, so it goes to LaneSamples<false> (its first index to Clipped.Lattice, as
-  // ClipRays with the lattice gives it); the others' weights go to state.Ends in the form
-  // ClipRaysWeighted gives them, for LaneSamples<true>: those with a lattice point in
+  // Boundary: the samples of a cell with a boundary face, or near a ray's begin or end
+  // (NearRayEnds; ClipRays kept hits rays of it, without the lattice's filter) through the lanes.
+  // Each pair's ends first (as PairWeights finds them): a pair with both ends plain and a lattice
+  // point takes the plain lattice's samples, so it goes to LaneSamples<false> (its first index to
+  // Clipped.Lattice, as ClipRays with the lattice gives it); the others' weights go to state.Ends
+  // in the form ClipRaysWeighted gives them, for LaneSamples<true>: those with a lattice point in
   // Clipped.Hits, those with a middle sample in Ends.MidHits. A pair without a sample (no
   // lattice point and no weighted end, or a clamped sliver) is dropped, as WeightedRay drops
   // it. A pixel holds one pair of the cell, so splitting the cell's rays changes no pixel's
@@ -483,11 +525,9 @@ struct VolumeRayMarcher::Walker
       const double tin = c.Tin[l];
       const double tout = c.Tout[l];
       // PairWeights' Boundary form, with the ends' flags kept.
-      bool in = false;
-      bool out = false;
-      const double end =
-        this->BoundaryPairEnds<Visitor>(l, ray, tin, tout, state, progress, in, out);
-      const walk::EndWeights w = walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
+      bool plainEnds = false;
+      const walk::EndWeights w =
+        this->BoundaryPairWeights<Visitor>(l, ray, tin, tout, state, progress, plainEnds);
       if (w.Mid)
       {
         ends.MidHits[ends.MidCount++] = static_cast<uint16_t>(l);
@@ -497,7 +537,7 @@ struct VolumeRayMarcher::Walker
         visitor.Segment(l, tin, tout);
         continue;
       }
-      else if (!in && !out)
+      else if (plainEnds)
       {
         c.Lattice[l] = static_cast<double>(w.First);
         plain[plainCount++] = static_cast<uint16_t>(l);
@@ -1014,6 +1054,7 @@ struct VolumeRayMarcher::Walker
     }
     TileRays packed;
     packed.Set(rays.data(), tile.Pixels(), this->FarLimit);
+    progress.NearestEnd = *std::min_element(packed.End, packed.End + tile.Pixels());
     visitor.BeginTile(inBand);
     const int64_t end = this->Bins.Start[tile.Index + 1];
     for (int64_t b = this->Bins.Start[tile.Index]; b < end; ++b)

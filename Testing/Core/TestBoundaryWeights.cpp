@@ -430,10 +430,9 @@ TEST(BoundaryWeights, GrazingSlabHasTheExactOpticalDepth)
 }
 
 // Rays that end at an opaque surface (the depth buffer's distances) a float rounding before
-// the slab's far face: a boundary cell's pair cut by the ray's end is weighted to it exactly,
-// as one ending at the face is, so the optical depth does not jump where a surface meets the
-// mesh's boundary (processes composite the depth a rounding apart). A cell with no boundary
-// face keeps the plain lattice's end there, as with the weights off.
+// the slab's far face: the pair cut by the ray's end is weighted to it exactly, as one ending
+// at the face is, so the optical depth does not jump where a surface meets the mesh's
+// boundary (processes composite the depth a rounding apart).
 TEST(BoundaryWeights, RaysEndingAtASurfaceCountExactlyToIt)
 {
   const double lo[3] = { -1.0, -0.5, -1.0 };
@@ -501,6 +500,78 @@ TEST(BoundaryWeights, RaysEndingAtASurfaceCountExactlyToIt)
     EXPECT_GE(exact, inside * 9 / 10)
       << "fraction " << fraction << ": " << exact << " of " << inside;
   }
+}
+
+// Rays that end a float rounding before or after a face between two cells (an opaque slice
+// through the mesh along a layer of faces; processes composite its depth a rounding apart):
+// the optical depth is continuous in the ray's end there, whether the cells have a boundary
+// face or none (the middle of the block), since the ray's end is weighted whichever cell it
+// falls in, and its last lattice sample's span is cut at it even when that sample lies in the
+// cell before.
+TEST(BoundaryWeights, RaysEndingAtAnInnerFaceAreContinuousInTheirEnd)
+{
+  const double lo[3] = { -1.0, -0.5, -1.0 };
+  const double hi[3] = { 1.0, 0.5, 1.0 };
+  const apc::CellMesh mesh = Block(8, 4, 8, 0.25, lo, true, nullptr);
+  const apc::TransferTable table(
+    0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.4, 0.4 }, kSpacing, 1.0);
+  const double sigma = table.Lookup(0.5).Absorbance / kSpacing;
+  const apc::RayCamera camera = Camera();
+  auto passOne = [&](const std::vector<float>& ends)
+  {
+    apc::VolumeRayMarcher marcher;
+    marcher.SetMesh(&mesh);
+    marcher.SetView(camera, ends.data());
+    marcher.SetEndWeightsMode(Mode::Boundary);
+    std::vector<double> moments(static_cast<size_t>(kSize) * kSize * 5, 0.0);
+    marcher.AccumulateMoments<4>(table, apc::LogDepthWarp(2.0, 7.0), moments.data());
+    return moments;
+  };
+  int rays = 0;
+  int inner = 0;
+  for (double z : { 0.5, 0.25, 0.0, -0.5 })
+  {
+    std::vector<float> before(kSize * kSize, std::numeric_limits<float>::infinity());
+    std::vector<float> after = before;
+    for (int p = 0; p < kSize * kSize; ++p)
+    {
+      const apc::Ray ray = camera.PixelRay(p % kSize, p / kSize);
+      const double t = (z - ray.Origin[2]) / ray.Direction[2];
+      double x[3];
+      for (int d = 0; d < 3; ++d)
+      {
+        x[d] = ray.Origin[d] + t * ray.Direction[d];
+      }
+      if (x[0] > lo[0] + 0.01 && x[0] < hi[0] - 0.01 && x[1] > lo[1] + 0.01 && x[1] < hi[1] - 0.01)
+      {
+        before[p] = std::nextafter(static_cast<float>(t), 0.f);
+        after[p] = std::nextafter(static_cast<float>(t), std::numeric_limits<float>::infinity());
+      }
+    }
+    const std::vector<double> a = passOne(before);
+    const std::vector<double> b = passOne(after);
+    for (int p = 0; p < kSize * kSize; ++p)
+    {
+      if (std::isinf(before[p]))
+      {
+        continue;
+      }
+      ++rays;
+      const apc::Ray ray = camera.PixelRay(p % kSize, p / kSize);
+      const double t = (z - ray.Origin[2]) / ray.Direction[2];
+      const double x = ray.Origin[0] + t * ray.Direction[0];
+      const double y = ray.Origin[1] + t * ray.Direction[1];
+      inner += z > -0.75 && z < 0.75 && x > -0.75 && x < 0.75 && y > -0.25 && y < 0.25 ? 1 : 0;
+      // The optical depth grows by sigma over the rounding between the two ends, and no more
+      // (the plain lattice's end, or a switch between rules at the face, moves it by up to
+      // half a sample).
+      const double grows = sigma * (static_cast<double>(after[p]) - before[p]);
+      EXPECT_NEAR(b[5 * p], a[5 * p] + grows, 1e-6 * a[5 * p] + 1e-12)
+        << "face z = " << z << " pixel " << p;
+    }
+  }
+  EXPECT_GT(rays, 3000);
+  EXPECT_GT(inner, 500); // ends in cells with no boundary face
 }
 
 TEST(BoundaryWeights, InnerCellsTakeThePlainLatticesSamples)

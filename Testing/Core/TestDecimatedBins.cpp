@@ -69,6 +69,7 @@ TEST(DecimatedBins, AreTheBinsOfTheDecimatedCamera)
             ASSERT_EQ(a, b) << "cell " << cell << ", step " << step << ", offset " << offset;
           }
           ASSERT_EQ(derived.Near[cell], expected.Near[cell]);
+          ASSERT_EQ(derived.Far[cell], expected.Far[cell]);
         }
         EXPECT_EQ(derived.Start, expected.Start);
         EXPECT_TRUE(derived.Cells == expected.Cells);
