@@ -34,8 +34,9 @@ struct VolumeSettings
   MomentParameters Moments;    // MBOIT's number of moments, beta, bias and resolve
   double SampleDistance = 0.0; // world units; 0: from the cells (apcDefaultSpacing.h)
   bool LatticeJitter = false;
-  // VolumeRayMarcher::EndWeightsMode: 0 off, 1 all ends, 2 the ends on the mesh's boundary.
-  int SampleEndWeights = 0;
+  // VolumeRayMarcher::EndWeightsMode: 0 off, 1 all ends, 2 the ends on the mesh's boundary
+  // (the default: no lattice staircase on silhouettes at a few per cent of a frame).
+  int SampleEndWeights = 2;
   // MBOIT stops a ray at VolumeRayMarcher::kRecommendedOpaqueAbsorbance of its own samples.
   bool StopWhereOpaque = true;
   int SampleCacheMiB = -1; // -1: the process's share of its node's memory (apcNodeThreads.h)

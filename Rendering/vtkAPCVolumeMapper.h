@@ -167,14 +167,15 @@ public:
    * the ray: N processes still render what one renders. MBOIT (APC) mode only: the EXACT and
    * segment modes keep the plain lattice, whose sort-last runs need every sample at a lattice
    * point (docs/sampler.md), and so does the HYBRID resolve, which is the exact blend on one
-   * process. Off by default.
+   * process.
    *
    * END_WEIGHTS_BOUNDARY weights only the ends on the mesh's boundary (faces no other cell of
    * the mesh shares): the staircase is there, while at an inner face the plain lattice
    * already covers the ray exactly, so inner cells keep the plain lattice's samples and
    * cost. The boundary is the whole mesh's: on several processes, vtkAPCCompositePass matches
    * the faces between the pieces once per data change (apcBoundaryExchange.h), so N processes
-   * take the samples one takes; the mapper alone sees its own input's boundary.
+   * take the samples one takes; the mapper alone sees its own input's boundary. The default:
+   * the staircase goes for a few per cent of a frame's time (docs/sampler.md).
    * true / 1 is END_WEIGHTS_ALL.
    */
   enum

@@ -98,7 +98,9 @@ TEST(VolumeMapperAnalytic, HexAndTetBlocksOfALinearFieldAgree)
 {
   // Trilinear interpolation in hexahedra and linear interpolation in tetrahedra both
   // reproduce a linear field exactly, and both meshes fill the same block, so the images
-  // may differ only by rounding.
+  // may differ only by rounding. On the plain lattice: with Sample End Weights = Boundary (the
+  // default) a boundary cell's piece of ray with no lattice point takes a middle sample, and
+  // which pieces have none depends on how the block is cut into cells (docs/sampler.md).
   auto linear = [](double x, double y, double z) { return 0.5 + (x + 2 * y - z) / 8.0; };
   auto hexes = apctest::HexBlock(4, linear);
   auto tets = apctest::Tetrahedralized(hexes);
@@ -114,6 +116,7 @@ TEST(VolumeMapperAnalytic, HexAndTetBlocksOfALinearFieldAgree)
     {
       m->SetMode(mode);
       m->SetSampleDistance(0.01);
+      m->SetSampleEndWeights(vtkAPCVolumeMapper::END_WEIGHTS_OFF);
     };
     const Frame a = apctest::Render(hexes, configure, tf, view);
     const Frame b = apctest::Render(tets, configure, tf, view);

@@ -309,7 +309,16 @@ TEST(VolumeMapperErrors, CameraInsideTheVolume)
   for (int mode : { vtkAPCVolumeMapper::MBOIT, vtkAPCVolumeMapper::EXACT })
   {
     vtkNew<MessageLog> log;
-    const Frame frame = apctest::Render(grid, Configure(mode, log), {}, view);
+    // The plain lattice in both modes (EXACT keeps it whatever Sample End Weights says): the
+    // same samples. The default (Boundary) is checked below.
+    const Frame frame = apctest::Render(
+      grid,
+      [&](vtkAPCVolumeMapper* m)
+      {
+        Configure(mode, log)(m);
+        m->SetSampleEndWeights(vtkAPCVolumeMapper::END_WEIGHTS_OFF);
+      },
+      {}, view);
     ASSERT_EQ(frame.RGBA.size(), static_cast<size_t>(4 * 33 * 33)) << ModeName(mode);
     EXPECT_EQ(NonFinite(frame.RGBA), 0) << ModeName(mode);
     double minAlpha = 1;
@@ -334,6 +343,22 @@ TEST(VolumeMapperErrors, CameraInsideTheVolume)
   }
   std::cout << "eye inside: max |alpha MBOIT - alpha EXACT| = " << alphaDiff << "\n";
   EXPECT_LE(alphaDiff, 1e-5);
+
+  // MBOIT with its default end weights (Boundary): the same analytic alpha, every pixel seen.
+  vtkNew<MessageLog> log;
+  const Frame weighted = apctest::Render(grid, Configure(vtkAPCVolumeMapper::MBOIT, log), {}, view);
+  ASSERT_EQ(weighted.RGBA.size(), static_cast<size_t>(4 * 33 * 33));
+  EXPECT_EQ(NonFinite(weighted.RGBA), 0);
+  double minWeighted = 1;
+  for (size_t p = 3; p < weighted.RGBA.size(); p += 4)
+  {
+    minWeighted = std::min(minWeighted, static_cast<double>(weighted.RGBA[p]));
+  }
+  std::cout << "MBOIT (Boundary), eye inside: centre alpha "
+            << weighted.RGBA[4 * (16 * 33 + 16) + 3] << ", min alpha " << minWeighted << "\n";
+  EXPECT_NEAR(weighted.RGBA[4 * (16 * 33 + 16) + 3], -std::expm1(-1.3 * kSigma), 2e-3);
+  EXPECT_GT(minWeighted, 0.05);
+  EXPECT_TRUE(log->Errors.empty()) << log->All();
 }
 
 // The defaults chosen from the quality evaluation (docs/evaluation.md): 4 moments, the core's

@@ -497,7 +497,11 @@ TEST(VolumeMapperInputs, QuadraticCellsRenderLikeTheirTetrahedra)
 
 TEST(VolumeMapperInputs, PolyhedraRenderLikeTheirTetrahedra)
 {
-  // A linear field: hexahedra and any tetrahedra of them interpolate it the same.
+  // A linear field: hexahedra and any tetrahedra of them interpolate it the same. On the
+  // plain lattice: Sample End Weights = Boundary's middle samples in boundary cells with no
+  // lattice point depend on how the block is cut into cells (docs/sampler.md).
+  const auto plain = [](vtkAPCVolumeMapper* m)
+  { m->SetSampleEndWeights(vtkAPCVolumeMapper::END_WEIGHTS_OFF); };
   auto f = [](double x, double y, double z) { return 0.5 + 0.3 * x - 0.2 * y + 0.1 * z; };
   auto hexahedra = apctest::HexBlock(2, f);
   auto polyhedra = AsPolyhedra(hexahedra);
@@ -506,10 +510,10 @@ TEST(VolumeMapperInputs, PolyhedraRenderLikeTheirTetrahedra)
   for (int mode : kModes)
   {
     vtkNew<MessageLog> log;
-    const Frame frame = RenderArray(polyhedra, "f", false, mode, log);
+    const Frame frame = RenderArray(polyhedra, "f", false, mode, log, plain);
     vtkNew<MessageLog> quiet;
-    const Frame tets = RenderArray(tetrahedra, "f", false, mode, quiet);
-    const Frame hexes = RenderArray(hexahedra, "f", false, mode, quiet);
+    const Frame tets = RenderArray(tetrahedra, "f", false, mode, quiet, plain);
+    const Frame hexes = RenderArray(hexahedra, "f", false, mode, quiet, plain);
     const double diffTets = apctest::MaxAbsDiff(frame.RGBA, tets.RGBA);
     const double diffHexes = apctest::MaxAbsDiff(frame.RGBA, hexes.RGBA);
     std::cout << "8 hexahedra as polyhedra (" << tetrahedra->GetNumberOfCells() << " tetrahedra), "

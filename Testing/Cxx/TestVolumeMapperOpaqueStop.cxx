@@ -47,6 +47,9 @@ TEST(VolumeMapperOpaqueStop, ReachesTheMarcherWithinTheBound)
   apctest::LiveWindow live(OpaqueTF(), view);
   live.Mapper->SetInputData(grid);
   live.Mapper->SetSampleDistance(0.02);
+  // The plain lattice, which the exact mode keeps whatever Sample End Weights says: the same
+  // samples in every mode, so the exact mode's count is the stop-off count.
+  live.Mapper->SetSampleEndWeights(vtkAPCVolumeMapper::END_WEIGHTS_OFF);
   ASSERT_TRUE(live.Mapper->GetStopWhereOpaque()) << "on by default";
 
   live.Mapper->StopWhereOpaqueOff();

@@ -67,8 +67,8 @@ parser.add_argument("--stop-where-opaque", help="folder: render with APCStopWher
                     "opaque scene) than 1/255 beyond where marching every sample leaves it")
 parser.add_argument("--stop", type=int, choices=(0, 1),
                     help="set APCStopWhereOpaque (default: the property's default)")
-parser.add_argument("--end-weights", action="store_true",
-                    help="set APCSampleEndWeights (it must be off by default)")
+parser.add_argument("--end-weights", choices=("Off", "All", "Boundary"),
+                    help="set APCSampleEndWeights (it must be Boundary by default)")
 parser.add_argument("--paraview-setup", action="store_true",
                     help="ParaView's default colour map and linear opacity ramp over the data "
                     "range, the representation's unit distance, APC's default sample distance")
@@ -384,8 +384,9 @@ def main():
         display.APCStopWhereOpaque = args.stop
     if args.end_weights:
         # An enumeration (Off / All / Boundary): Python sees its text.
-        check(display.APCSampleEndWeights in (0, "Off"), "APCSampleEndWeights is off by default")
-        display.APCSampleEndWeights = "All"
+        check(display.APCSampleEndWeights in (2, "Boundary"),
+              "APCSampleEndWeights is Boundary by default")
+        display.APCSampleEndWeights = args.end_weights
     if args.band_megapixels > 0:
         display.APCBandMegapixels = args.band_megapixels
     display.APCResolveMode = args.resolve
