@@ -362,7 +362,8 @@ TEST(VolumeMapperErrors, CameraInsideTheVolume)
 }
 
 // The defaults chosen from the quality evaluation (docs/evaluation.md): 4 moments, the core's
-// overestimation (the mapper's header repeats it as a literal), MBOIT's renormalised resolve.
+// overestimation (the mapper's header repeats it as a literal), MBOIT's renormalised resolve;
+// end weights at the mesh's boundary (docs/sampler.md).
 TEST(VolumeMapperErrors, Defaults)
 {
   vtkNew<vtkAPCVolumeMapper> mapper;
@@ -371,6 +372,7 @@ TEST(VolumeMapperErrors, Defaults)
   EXPECT_EQ(mapper->GetOverestimation(), apc::kDefaultOverestimation);
   EXPECT_EQ(apc::kDefaultOverestimation, 0.3);
   EXPECT_EQ(mapper->GetResolveMode(), vtkAPCVolumeMapper::RENORMALISED);
+  EXPECT_EQ(mapper->GetSampleEndWeights(), vtkAPCVolumeMapper::END_WEIGHTS_BOUNDARY);
 }
 
 TEST(VolumeMapperErrors, NumberOfMoments)
