@@ -406,11 +406,11 @@ struct VolumeRayMarcher::Walker
   }
 
   // Boundary: whether a cell without a boundary face may still hold a pair that
-  // BoundaryPairWeights weights by the ray's own begin or end: one reaching within a spacing
-  // of the eye or of the tile's nearest ray end. The others take the plain lattice.
+  // BoundaryPairWeights weights by the ray's own begin or end: one holding the eye, or
+  // reaching within a spacing of the tile's nearest ray end. The others take the plain lattice.
   [[gnu::always_inline]] bool NearRayEnds(const CellState& state, const RayProgress& progress) const
   {
-    return state.Near < this->Grid.Spacing || state.Far + this->Grid.Spacing > progress.NearestEnd;
+    return state.Near <= 0.0 || state.Far + this->Grid.Spacing > progress.NearestEnd;
   }
 
   // Boundary: the end weights of the pair of ray local over [tin, tout) (tout: up to the ray's
@@ -419,17 +419,17 @@ struct VolumeRayMarcher::Walker
   // with ClipRays' own arithmetic (clipped again only there: else [tin, tout) is already
   // Clip's interval from [0, min(End, far)), bit for bit).
   //
-  // The ray's own begin (0: the eye inside the mesh) and end (an opaque surface's depth, the
-  // far bound) count exactly too. A sample stands for the half spacing either side of its
-  // lattice point, and that span is cut where the ray begins or ends, whichever cell the
-  // point lies in: the pair the ray's end cuts, and a pair whose last lattice point lies less
-  // than half a spacing before the ray's end (the ray ends in a later cell before the next
-  // lattice point), weight their end to the ray's end, and a later pair without a lattice
-  // point then adds nothing (EndWeightsAt's clamp); the same at the begin. The ray's integral
-  // is then continuous in its end across every face, shared or on the boundary: processes
+  // The ray's own end (an opaque surface's depth, the far bound) counts exactly too, whichever
+  // cell it falls in. A plain end leaves the half spacing before the next lattice point to
+  // that point's sample; where the ray ends before the next lattice point nobody takes that
+  // sample, so the pair ends weighted at the ray's end instead (the pair the end cuts, and one
+  // left through a shared face with no lattice point between it and the ray's end), and a
+  // later pair entered through a shared face with no lattice point of its own adds nothing
+  // (the pair before it, with the same next lattice point, counted it). The ray's integral is
+  // then continuous in its end across every face, shared or on the boundary: processes
   // composite an opaque depth a rounding apart, and a rule that switched at a face (a plain
-  // end in one cell, a weighted one in the next) turned that rounding into up to half a
-  // sample.
+  // end in one cell, a weighted one in the next, or a sliver's clamp) turned that rounding
+  // into up to half a sample. The eye inside the mesh: the pair it cuts starts weighted.
   template <class Visitor>
   [[gnu::always_inline]] walk::EndWeights BoundaryPairWeights(int local, const RaySetup& ray,
     double tin, double tout, CellState& state, const RayProgress& progress, bool& plain) const
@@ -448,27 +448,31 @@ struct VolumeRayMarcher::Walker
     {
       state.Planes.BoundaryEnds(ray, tin, tout, in, out);
     }
-    const double half = 0.5 * this->Grid.Spacing;
-    double start = tin;
     const double own[2] = { tin, end };
-    if (!in &&
-      (tin <= 0.0 || this->Grid.At(this->Grid.First(tin, ray.Offset), ray.Offset) - half < 0.0))
+    // The ray's next lattice point after the pair: none is sampled at or past the ray's end.
+    const int64_t next = this->Grid.First(end, ray.Offset);
+    const bool lastBeforeEnd = this->Grid.At(next, ray.Offset) >= rayEnd;
+    in = in || tin <= 0.0;
+    if (lastBeforeEnd && !in && this->Grid.First(tin, ray.Offset) == next)
     {
-      in = true;
-      start = std::min(tin, 0.0);
+      // Entered through a shared face with no lattice point before the ray's end: the pair
+      // before it, which reaches the same next lattice point, counts up to the ray's end.
+      plain = false;
+      walk::EndWeights none;
+      none.First = next;
+      none.Last = next - 1;
+      return none;
     }
-    if (!out &&
-      (end >= rayEnd ||
-        this->Grid.At(this->Grid.First(end, ray.Offset) - 1, ray.Offset) + half > rayEnd))
+    if (!out && lastBeforeEnd)
     {
       out = true;
       end = std::max(end, rayEnd);
     }
     plain = !in && !out;
-    walk::EndWeights w = walk::EndWeightsAt(this->Grid, start, end, ray.Offset, in, out);
-    if (w.Mid && (start != own[0] || end != own[1]))
+    walk::EndWeights w = walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
+    if (w.Mid && end != own[1])
     {
-      // No lattice point from the ray's begin or to its end: the sample stays in the pair.
+      // No lattice point up to the ray's end: the sample stays in the pair.
       w.MidOffset =
         0.5 * (own[0] + own[1]) * this->Grid.InverseSpacing - static_cast<double>(w.First);
       w.MidT = this->Grid.At(w.First, w.MidOffset);

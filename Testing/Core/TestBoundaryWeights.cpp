@@ -505,9 +505,10 @@ TEST(BoundaryWeights, RaysEndingAtASurfaceCountExactlyToIt)
 // Rays that end a float rounding before or after a face between two cells (an opaque slice
 // through the mesh along a layer of faces; processes composite its depth a rounding apart):
 // the optical depth is continuous in the ray's end there, whether the cells have a boundary
-// face or none (the middle of the block), since the ray's end is weighted whichever cell it
-// falls in, and its last lattice sample's span is cut at it even when that sample lies in the
-// cell before.
+// face or none (the middle of the block): the ray's end is weighted whichever cell it falls
+// in, a pair left through a shared face before the ray's next lattice point counts up to the
+// ray's end, and the pair after it adds nothing (rays entering through the block's sides just
+// before the face have such pairs without a lattice point).
 TEST(BoundaryWeights, RaysEndingAtAnInnerFaceAreContinuousInTheirEnd)
 {
   const double lo[3] = { -1.0, -0.5, -1.0 };
