@@ -298,8 +298,8 @@ struct RayProgress
   // Once every pixel of the tile has a stop, the largest: a cell nearer than none of them is
   // skipped without looking at its rays.
   double TileStop = std::numeric_limits<double>::infinity();
-  // The nearest of the tile's ray ends, min(ray end, far bound) (Sample End Weights =
-  // Boundary: only a cell reaching within a spacing of it may hold a ray's last samples).
+  // The nearest of the tile's ray ends (Sample End Weights = Boundary: only a cell reaching
+  // within a spacing of it may hold a pair weighted to a ray's end).
   double NearestEnd = std::numeric_limits<double>::infinity();
   int Pixels = 0;
   int Open = 0;         // pixels without a stop

@@ -419,7 +419,7 @@ struct VolumeRayMarcher::Walker
   // with ClipRays' own arithmetic (clipped again only there: else [tin, tout) is already
   // Clip's interval from [0, min(End, far)), bit for bit).
   //
-  // The ray's own end (an opaque surface's depth, the far bound) counts exactly too, whichever
+  // The ray's own end (an opaque surface's depth) counts exactly too, whichever
   // cell it falls in. A plain end leaves the half spacing before the next lattice point to
   // that point's sample; where the ray ends before the next lattice point nobody takes that
   // sample, so the pair ends weighted at the ray's end instead (the pair the end cuts, and one
@@ -437,11 +437,13 @@ struct VolumeRayMarcher::Walker
     bool in = false;
     bool out = false;
     double end = tout;
-    const double rayEnd = std::min(ray.End, this->FarLimit);
+    // The ray's own end, not the clip's min(end, far bound): the far bound is each process's
+    // own piece's, and N processes must weigh what one process weighs.
+    const double rayEnd = ray.End;
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
     {
       double start = 0;
-      end = rayEnd;
+      end = std::min(ray.End, this->FarLimit);
       state.Planes.ClipEnds(ray, start, end, in, out);
     }
     else
@@ -1058,7 +1060,10 @@ struct VolumeRayMarcher::Walker
     }
     TileRays packed;
     packed.Set(rays.data(), tile.Pixels(), this->FarLimit);
-    progress.NearestEnd = *std::min_element(packed.End, packed.End + tile.Pixels());
+    progress.NearestEnd = std::min_element(rays.begin(), rays.begin() + tile.Pixels(),
+      [](const RaySetup& a, const RaySetup& b) {
+        return a.End < b.End;
+      })->End;
     visitor.BeginTile(inBand);
     const int64_t end = this->Bins.Start[tile.Index + 1];
     for (int64_t b = this->Bins.Start[tile.Index]; b < end; ++b)
