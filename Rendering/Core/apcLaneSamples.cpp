@@ -124,15 +124,17 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
   __m256d k = _mm256_load_pd(rays.K);
   if (cell.Bins)
   {
-    // The number of ends at or before K, BinOf's value: the ends and K are integers exact
-    // as doubles, so each compare is the integers'.
-    __m256i bin = _mm256_setzero_si256();
-    for (int b = 0; b < kBinEnds; ++b)
-    {
-      bin = _mm256_sub_epi64(
-        bin, _mm256_castpd_si256(_mm256_cmp_pd(V(cell.BinEnds[b]), k, _CMP_LE_OQ)));
-    }
-    _mm256_store_si256(reinterpret_cast<__m256i*>(steps.Bin), bin);
+    // The number of ends at or before K, BinOf's value, is floor((K - Base) / Width) held to
+    // 0 .. kBinEnds (the ends are Base + (b + 1) Width): one division instead of a compare
+    // per end. K - Base and Width are integers below 2^53, exact as doubles; a quotient that
+    // is not an integer lies at least 1 / Width from the next one, more than its rounding
+    // (below |K - Base| / Width 2^-53), so the rounded quotient's floor is the integers'.
+    const __m256d d = _mm256_sub_pd(k, V(cell.BinBase));
+    __m256d bin = _mm256_floor_pd(_mm256_div_pd(d, V(cell.BinWidth)));
+    bin = _mm256_min_pd(
+      _mm256_max_pd(bin, _mm256_setzero_pd()), _mm256_set1_pd(static_cast<double>(kBinEnds)));
+    _mm256_store_si256(
+      reinterpret_cast<__m256i*>(steps.Bin), _mm256_cvtepi32_epi64(_mm256_cvttpd_epi32(bin)));
   }
   int s = 0;
   for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
@@ -292,10 +294,10 @@ __attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCel
   vectors.Bins = cell.BinEnds != nullptr;
   if (vectors.Bins)
   {
-    for (int b = 0; b < kBinEnds; ++b)
-    {
-      Broadcast(cell.BinEnds[b], vectors.BinEnds[b]);
-    }
+    // The ends are Base + (b + 1) Width (integers exact as doubles, and so their differences).
+    const double width = cell.BinEnds[1] - cell.BinEnds[0];
+    Broadcast(cell.BinEnds[0] - width, vectors.BinBase);
+    Broadcast(width, vectors.BinWidth);
   }
 }
 
