@@ -82,9 +82,11 @@ struct LaneCellVectors
   alignas(32) double Min[4]; // the table's layout
   alignas(32) double Scale[4];
   alignas(32) double Last[4];
-  // With Bins: where bin 0 starts and the bins' width (OpaqueBins::Base, Width), exact.
+  // With Bins: where bin 0 starts and the bins' width (OpaqueBins::Base, Width), exact, and
+  // the width's rounded inverse.
   alignas(32) double BinBase[4];
   alignas(32) double BinWidth[4];
+  alignas(32) double BinInverse[4];
   const float* AbsorbancePairs; // the table's (TransferTable::Layout)
   bool Pyramid;
   bool Twisted;
