@@ -124,15 +124,24 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
   __m256d k = _mm256_load_pd(rays.K);
   if (cell.Bins)
   {
-    // The number of ends at or before K, BinOf's value: the ends and K are integers exact
-    // as doubles, so each compare is the integers'.
-    __m256i bin = _mm256_setzero_si256();
-    for (int b = 0; b < kBinEnds; ++b)
-    {
-      bin = _mm256_sub_epi64(
-        bin, _mm256_castpd_si256(_mm256_cmp_pd(V(cell.BinEnds[b]), k, _CMP_LE_OQ)));
-    }
-    _mm256_store_si256(reinterpret_cast<__m256i*>(steps.Bin), bin);
+    // The number of ends at or before K, BinOf's value, is floor((K - Base) / Width) held to
+    // 0 .. kBinEnds (the ends are Base + (b + 1) Width): a multiply instead of a compare per
+    // end (and instead of a division, whose latency showed). K - Base and Width are integers
+    // below 2^53, exact as doubles. Where the quotient matters (about -1 to 16) the product
+    // with the rounded inverse lies within 2^-47 of it, and a quotient that is not an integer
+    // lies at least 1 / Width from the next one, so the product's floor is the integers' but
+    // where the quotient is an integer n and the product rounds below it (width 49, n = 1):
+    // then (floor + 1) Width, exact, is at most K - Base, and the bin is one more. Far from
+    // the bins the clamp gives the first or last bin either way.
+    const __m256d d = _mm256_sub_pd(k, V(cell.BinBase));
+    __m256d bin = _mm256_floor_pd(_mm256_mul_pd(d, V(cell.BinInverse)));
+    const __m256d up = _mm256_add_pd(bin, _mm256_set1_pd(1.0));
+    bin =
+      _mm256_blendv_pd(bin, up, _mm256_cmp_pd(_mm256_mul_pd(up, V(cell.BinWidth)), d, _CMP_LE_OQ));
+    bin = _mm256_min_pd(
+      _mm256_max_pd(bin, _mm256_setzero_pd()), _mm256_set1_pd(static_cast<double>(kBinEnds)));
+    _mm256_store_si256(
+      reinterpret_cast<__m256i*>(steps.Bin), _mm256_cvtepi32_epi64(_mm256_cvttpd_epi32(bin)));
   }
   int s = 0;
   for (; s < kLaneSteps; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
@@ -292,10 +301,11 @@ __attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCel
   vectors.Bins = cell.BinEnds != nullptr;
   if (vectors.Bins)
   {
-    for (int b = 0; b < kBinEnds; ++b)
-    {
-      Broadcast(cell.BinEnds[b], vectors.BinEnds[b]);
-    }
+    // The ends are Base + (b + 1) Width (integers exact as doubles, and so their differences).
+    const double width = cell.BinEnds[1] - cell.BinEnds[0];
+    Broadcast(cell.BinEnds[0] - width, vectors.BinBase);
+    Broadcast(width, vectors.BinWidth);
+    Broadcast(1.0 / width, vectors.BinInverse);
   }
 }
 

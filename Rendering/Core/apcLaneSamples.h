@@ -30,8 +30,8 @@ struct LaneCell
   double Hi;
   TransferTable::Layout Table;
   double Spacing; // Lattice::Spacing
-  // Pass 1's own stop: the first kBinEnds bin ends (RayProgress::BinEnds, exact as doubles),
-  // or null (no bins to find).
+  // Pass 1's own stop: the first kBinEnds bin ends (RayProgress::BinEnds, exact as doubles,
+  // evenly spaced as OpaqueBins::End makes them), or null (no bins to find).
   const double* BinEnds = nullptr;
 };
 
@@ -82,8 +82,12 @@ struct LaneCellVectors
   alignas(32) double Min[4]; // the table's layout
   alignas(32) double Scale[4];
   alignas(32) double Last[4];
-  alignas(32) double BinEnds[kBinEnds][4]; // with Bins
-  const float* AbsorbancePairs;            // the table's (TransferTable::Layout)
+  // With Bins: where bin 0 starts and the bins' width (OpaqueBins::Base, Width), exact, and
+  // the width's rounded inverse.
+  alignas(32) double BinBase[4];
+  alignas(32) double BinWidth[4];
+  alignas(32) double BinInverse[4];
+  const float* AbsorbancePairs; // the table's (TransferTable::Layout)
   bool Pyramid;
   bool Twisted;
   bool Other; // with Twisted: A != 0, the second root may be tried

@@ -334,10 +334,11 @@ struct Moments : NoSegments
   // LaneRunEnd.
   static constexpr bool TakesLaneMoments = N == 4;
   const double* PixelSums(int pixel) const { return this->Sums.data() + pixel * (N + 1); }
-  // Keeps lane's run of m (steps from lattice index k, pixel's): its sums, and the records of
-  // its visible steps in order, as RunBegin, RunAdd per step and RunEnd would.
-  [[gnu::always_inline]] void LaneRunEnd(
-    int pixel, const walk::LaneMoments& m, int lane, int64_t k, const walk::LaneSteps& steps)
+  // Keeps lane's run of m (steps from lattice index k, pixel's; the call took taken steps): its
+  // sums, and the records of its visible steps in order, as RunBegin, RunAdd per step and
+  // RunEnd would.
+  [[gnu::always_inline]] void LaneRunEnd(int pixel, const walk::LaneMoments& m, int lane, int64_t k,
+    const walk::LaneSteps& steps, int taken)
   {
     static_assert(N == 4, "the lanes' sums are four moments'");
     const uint64_t visible = static_cast<uint64_t>(m.Visible[lane]);
@@ -353,15 +354,18 @@ struct Moments : NoSegments
     sums[4] = m.Sum4[lane];
     if (this->Recording)
     {
-      RecordedSample* record = this->Buffer->Room(static_cast<size_t>(m.Steps[lane]));
+      // Every step of the call written, the next record's place advanced only past a visible
+      // one (as RunAdd does): the call's step count is the same in its four lanes, where a
+      // loop over each lane's visible steps ended at a count the processor could not predict.
+      RecordedSample* record = this->Buffer->Room(static_cast<size_t>(taken));
       uint32_t kept = 0;
-      for (uint64_t bits = visible; bits; bits &= bits - 1, ++kept)
+      for (int s = 0; s < taken; ++s)
       {
-        const int s = __builtin_ctzll(bits);
         record[kept].Z = m.Z[s][lane];
         record[kept].Scalar = static_cast<float>(steps.Scalar[s][lane]);
         record[kept].Pixel = static_cast<uint16_t>(pixel);
         record[kept].K16 = static_cast<uint16_t>(k + s);
+        kept += static_cast<uint32_t>(visible >> s & 1);
       }
       this->Buffer->Used += kept;
       this->Buffer->Counts[pixel] += kept;

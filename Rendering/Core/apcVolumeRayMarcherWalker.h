@@ -782,7 +782,7 @@ struct VolumeRayMarcher::Walker
             if (kept)
             {
               s = static_cast<int>(across.Steps[i]);
-              visitor.LaneRunEnd(l, across, i, kk, steps);
+              visitor.LaneRunEnd(l, across, i, kk, steps, taken);
               if (own)
               {
                 const uint64_t visible = static_cast<uint64_t>(across.Visible[i]);

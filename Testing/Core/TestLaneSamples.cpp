@@ -291,3 +291,62 @@ TEST(LaneSamples, ScalarsThatAreNotFiniteGiveNoAbsorbance)
   }
   CheckLanes(0.05, false, true);
 }
+
+// Each lane's bin against BinOf for bins of every width up to OpaqueBins' largest (kMaxSpan /
+// kBins), lanes at each bin end, one before it and one past it: (K - Base) times the width's
+// rounded inverse falls just below an integer for some widths (49 is the first), which the
+// bin's correction must undo.
+TEST(LaneSamples, BinsOfEveryWidthMatchBinOfAtTheirEnds)
+{
+  if (!apc::walk::HasAvx2())
+  {
+    GTEST_SKIP() << "no AVX2";
+  }
+  std::mt19937 rng(7);
+  const apc::TransferTable table = RandomTable(rng);
+  apc::walk::LaneCell cell{};
+  cell.Pyramid = false;
+  for (int i = 0; i < 3; ++i)
+  {
+    cell.Inverse[i][i] = 1.0;
+  }
+  cell.Lo = 0.0;
+  cell.Hi = 10.0;
+  cell.Table = table.GetLayout();
+  cell.Spacing = 0.5;
+  auto progress = std::make_unique<apc::walk::RayProgress>();
+  int compared = 0;
+  const int widest = static_cast<int>(apc::OpaqueBins::kMaxSpan) / apc::OpaqueBins::kBins;
+  for (int width = 1; width <= widest; ++width)
+  {
+    // Bins from lattice index 37 on, width steps each.
+    const double span = static_cast<double>(width * apc::OpaqueBins::kBins);
+    const apc::OpaqueBins bins =
+      apc::OpaqueBins::Make(1.0, 37 * cell.Spacing, (37 + span) * cell.Spacing, cell.Spacing);
+    ASSERT_EQ(bins.Width, width);
+    progress->Begin(1, &bins);
+    cell.BinEnds = progress->BinEnds;
+    apc::walk::LaneCellVectors vectors;
+    apc::walk::SetUpLaneCell(cell, vectors);
+    for (int end = 0; end < apc::OpaqueBins::kBins; end += 1)
+    {
+      apc::walk::LaneRays rays{};
+      const int64_t at = bins.Base + static_cast<int64_t>(end) * width;
+      const int64_t k[4] = { at - 1, at, at + 1, at + width - 1 };
+      for (int i = 0; i < 4; ++i)
+      {
+        rays.K[i] = static_cast<double>(k[i]);
+        rays.Tout[i] = -std::numeric_limits<double>::infinity();
+        rays.D[0][i] = 1.0;
+      }
+      apc::walk::LaneSteps steps;
+      apc::walk::LaneSamplesAvx2(vectors, rays, steps);
+      for (int i = 0; i < 4; ++i)
+      {
+        ASSERT_EQ(steps.Bin[i], progress->BinOf(k[i])) << "width " << width << " k " << k[i];
+        compared += 1;
+      }
+    }
+  }
+  EXPECT_EQ(compared, widest * apc::OpaqueBins::kBins * 4);
+}
