@@ -413,14 +413,6 @@ std::vector<CellMesh::FaceCorners> CellMesh::GetBoundaryFaces() const
   {
     return faces;
   }
-  // Sized first: grown face by face, the list (96 bytes a face) was copied and touched afresh
-  // at every doubling.
-  size_t count = this->CrowdedFaces.size();
-  for (int64_t cell = 0; cell < numCells; ++cell)
-  {
-    count += static_cast<size_t>(__builtin_popcount(this->BoundaryPlanes[cell]));
-  }
-  faces.reserve(count);
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
     const uint8_t mask = this->BoundaryPlanes[cell];

@@ -274,7 +274,12 @@ int main(int argc, char* argv[])
       planes += __builtin_popcount(bits);
     }
     // The faces sorted: which copy of a face three cells hold is listed may move it in the list.
-    std::vector<apc::CellMesh::FaceCorners> faces = mesh.GetBoundaryFaces();
+    std::vector<apc::CellMesh::FaceCorners> faces;
+    getrusage(RUSAGE_SELF, &before);
+    Time(
+      "boundary_faces_first", 1, [&] { faces = mesh.GetBoundaryFaces(); }, cpu, wall);
+    getrusage(RUSAGE_SELF, &after);
+    std::printf("# boundary_faces_first: %ld page faults\n", after.ru_minflt - before.ru_minflt);
     std::sort(faces.begin(), faces.end());
     Mix(hash, faces.data(), faces.size() * sizeof(faces[0]));
     std::printf("# boundary checksum %016llx, %lld boundary planes, %zu faces listed\n", hash,
