@@ -335,6 +335,9 @@ public:
   {
     double Agree = 0;
     double Depth = 0;
+    // Sample End Weights = Boundary on several processes, after a data change: matching the
+    // piece's faces and exchanging those on its boundary (apcBoundaryExchange.h).
+    double Boundary = 0;
     double Pass1 = 0;
     double Tiles = 0;   // where a process waits for the slowest pass 1
     double Profile = 0; // Stop Where Opaque: the opaque profiles' allreduce
@@ -394,6 +397,7 @@ public:
     // Each stage's wait for the last process and transfer after it (see above).
     double AgreeWait = 0, AgreeTransfer = 0;
     double DepthWait = 0, DepthTransfer = 0;
+    double BoundaryWait = 0, BoundaryTransfer = 0;
     double TilesWait = 0, TilesTransfer = 0;
     double ProfileWait = 0, ProfileTransfer = 0;
     double AllreduceWait = 0, AllreduceTransfer = 0;
@@ -424,6 +428,7 @@ public:
   {
     f("agree", timings.Agree);
     f("depth", timings.Depth);
+    f("boundary", timings.Boundary);
     f("pass1", timings.Pass1);
     f("tiles", timings.Tiles);
     f("profile", timings.Profile);
@@ -467,6 +472,8 @@ public:
     f("agree_transfer", timings.AgreeTransfer);
     f("depth_wait", timings.DepthWait);
     f("depth_transfer", timings.DepthTransfer);
+    f("boundary_wait", timings.BoundaryWait);
+    f("boundary_transfer", timings.BoundaryTransfer);
     f("tiles_wait", timings.TilesWait);
     f("tiles_transfer", timings.TilesTransfer);
     f("profile_wait", timings.ProfileWait);
@@ -494,7 +501,7 @@ public:
     f("slowest_rank", timings.SlowestRank);
     f("wait_max", timings.WaitMax);
   }
-  static constexpr int NumberOfTimings = 71;
+  static constexpr int NumberOfTimings = 74;
 
   ///@{
   /**

@@ -139,7 +139,7 @@ public:
    * them by name, with GetLastTimingNames (apcparaview.last_timings in Python), never by
    * position: fields are added as the pass measures more.
    */
-  double* GetLastTimings() VTK_SIZEHINT(71);
+  double* GetLastTimings() VTK_SIZEHINT(74);
   /**
    * The names of GetLastTimings' values, in their order, separated by spaces.
    */
@@ -173,7 +173,7 @@ protected:
   vtkWeakPointer<vtkPVRenderView> View;
   std::unique_ptr<apc::ViewRequest> ViewRequest; // the view settings above, for the pass
   bool SaidNoArray = false; // that Solid Color draws nothing, until an array is chosen
-  double LastTimings[71] = {};
+  double LastTimings[74] = {};
   std::string LastTimingNames;
   std::string LastRankRenderSeconds;
 

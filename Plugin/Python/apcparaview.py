@@ -58,8 +58,10 @@ def rank_summaries(proxy, port=0):
 
 def last_timings(display):
     """The last frame of an "APC Volume" display on the display rank, as a dict by name:
-    seconds of each stage ("agree", "depth", "pass1", "tiles", "profile" and "cut" (Stop Where
-    Opaque's profile allreduce and cut), "allreduce", "pass2", "reduce",
+    seconds of each stage ("agree", "depth", "boundary" (Sample End Weights = Boundary's
+    matching and exchange of the boundary faces after a data change), "pass1", "tiles",
+    "profile" and "cut" (Stop Where Opaque's profile allreduce and cut), "allreduce", "pass2",
+    "reduce",
     "resolve", "segments", "exchange", "blend_segments", "gather", "exact", "blend", ...) and
     "total", and "bytes_sent", "messages_sent", "composited_pixels", "covered_pixels", "mode"
     (0 APC, 1 Exact (segments), 2 Local exact: what Auto chose; -1 skipped), "image_reduction"
@@ -105,7 +107,7 @@ def rank_render_seconds(display):
 
 
 # The pass's stages in their order (they add up to last_timings()["total"]).
-STAGES = ["agree", "depth", "pass1", "tiles", "profile", "cut", "allreduce", "pass2", "reduce", "resolve",
+STAGES = ["agree", "depth", "boundary", "pass1", "tiles", "profile", "cut", "allreduce", "pass2", "reduce", "resolve",
           "segments", "exchange", "blend_segments", "gather", "statistics", "exact", "auto",
           "ranks", "blend"]
 

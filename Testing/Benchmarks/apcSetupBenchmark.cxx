@@ -11,8 +11,14 @@
 // have, so the same source measures a baseline, but for "probe_bins_decimated" (a first
 // frame's probe binning, and its bins derived from the frame's: DecimateBins).
 //
+// "boundary_first" is CellMesh::FindBoundaryPlanes (Sample End Weights = Boundary's matching)
+// once after the conversion, as a first frame runs it (its memory new to the process), with its
+// system CPU seconds and page faults; "boundary" the smallest of --repeats more; then a checksum
+// of the boundary planes found. --piece K N converts piece K of N (a rank's share of the data
+// on N ranks, as ParaView's reader splits it).
+//
 //   apcSetupBenchmark [--data FILE] [--array U_mag] [--size 1024] [--repeats 3] [--no-pass1]
-//                     [--camera fill|overview]
+//                     [--camera fill|overview] [--piece K N]
 
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
@@ -39,6 +45,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <sys/resource.h>
 #include <vector>
 
 namespace
@@ -165,6 +172,8 @@ int main(int argc, char* argv[])
   std::string arrayName = "U_mag";
   int size = 1024;
   int repeats = 3;
+  int piece = 0;
+  int pieces = 1;
   bool timePass1 = true;
   double factor = 1.0; // the camera's distance: 1 = the demo's view, 0.6 = "fill"
   for (int i = 1; i < argc; ++i)
@@ -177,6 +186,13 @@ int main(int argc, char* argv[])
     }
     if (i + 1 >= argc)
       break;
+    if (option == "--piece" && i + 2 < argc)
+    {
+      piece = std::atoi(argv[i + 1]);
+      pieces = std::max(1, std::atoi(argv[i + 2]));
+      i += 2;
+      continue;
+    }
     if (option == "--data")
       data = argv[i + 1];
     else if (option == "--array")
@@ -194,7 +210,7 @@ int main(int argc, char* argv[])
   {
     vtkNew<vtkXMLPUnstructuredGridReader> reader;
     reader->SetFileName(data.c_str());
-    reader->Update();
+    reader->UpdatePiece(piece, pieces, 0);
     grid = reader->GetOutput();
   }
   else
@@ -230,6 +246,45 @@ int main(int argc, char* argv[])
   }
   Time(
     "finalize", repeats, [&] { mesh.Finalize(); }, cpu, wall);
+  {
+    rusage before;
+    rusage after;
+    getrusage(RUSAGE_SELF, &before);
+    Time(
+      "boundary_first", 1, [&] { mesh.FindBoundaryPlanes(); }, cpu, wall);
+    getrusage(RUSAGE_SELF, &after);
+    std::printf("# boundary_first: %.4f system s, %ld page faults\n",
+      (after.ru_stime.tv_sec - before.ru_stime.tv_sec) +
+        1e-6 * (after.ru_stime.tv_usec - before.ru_stime.tv_usec),
+      after.ru_minflt - before.ru_minflt);
+    Time(
+      "boundary", repeats,
+      [&]
+      {
+        mesh.ForgetBoundaryPlanes();
+        mesh.FindBoundaryPlanes();
+      },
+      cpu, wall);
+    unsigned long long hash = 1469598103934665603ull;
+    int64_t planes = 0;
+    for (int64_t c = 0; c < mesh.GetNumberOfCells(); ++c)
+    {
+      const uint8_t bits = mesh.GetBoundaryPlanes(c);
+      Mix(hash, &bits, 1);
+      planes += __builtin_popcount(bits);
+    }
+    // The faces sorted: which copy of a face three cells hold is listed may move it in the list.
+    std::vector<apc::CellMesh::FaceCorners> faces;
+    getrusage(RUSAGE_SELF, &before);
+    Time(
+      "boundary_faces_first", 1, [&] { faces = mesh.GetBoundaryFaces(); }, cpu, wall);
+    getrusage(RUSAGE_SELF, &after);
+    std::printf("# boundary_faces_first: %ld page faults\n", after.ru_minflt - before.ru_minflt);
+    std::sort(faces.begin(), faces.end());
+    Mix(hash, faces.data(), faces.size() * sizeof(faces[0]));
+    std::printf("# boundary checksum %016llx, %lld boundary planes, %zu faces listed\n", hash,
+      static_cast<long long>(planes), faces.size());
+  }
   // The camera of first_frame.py and paraview_vs_apc.py, a square image.
   // --camera fill moves it to 0.6 x its focal distance (paraview_vs_apc.py's fill camera).
   const double focal[3] = { 155, 90, 40 };

@@ -117,7 +117,7 @@ STAGES = ["agree", "depth", "pass1", "allreduce", "pass2", "reduce", "resolve", 
 # APC's collectives: each stage's wait for the slowest rank and its transfer after it.
 COLLECTIVES = ["tiles", "profile", "allreduce", "reduce"]
 SEGMENT_STAGES = ["segments", "exchange", "blend_segments", "gather"]
-FIRST_STAGES = ["opaque_prepass", "pass1", "tiles", "profile", "cut", "allreduce", "pass2",
+FIRST_STAGES = ["boundary", "opaque_prepass", "pass1", "tiles", "profile", "cut", "allreduce", "pass2",
                 "reduce"]
 # Stop Where Opaque's counts in the first frame (several ranks: the probe's samples, the pixels
 # its bound left unresolved and the tiles marched again for them).
@@ -484,7 +484,7 @@ def main(args):
             # Where the first frame's time went, beside the later frames' medians above.
             notes.append("first frame's stages (s): " + " ".join(
                 "%s %.3f" % (s, timings[0].get(s, 0))
-                for s in STAGES + ["tiles", "profile", "cut"]))
+                for s in STAGES + ["boundary", "opaque_prepass", "tiles", "profile", "cut"]))
             notes.append("cells unchanged by rendering" if after == before
                          else "CELLS MOVED by rendering")
         else:

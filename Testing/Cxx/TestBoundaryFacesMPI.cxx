@@ -81,6 +81,17 @@ int main(int argc, char* argv[])
       apctest::RenderDistributed(controller, wind, piece, bounds, size, false, pass);
     Check(!pass->GetLastFrameFailed(), rank, "the frame renders");
     Report(controller, "matched");
+    // The matching and exchange are a stage of the frame's timings of their own ("boundary",
+    // its collectives' waits and transfers inside it), so a first frame's cost shows there.
+    const vtkAPCCompositePass::Timings timings = pass->GetLastTimings();
+    if (ranks > 1)
+    {
+      std::printf("rank %d: boundary stage %.4f s (wait %.4f, transfer %.4f)\n", rank,
+        timings.Boundary, timings.BoundaryWait, timings.BoundaryTransfer);
+      Check(timings.Boundary > 0 && timings.BoundaryWait > 0 &&
+          timings.BoundaryWait + timings.BoundaryTransfer <= timings.Boundary,
+        rank, "the boundary exchange is timed as its own stage");
+    }
     if (rank == 0)
     {
       // The compact wire's criterion of every N-ranks-against-one test (TestCompositePassMPI).
