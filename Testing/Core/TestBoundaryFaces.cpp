@@ -4,10 +4,16 @@
 // between pieces stay flagged.
 #include "apcBoundaryFaces.h"
 #include "apcCellMesh.h"
+#include "apcDepthWarp.h"
+#include "apcRayCamera.h"
+#include "apcTransferTable.h"
+#include "apcVolumeRayMarcher.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <functional>
 #include <random>
 #include <vector>
@@ -209,6 +215,67 @@ TEST(BoundaryFaces, AFaceIsInnerOnlyWhenTwoProcessesSendIt)
   EXPECT_EQ(inner, (std::vector<uint8_t>{ 1, 0, 0, 1 }));
   EXPECT_EQ(apc::FaceOwner(a, 3), apc::FaceOwner(a, 3));
   EXPECT_LT(apc::FaceOwner(b, 3), 3);
+}
+
+// Pass 1 with Boundary on pieces matched as the exchange matches them sums to the whole mesh's
+// moments: every weight depends on the pair and the ray, never on the piece, also at a spacing
+// close to the cells' size where a ray's last lattice point lies far before the piece's own
+// far bound (each piece's far bound differs; a weight taken from it would differ too).
+TEST(BoundaryFaces, PiecesMatchedSumToTheWholeMeshsMoments)
+{
+  const int n[3] = { 6, 5, 4 };
+  const double h = 0.25;
+  constexpr int kSize = 48;
+  const apc::RayCamera camera({ 0.3, 1.2, 3.0 }, { -0.25, 0.125, 0.0 }, { 0, 1, 0 }, 40.0, false,
+    1.0, kSize, kSize, 0.1, 20.0);
+  auto passOne = [&](const apc::CellMesh& mesh, double spacing)
+  {
+    const apc::TransferTable table(
+      0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.4, 0.4 }, spacing, 1.0);
+    apc::VolumeRayMarcher marcher;
+    marcher.SetMesh(&mesh);
+    marcher.SetView(camera, nullptr);
+    marcher.SetEndWeightsMode(apc::VolumeRayMarcher::EndWeightsMode::Boundary);
+    std::vector<double> moments(static_cast<size_t>(kSize) * kSize * 5, 0.0);
+    marcher.AccumulateMoments<4>(table, apc::LogDepthWarp(1.5, 6.0), moments.data());
+    return moments;
+  };
+  std::vector<std::array<int, 3>> wholeCells;
+  const apc::CellMesh whole = Piece(
+    n, h, [](int, int, int) { return true; }, wholeCells);
+  for (int processes : { 2, 4 })
+  {
+    // Slabs along the depth (k), so that the pieces' far bounds differ.
+    std::vector<apc::CellMesh> pieces;
+    std::vector<std::vector<std::array<int, 3>>> cells(processes);
+    for (int p = 0; p < processes; ++p)
+    {
+      pieces.push_back(Piece(
+        n, h, [&](int, int, int k) { return k * processes / n[2] == p; }, cells[p]));
+    }
+    MatchPieces(pieces);
+    for (double spacing : { 0.05, 0.2 })
+    {
+      const std::vector<double> expected = passOne(whole, spacing);
+      std::vector<double> sum(expected.size(), 0.0);
+      for (const apc::CellMesh& piece : pieces)
+      {
+        const std::vector<double> own = passOne(piece, spacing);
+        for (size_t i = 0; i < sum.size(); ++i)
+        {
+          sum[i] += own[i];
+        }
+      }
+      int covered = 0;
+      for (int p = 0; p < kSize * kSize; ++p)
+      {
+        covered += expected[5 * p] > 0 ? 1 : 0;
+        EXPECT_NEAR(sum[5 * p], expected[5 * p], 1e-9 * (1.0 + expected[5 * p]))
+          << processes << " pieces, spacing " << spacing << ", pixel " << p;
+      }
+      EXPECT_GT(covered, kSize * kSize / 4) << processes << " pieces, spacing " << spacing;
+    }
+  }
 }
 
 } // namespace
