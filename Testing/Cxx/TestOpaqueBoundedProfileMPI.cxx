@@ -31,11 +31,7 @@ namespace
 {
 using apctest::Check;
 
-struct Frame
-{
-  std::vector<float> RGBA; // the display rank's float image
-  vtkAPCCompositePass::Timings Timings;
-};
+using Frame = apctest::PassFrame;
 
 // Renders each of views in turn through one pass over each rank's piece (the first frame
 // has no prediction, the later ones predict from the frame before); returns every frame.
@@ -43,31 +39,9 @@ std::vector<Frame> RenderFrames(vtkMPIController* controller, const apctest::Sce
   vtkUnstructuredGrid* piece, const double bounds[6], const std::vector<apctest::View>& views,
   bool stop = true)
 {
-  constexpr int size = 96;
-  vtkNew<vtkAPCCompositePass> pass;
-  vtkNew<vtkRenderWindow> window;
-  vtkNew<vtkRenderer> renderer;
-  apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
-  vtkNew<vtkAPCVolumeMapper> mapper;
-  mapper->SetInputData(piece);
-  mapper->SetStopWhereOpaque(stop);
-  mapper->SetNumberOfThreads(1);
-  vtkNew<vtkVolume> volume;
-  apctest::ConfigureVolume(volume, mapper, scene);
-  pass->KeepLastImageOn();
-  pass->AddVolume(volume);
-  std::vector<Frame> frames;
-  for (const apctest::View& view : views)
-  {
-    apctest::ApplyView(renderer, view);
-    renderer->ResetCameraClippingRange(bounds);
-    window->Render();
-    Frame frame;
-    frame.Timings = pass->GetLastTimings();
-    frame.RGBA = apctest::ImageRGBA(pass->GetLastImage());
-    frames.push_back(frame);
-  }
-  return frames;
+  apctest::PassFrameOptions options;
+  options.Stop = stop;
+  return apctest::RenderPassFrames(controller, scene, piece, bounds, views, options);
 }
 }
 

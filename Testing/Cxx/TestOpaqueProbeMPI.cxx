@@ -31,41 +31,16 @@ namespace
 {
 using apctest::Check;
 
-struct Frame
-{
-  std::vector<float> RGBA; // the display rank's float image
-  vtkAPCCompositePass::Timings Timings;
-};
-
-constexpr int kSize = 96;
+using Frame = apctest::PassFrame;
 
 // The first frame of a fresh pass over each rank's piece, with the probe (its default step) or
 // without it.
 Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
   vtkUnstructuredGrid* piece, const double bounds[6], bool probe)
 {
-  vtkNew<vtkAPCCompositePass> pass;
-  if (!probe)
-  {
-    pass->SetOpaqueProbeStep(0);
-  }
-  vtkNew<vtkRenderWindow> window;
-  vtkNew<vtkRenderer> renderer;
-  apctest::SetUpCompositeWindow(window, renderer, kSize, pass, controller);
-  vtkNew<vtkAPCVolumeMapper> mapper;
-  mapper->SetInputData(piece);
-  mapper->SetNumberOfThreads(1);
-  vtkNew<vtkVolume> volume;
-  apctest::ConfigureVolume(volume, mapper, scene);
-  pass->KeepLastImageOn();
-  pass->AddVolume(volume);
-  apctest::ApplyView(renderer, scene.Camera);
-  renderer->ResetCameraClippingRange(bounds);
-  window->Render();
-  Frame frame;
-  frame.Timings = pass->GetLastTimings();
-  frame.RGBA = apctest::ImageRGBA(pass->GetLastImage());
-  return frame;
+  apctest::PassFrameOptions options;
+  options.ProbeStep = probe ? -1 : 0;
+  return apctest::RenderPassFrames(controller, scene, piece, bounds, { scene.Camera }, options)[0];
 }
 
 // Every process's value summed.

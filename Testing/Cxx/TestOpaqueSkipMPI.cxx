@@ -39,37 +39,18 @@ using apctest::Check;
 // probe's at a step of 64 (at 128^2 on 2 ranks: 0.02-0.08 do; 0.15 leaves every ray open).
 constexpr double kBarelyOpaqueUnit = 0.05;
 
-struct Frame
-{
-  std::vector<float> RGBA; // the display rank's float image
-  vtkAPCCompositePass::Timings Timings;
-};
+using Frame = apctest::PassFrame;
 
 // The first frame of a fresh pass over each rank's piece, with the stop on or off, and the
 // probe's step (0: no probe).
 Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
   vtkUnstructuredGrid* piece, const double bounds[6], bool stop, int probeStep = 8)
 {
-  constexpr int size = 128; // 64 tiles, for one thread (kTilesPerThreadWithoutStop)
-  vtkNew<vtkAPCCompositePass> pass;
-  pass->SetOpaqueProbeStep(probeStep);
-  vtkNew<vtkRenderWindow> window;
-  vtkNew<vtkRenderer> renderer;
-  apctest::SetUpCompositeWindow(window, renderer, size, pass, controller);
-  vtkNew<vtkAPCVolumeMapper> mapper;
-  mapper->SetInputData(piece);
-  mapper->SetStopWhereOpaque(stop);
-  mapper->SetNumberOfThreads(1);
-  vtkNew<vtkVolume> volume;
-  apctest::ConfigureVolume(volume, mapper, scene);
-  pass->KeepLastImageOn();
-  pass->AddVolume(volume);
-  apctest::SetCamera(renderer, scene, bounds);
-  window->Render();
-  Frame frame;
-  frame.Timings = pass->GetLastTimings();
-  frame.RGBA = apctest::ImageRGBA(pass->GetLastImage());
-  return frame;
+  apctest::PassFrameOptions options;
+  options.Size = 128; // 64 tiles, for one thread (kTilesPerThreadWithoutStop)
+  options.Stop = stop;
+  options.ProbeStep = probeStep;
+  return apctest::RenderPassFrames(controller, scene, piece, bounds, { scene.Camera }, options)[0];
 }
 }
 

@@ -44,6 +44,37 @@ void SetCamera(vtkRenderer* renderer, const Scene& scene, const double bounds[6]
   renderer->ResetCameraClippingRange(bounds);
 }
 
+std::vector<PassFrame> RenderPassFrames(vtkMPIController* controller, const Scene& scene,
+  vtkUnstructuredGrid* piece, const double bounds[6], const std::vector<View>& views,
+  const PassFrameOptions& options)
+{
+  vtkNew<vtkAPCCompositePass> pass;
+  if (options.ProbeStep >= 0)
+  {
+    pass->SetOpaqueProbeStep(options.ProbeStep);
+  }
+  vtkNew<vtkRenderWindow> window;
+  vtkNew<vtkRenderer> renderer;
+  SetUpCompositeWindow(window, renderer, options.Size, pass, controller);
+  vtkNew<vtkAPCVolumeMapper> mapper;
+  mapper->SetInputData(piece);
+  mapper->SetStopWhereOpaque(options.Stop);
+  mapper->SetNumberOfThreads(1);
+  vtkNew<vtkVolume> volume;
+  ConfigureVolume(volume, mapper, scene);
+  pass->KeepLastImageOn();
+  pass->AddVolume(volume);
+  std::vector<PassFrame> frames;
+  for (const View& view : views)
+  {
+    ApplyView(renderer, view);
+    renderer->ResetCameraClippingRange(bounds);
+    window->Render();
+    frames.push_back({ ImageRGBA(pass->GetLastImage()), pass->GetLastTimings() });
+  }
+  return frames;
+}
+
 std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& scene,
   vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
   vtkAPCCompositePass* pass, bool withVolume, int resolve, std::vector<unsigned char>* shown,

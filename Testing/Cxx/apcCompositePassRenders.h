@@ -5,6 +5,7 @@
 #define apcCompositePassRenders_h
 
 #include "apcTestScenes.h"
+#include "vtkAPCCompositePass.h"
 #include "vtkAPCPuzzleSource.h"
 #include "vtkAPCVolumeMapper.h"
 
@@ -12,7 +13,6 @@
 
 #include <vector>
 
-class vtkAPCCompositePass;
 class vtkImageData;
 class vtkMPIController;
 class vtkRenderer;
@@ -29,6 +29,28 @@ std::vector<float> RenderDistributed(vtkMPIController* controller, const Scene& 
   vtkUnstructuredGrid* piece, const double globalBounds[6], int size, bool plane,
   vtkAPCCompositePass* pass, bool withVolume = true, int resolve = vtkAPCVolumeMapper::RENORMALISED,
   std::vector<unsigned char>* shown = nullptr, bool stopWhereOpaque = true);
+
+// One frame of a pass as the opaque stop's tests read it: the display rank's float image (empty
+// on the other ranks) and the pass's timings of that frame on this rank.
+struct PassFrame
+{
+  std::vector<float> RGBA;
+  vtkAPCCompositePass::Timings Timings;
+};
+
+// How RenderPassFrames sets up its fresh pass and mapper (one thread per rank).
+struct PassFrameOptions
+{
+  int Size = 96;      // the window's width and height
+  bool Stop = true;   // the mapper's Stop Where Opaque
+  int ProbeStep = -1; // the pass's OpaqueProbeStep; -1 leaves the pass's default
+};
+
+// Renders each of views in turn through one fresh pass over each rank's piece (the first frame
+// has no previous frame; each later one follows the frame before); every frame, in order.
+std::vector<PassFrame> RenderPassFrames(vtkMPIController* controller, const Scene& scene,
+  vtkUnstructuredGrid* piece, const double bounds[6], const std::vector<View>& views,
+  const PassFrameOptions& options = PassFrameOptions());
 
 // The scene's sample distance, moments, jitter and transfer function on mapper and volume.
 void ConfigureVolume(vtkVolume* volume, vtkAPCVolumeMapper* mapper, const Scene& scene);
