@@ -537,6 +537,14 @@ struct VolumeRayMarcher::Walker
     int plainCount = 0;
     int kept = 0;
     ends.MidCount = 0;
+    // Whether each pair enters or leaves through a boundary plane (CellPlanes::BoundaryEnds),
+    // four pairs at a time; a cell here only for its rays' ends (NearRayEnds) has none.
+    uint8_t boundary[walk::kTilePixels + 3];
+    const bool onBoundary = state.Planes.BoundaryMask != 0;
+    if (onBoundary)
+    {
+      walk::BoundaryEnds(state.Planes, packed, c, c.Hits, hits, boundary);
+    }
     for (int h = 0; h < hits; ++h)
     {
       const int l = c.Hits[h];
@@ -555,9 +563,8 @@ struct VolumeRayMarcher::Walker
       }
       else
       {
-        bool in = false;
-        bool out = false;
-        state.Planes.BoundaryEnds(ray, tin, tout, in, out);
+        const bool in = onBoundary && (boundary[h] & 1) != 0;
+        const bool out = onBoundary && (boundary[h] & 2) != 0;
         if (!in && !out && tin > 0.0 && ray.End > tout + 2.0 * this->Grid.Spacing)
         {
           // Neither end on the boundary, the eye before the pair and the ray's end more than
