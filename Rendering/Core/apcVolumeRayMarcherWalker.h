@@ -538,7 +538,8 @@ struct VolumeRayMarcher::Walker
     int kept = 0;
     ends.MidCount = 0;
     // Whether each pair enters or leaves through a boundary plane (CellPlanes::BoundaryEnds),
-    // four pairs at a time; a cell here only for its rays' ends (NearRayEnds) has none.
+    // four pairs at a time; a cell here only for its rays' ends (NearRayEnds) has none (and
+    // BoundaryEnds would find none: tout is at most the mesh's finite far bound).
     uint8_t boundary[walk::kTilePixels + 3];
     const bool onBoundary = state.Planes.BoundaryMask != 0;
     if (onBoundary)
