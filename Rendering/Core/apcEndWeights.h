@@ -44,13 +44,15 @@ struct EndWeights
   }
 };
 
-// The weights of the pair [tin, tout) (tin < tout) of a ray with this lattice offset.
+// The weights of the pair [tin, tout) (tin < tout) of a ray with this lattice offset, given
+// first = lattice.First(tin, offset) and next = lattice.First(tout, offset) (a caller that
+// has them already does not search the lattice again).
 [[gnu::always_inline]] inline EndWeights EndWeightsOf(
-  const Lattice& lattice, double tin, double tout, double offset)
+  const Lattice& lattice, double tin, double tout, double offset, int64_t first, int64_t next)
 {
   EndWeights w;
-  w.First = lattice.First(tin, offset);
-  w.Last = lattice.First(tout, offset) - 1;
+  w.First = first;
+  w.Last = next - 1;
   if (w.Last < w.First)
   {
     w.Mid = true;
@@ -70,6 +72,14 @@ struct EndWeights
   return w;
 }
 
+// The weights of the pair [tin, tout) (tin < tout) of a ray with this lattice offset.
+[[gnu::always_inline]] inline EndWeights EndWeightsOf(
+  const Lattice& lattice, double tin, double tout, double offset)
+{
+  return EndWeightsOf(
+    lattice, tin, tout, offset, lattice.First(tin, offset), lattice.First(tout, offset));
+}
+
 // The weights of the pair [tin, tout) with only some of its ends weighted (Sample End Weights
 // = Boundary: the ends on the mesh's boundary, CellMesh::GetBoundaryPlanes). A weighted end
 // counts exactly from the face, a plain one covers half a spacing past its last lattice
@@ -82,16 +92,19 @@ struct EndWeights
 // t_next - s/2, so the pair's exact weight is (t_next - s/2 - tin) / s, down to -1/2. A
 // negative weight is clamped to no sample (the marcher takes no sample of non-positive
 // absorbance either): the ray then counts up to s/2 more than its length there.
-[[gnu::always_inline]] inline EndWeights EndWeightsAt(
-  const Lattice& lattice, double tin, double tout, double offset, bool weightedIn, bool weightedOut)
+// With firstIndex = lattice.First(tin, offset) and nextIndex = lattice.First(tout, offset)
+// given.
+[[gnu::always_inline]] inline EndWeights EndWeightsAt(const Lattice& lattice, double tin,
+  double tout, double offset, bool weightedIn, bool weightedOut, int64_t firstIndex,
+  int64_t nextIndex)
 {
   if (weightedIn && weightedOut)
   {
-    return EndWeightsOf(lattice, tin, tout, offset);
+    return EndWeightsOf(lattice, tin, tout, offset, firstIndex, nextIndex);
   }
   EndWeights w;
-  w.First = lattice.First(tin, offset);
-  w.Last = lattice.First(tout, offset) - 1;
+  w.First = firstIndex;
+  w.Last = nextIndex - 1;
   if (!weightedIn && !weightedOut)
   {
     return w;
@@ -129,6 +142,13 @@ struct EndWeights
   w.FirstWeight = first;
   w.LastWeight = last;
   return w;
+}
+
+[[gnu::always_inline]] inline EndWeights EndWeightsAt(
+  const Lattice& lattice, double tin, double tout, double offset, bool weightedIn, bool weightedOut)
+{
+  return EndWeightsAt(lattice, tin, tout, offset, weightedIn, weightedOut,
+    lattice.First(tin, offset), lattice.First(tout, offset));
 }
 
 } // namespace walk

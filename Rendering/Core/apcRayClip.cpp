@@ -69,6 +69,21 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
   return n;
 }
 
+void BoundaryEndsScalar(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
+  const uint16_t* hits, int count, uint8_t* ends)
+{
+  for (int h = 0; h < count; ++h)
+  {
+    const int l = hits[h];
+    const RaySetup ray{ { rays.Ox[l], rays.Oy[l], rays.Oz[l] },
+      { rays.Dx[l], rays.Dy[l], rays.Dz[l] }, rays.End[l], rays.Offset[l] };
+    bool in = false;
+    bool leaves = false;
+    planes.BoundaryEnds(ray, out.Tin[l], out.Tout[l], in, leaves);
+    ends[h] = static_cast<uint8_t>((in ? 1 : 0) | (leaves ? 2 : 0));
+  }
+}
+
 namespace
 {
 
@@ -289,6 +304,72 @@ constexpr LaneList kLaneList;
 
 } // namespace
 
+// Four of the hits at a time, each lane a ray gathered by its index (the last group repeats
+// its last ray); per boundary plane BoundaryEnds' quotient with PlaneTerms' operations (the
+// same products, sums and division), the entering ones' maximum against tin, the leaving
+// ones' minimum against tout. An entering plane's quotient is never NaN (its denominator is
+// below 0), so the maximum's order does not matter; nor does a zero's sign to the compares.
+__attribute__((target("avx2"))) void BoundaryEndsAvx2(const CellPlanes& planes,
+  const TileRays& rays, const ClippedRays& out, const uint16_t* hits, int count, uint8_t* ends)
+{
+  const __m256d zero = _mm256_setzero_pd();
+  const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
+  const __m256d minusInf = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
+  const unsigned mask = planes.BoundaryMask & ((1u << planes.Count) - 1u);
+  for (int h = 0; h < count; h += 4)
+  {
+    int r[4];
+    for (int j = 0; j < 4; ++j)
+    {
+      r[j] = hits[std::min(h + j, count - 1)];
+    }
+    const __m256d dx = _mm256_setr_pd(rays.Dx[r[0]], rays.Dx[r[1]], rays.Dx[r[2]], rays.Dx[r[3]]);
+    const __m256d dy = _mm256_setr_pd(rays.Dy[r[0]], rays.Dy[r[1]], rays.Dy[r[2]], rays.Dy[r[3]]);
+    const __m256d dz = _mm256_setr_pd(rays.Dz[r[0]], rays.Dz[r[1]], rays.Dz[r[2]], rays.Dz[r[3]]);
+    __m256d loB = minusInf;
+    __m256d hiB = inf;
+    for (unsigned m = mask; m; m &= m - 1)
+    {
+      const int p = __builtin_ctz(m);
+      const __m256d nx = _mm256_set1_pd(planes.Nx[p]);
+      const __m256d ny = _mm256_set1_pd(planes.Ny[p]);
+      const __m256d nz = _mm256_set1_pd(planes.Nz[p]);
+      const __m256d denom = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(nx, dx), _mm256_mul_pd(ny, dy)), _mm256_mul_pd(nz, dz));
+      __m256d num;
+      if (planes.SharedOrigin)
+      {
+        num = _mm256_set1_pd(planes.Num[p]);
+      }
+      else
+      {
+        const __m256d ox =
+          _mm256_setr_pd(rays.Ox[r[0]], rays.Ox[r[1]], rays.Ox[r[2]], rays.Ox[r[3]]);
+        const __m256d oy =
+          _mm256_setr_pd(rays.Oy[r[0]], rays.Oy[r[1]], rays.Oy[r[2]], rays.Oy[r[3]]);
+        const __m256d oz =
+          _mm256_setr_pd(rays.Oz[r[0]], rays.Oz[r[1]], rays.Oz[r[2]], rays.Oz[r[3]]);
+        const __m256d dot = _mm256_add_pd(
+          _mm256_add_pd(_mm256_mul_pd(nx, ox), _mm256_mul_pd(ny, oy)), _mm256_mul_pd(nz, oz));
+        num = _mm256_sub_pd(_mm256_set1_pd(planes.Offset[p]), dot);
+      }
+      const __m256d q = _mm256_div_pd(num, denom);
+      loB =
+        _mm256_max_pd(_mm256_blendv_pd(minusInf, q, _mm256_cmp_pd(denom, zero, _CMP_LT_OQ)), loB);
+      hiB = _mm256_min_pd(_mm256_blendv_pd(inf, q, _mm256_cmp_pd(denom, zero, _CMP_GT_OQ)), hiB);
+    }
+    const __m256d tin = _mm256_setr_pd(out.Tin[r[0]], out.Tin[r[1]], out.Tin[r[2]], out.Tin[r[3]]);
+    const __m256d tout =
+      _mm256_setr_pd(out.Tout[r[0]], out.Tout[r[1]], out.Tout[r[2]], out.Tout[r[3]]);
+    const int in = _mm256_movemask_pd(_mm256_cmp_pd(loB, tin, _CMP_GE_OQ));
+    const int leaves = _mm256_movemask_pd(_mm256_cmp_pd(hiB, tout, _CMP_LE_OQ));
+    for (int j = 0; j < 4; ++j)
+    {
+      ends[h + j] = static_cast<uint8_t>((in >> j & 1) | (leaves >> j & 1) << 1);
+    }
+  }
+}
+
 __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays,
   const RayRect& rect, const double* stop, double near, const Lattice* lattice, ClippedRays& out)
 {
@@ -434,6 +515,11 @@ __attribute__((target("avx2"))) int ClipRaysWeightedAvx2(const CellPlanes& plane
   return n;
 }
 #else
+void BoundaryEndsAvx2(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
+  const uint16_t* hits, int count, uint8_t* ends)
+{
+  BoundaryEndsScalar(planes, rays, out, hits, count, ends);
+}
 int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out)
 {
@@ -452,6 +538,19 @@ int ClipRays(const CellPlanes& planes, const TileRays& rays, const RayRect& rect
 {
   return HasAvx2() ? ClipRaysAvx2(planes, rays, rect, stop, near, lattice, out)
                    : ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
+}
+
+void BoundaryEnds(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
+  const uint16_t* hits, int count, uint8_t* ends)
+{
+  if (HasAvx2())
+  {
+    BoundaryEndsAvx2(planes, rays, out, hits, count, ends);
+  }
+  else
+  {
+    BoundaryEndsScalar(planes, rays, out, hits, count, ends);
+  }
 }
 
 int ClipRaysWeighted(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,

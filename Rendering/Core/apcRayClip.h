@@ -85,6 +85,18 @@ int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& 
   const double* stop, double near, const Lattice* lattice, ClippedRays& out);
 bool HasAvx2();
 
+// Sample End Weights = Boundary: CellPlanes::BoundaryEnds of the rays hits[0, count) of out
+// (each over [Tin, Tout), as ClipRays left it), bit for bit, four rays at a time: ends[h]
+// bit 0 the entry's flag (in), bit 1 the exit's (out) of ray hits[h]. ends holds count + 3
+// entries. Ray by ray, a loop over the cell's planes with a division per boundary plane.
+void BoundaryEnds(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
+  const uint16_t* hits, int count, uint8_t* ends);
+// The two forms BoundaryEnds chooses from (tests); the AVX2 one only where HasAvx2().
+void BoundaryEndsScalar(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
+  const uint16_t* hits, int count, uint8_t* ends);
+void BoundaryEndsAvx2(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
+  const uint16_t* hits, int count, uint8_t* ends);
+
 // With end weights (apcEndWeights.h): each kept pair's EndWeightsOf(lattice, Tin, End,
 // Offset), bit for bit, by the ray's index in the tile, End the pair's end before the opaque
 // stop cut it (CellPlanes::Clip from [0, TileRays::End)). Found with the clipping, four rays

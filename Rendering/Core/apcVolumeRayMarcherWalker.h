@@ -430,16 +430,15 @@ struct VolumeRayMarcher::Walker
   // composite an opaque depth a rounding apart, and a rule that switched at a face (a plain
   // end in one cell, a weighted one in the next, or a sliver's clamp) turned that rounding
   // into up to half a sample. The eye inside the mesh: the pair it cuts starts weighted.
+  // first: Grid.First(tin, ray.Offset) (BoundaryLaneSamples hands its plain pairs that index).
   template <class Visitor>
   [[gnu::always_inline]] walk::EndWeights BoundaryPairWeights(int local, const RaySetup& ray,
-    double tin, double tout, CellState& state, const RayProgress& progress, bool& plain) const
+    double tin, double tout, int64_t first, CellState& state, const RayProgress& progress,
+    bool& plain) const
   {
     bool in = false;
     bool out = false;
     double end = tout;
-    // The ray's own end, not the clip's min(end, far bound): the far bound is each process's
-    // own piece's, and N processes must weigh what one process weighs.
-    const double rayEnd = ray.End;
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
     {
       double start = 0;
@@ -450,12 +449,23 @@ struct VolumeRayMarcher::Walker
     {
       state.Planes.BoundaryEnds(ray, tin, tout, in, out);
     }
+    return this->BoundaryPairWeightsAt(ray, tin, end, first, in, out, plain);
+  }
+
+  // BoundaryPairWeights once the pair's end (end: before the stop cut it) and whether its ends
+  // lie on the boundary (in, out) are known.
+  [[gnu::always_inline]] walk::EndWeights BoundaryPairWeightsAt(const RaySetup& ray, double tin,
+    double end, int64_t first, bool in, bool out, bool& plain) const
+  {
+    // The ray's own end, not the clip's min(end, far bound): the far bound is each process's
+    // own piece's, and N processes must weigh what one process weighs.
+    const double rayEnd = ray.End;
     const double own[2] = { tin, end };
     // The ray's next lattice point after the pair: none is sampled at or past the ray's end.
     const int64_t next = this->Grid.First(end, ray.Offset);
     const bool lastBeforeEnd = this->Grid.At(next, ray.Offset) >= rayEnd;
     in = in || tin <= 0.0;
-    if (lastBeforeEnd && !in && this->Grid.First(tin, ray.Offset) == next)
+    if (lastBeforeEnd && !in && first == next)
     {
       // Entered through a shared face with no lattice point before the ray's end: the pair
       // before it, which reaches the same next lattice point, counts up to the ray's end.
@@ -471,7 +481,9 @@ struct VolumeRayMarcher::Walker
       end = std::max(end, rayEnd);
     }
     plain = !in && !out;
-    walk::EndWeights w = walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out);
+    // Grid.First(end, ray.Offset) is next, also where end moved out to the ray's end: that
+    // lies after next - 1's point (as end did) and at or before next's (lastBeforeEnd).
+    walk::EndWeights w = walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out, first, next);
     if (w.Mid && end != own[1])
     {
       // No lattice point up to the ray's end: the sample stays in the pair.
@@ -493,7 +505,8 @@ struct VolumeRayMarcher::Walker
     if (this->BoundaryWeights)
     {
       bool plain = false;
-      return this->BoundaryPairWeights<Visitor>(local, ray, tin, tout, state, progress, plain);
+      return this->BoundaryPairWeights<Visitor>(
+        local, ray, tin, tout, this->Grid.First(tin, ray.Offset), state, progress, plain);
     }
     if (Visitor::StopsWhenOpaque && tout == progress.Stop[local])
     {
@@ -507,10 +520,10 @@ struct VolumeRayMarcher::Walker
   // Boundary: the samples of a cell with a boundary face, or near a ray's begin or end
   // (NearRayEnds; ClipRays kept hits rays of it, without the lattice's filter) through the lanes.
   // Each pair's ends first (as PairWeights finds them): a pair with both ends plain and a lattice
-  // point takes the plain lattice's samples, so it goes to LaneSamples<false> (its first index to
-  // Clipped.Lattice, as ClipRays with the lattice gives it); the others' weights go to state.Ends
-  // in the form ClipRaysWeighted gives them, for LaneSamples<true>: those with a lattice point in
-  // Clipped.Hits, those with a middle sample in Ends.MidHits. A pair without a sample (no
+  // point takes the plain lattice's samples, so it goes to LaneSamples<false> (its first index
+  // to Clipped.Lattice, as ClipRays with the lattice gives it); the others' weights go to
+  // state.Ends in the form ClipRaysWeighted gives them, for LaneSamples<true>: those with a lattice
+  // point in Clipped.Hits, those with a middle sample in Ends.MidHits. A pair without a sample (no
   // lattice point and no weighted end, or a clamped sliver) is dropped, as WeightedRay drops
   // it. A pixel holds one pair of the cell, so splitting the cell's rays changes no pixel's
   // order.
@@ -524,16 +537,54 @@ struct VolumeRayMarcher::Walker
     int plainCount = 0;
     int kept = 0;
     ends.MidCount = 0;
+    // Whether each pair enters or leaves through a boundary plane (CellPlanes::BoundaryEnds),
+    // four pairs at a time; a cell here only for its rays' ends (NearRayEnds) has none (and
+    // BoundaryEnds would find none: tout is at most the mesh's finite far bound).
+    uint8_t boundary[walk::kTilePixels + 3];
+    const bool onBoundary = state.Planes.BoundaryMask != 0;
+    if (onBoundary)
+    {
+      walk::BoundaryEnds(state.Planes, packed, c, c.Hits, hits, boundary);
+    }
     for (int h = 0; h < hits; ++h)
     {
       const int l = c.Hits[h];
       const RaySetup& ray = rays[l];
       const double tin = c.Tin[l];
       const double tout = c.Tout[l];
+      const int64_t first = this->Grid.First(tin, ray.Offset);
+      c.Lattice[l] = static_cast<double>(first);
       // PairWeights' Boundary form, with the ends' flags kept.
       bool plainEnds = false;
-      const walk::EndWeights w =
-        this->BoundaryPairWeights<Visitor>(l, ray, tin, tout, state, progress, plainEnds);
+      walk::EndWeights w;
+      if (Visitor::StopsWhenOpaque && tout == progress.Stop[l])
+      {
+        w =
+          this->BoundaryPairWeights<Visitor>(l, ray, tin, tout, first, state, progress, plainEnds);
+      }
+      else
+      {
+        const bool in = onBoundary && (boundary[h] & 1) != 0;
+        const bool out = onBoundary && (boundary[h] & 2) != 0;
+        if (!in && !out && tin > 0.0 && ray.End > tout + 2.0 * this->Grid.Spacing)
+        {
+          // Neither end on the boundary, the eye before the pair and the ray's end more than
+          // a spacing past the next lattice point t_next (t_next < tout + spacing, give or
+          // take roundings far below a spacing): BoundaryPairWeightsAt would keep the plain
+          // lattice's samples, from first up to tout, some where t_first < tout and else
+          // none; without its search for t_next (Lattice::First(tout)).
+          if (this->Grid.At(first, ray.Offset) < tout)
+          {
+            plain[plainCount++] = static_cast<uint16_t>(l);
+          }
+          else
+          {
+            visitor.Segment(l, tin, tout);
+          }
+          continue;
+        }
+        w = this->BoundaryPairWeightsAt(ray, tin, tout, first, in, out, plainEnds);
+      }
       if (w.Mid)
       {
         ends.MidHits[ends.MidCount++] = static_cast<uint16_t>(l);
@@ -545,7 +596,7 @@ struct VolumeRayMarcher::Walker
       }
       else if (plainEnds)
       {
-        c.Lattice[l] = static_cast<double>(w.First);
+        // Its first index, w.First, is in Clipped.Lattice already.
         plain[plainCount++] = static_cast<uint16_t>(l);
         continue;
       }

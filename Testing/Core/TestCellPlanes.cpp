@@ -271,6 +271,82 @@ TEST(CellPlanes, ClipRaysAvx2MatchesPerPlaneDivision)
   CheckClipRays(apc::walk::ClipRaysAvx2);
 }
 
+// Sample End Weights = Boundary's ends four rays at a time (walk::BoundaryEnds, both forms):
+// for random cells, boundary masks and rays (shared origin or not, rays along the axes too,
+// so that quotients tie between planes and denominators are +-0), the flags of
+// CellPlanes::BoundaryEnds for every ray ClipRays kept, bit for bit.
+TEST(CellPlanes, BoundaryEndsFourAtATimeMatchRayByRay)
+{
+  using Form = void (*)(
+    const CellPlanes&, const TileRays&, const ClippedRays&, const uint16_t*, int, uint8_t*);
+  std::vector<Form> forms{ apc::walk::BoundaryEndsScalar, apc::walk::BoundaryEnds };
+  if (apc::walk::HasAvx2())
+  {
+    forms.push_back(apc::walk::BoundaryEndsAvx2);
+  }
+  constexpr int kWidth = 16;
+  std::mt19937 rng(53);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> small(-2, 2);
+  int counts[4] = { 0, 0, 0, 0 };
+  for (int trial = 0; trial < 3000; ++trial)
+  {
+    const bool axis = trial % 2 == 0;
+    const bool shared = trial % 4 < 2;
+    std::vector<RaySetup> rays(kWidth * kWidth);
+    for (size_t p = 0; p < rays.size(); ++p)
+    {
+      RaySetup& ray = rays[p];
+      for (int d = 0; d < 3; ++d)
+      {
+        ray.O[d] = shared ? rays[0].O[d] : (axis ? small(rng) : 3 * u(rng));
+        ray.D[d] =
+          axis ? (d == static_cast<int>(p + trial) % 3 ? (p % 2 ? -1.0 : 1.0) : 0.0) : u(rng);
+      }
+      ray.End = 10.0;
+      ray.Offset = 0.0;
+    }
+    const int count = 4 + trial % 3;
+    FacePlane planes[6];
+    for (int p = 0; p < count; ++p)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        planes[p].Normal[d] = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
+      }
+      planes[p].Offset = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
+    }
+    CellPlanes cell;
+    cell.Set(planes, count, rays[0], shared);
+    // Bits past the cell's planes too: BoundaryEnds reads only the cell's.
+    cell.BoundaryMask = static_cast<unsigned>(rng() % 256);
+    TileRays packed;
+    packed.Set(rays.data(), kWidth * kWidth, 8.0);
+    ClippedRays clipped;
+    const int n = apc::walk::ClipRays(
+      cell, packed, RayRect{ 0, kWidth, kWidth, kWidth }, nullptr, 0.0, nullptr, clipped);
+    for (Form form : forms)
+    {
+      uint8_t ends[apc::walk::kTilePixels + 3];
+      form(cell, packed, clipped, clipped.Hits, n, ends);
+      for (int h = 0; h < n; ++h)
+      {
+        const int l = clipped.Hits[h];
+        bool in = false;
+        bool out = false;
+        cell.BoundaryEnds(rays[l], clipped.Tin[l], clipped.Tout[l], in, out);
+        ASSERT_EQ(ends[h], (in ? 1 : 0) | (out ? 2 : 0)) << "trial " << trial << " ray " << l;
+        ++counts[ends[h]];
+      }
+    }
+  }
+  // Every combination of the two flags occurs.
+  for (int c : counts)
+  {
+    EXPECT_GT(c, 1000);
+  }
+}
+
 // Rays entering a cell exactly at a lattice point t_k or at the next double above it (a plane
 // across axis-parallel rays from the origin, at that value): the first index must be k,
 // respectively k + 1, where the quotient tin / spacing - offset rounds to either side of an

@@ -417,4 +417,59 @@ TEST(EndWeights, BoundaryCellsInTheLanesTakeTheScalarLoopsSamples)
   }
 }
 
+TEST(EndWeights, BoundaryCellsInTheLanesHoldingTheEyeTakeTheScalarLoopsSamples)
+{
+  // Boundary with the eye inside the mesh: the pairs of the cell that holds it start at
+  // t = 0, weighted there (BoundaryPairWeights), in the lanes as in the scalar loop, though
+  // the cell may have no boundary face; the lanes' shortcut for pairs with plain ends must not
+  // take them.
+  std::mt19937 rng(31);
+  int differentFromPlain = 0;
+  for (int mesh = 0; mesh < 4; ++mesh)
+  {
+    apc::CellMesh block = apctest::DistortedBlock(rng);
+    block.FindBoundaryPlanes();
+    const double spacing = mesh < 2 ? kSpacing : kSpacing / 5;
+    // Eyes in cells of the middle (no boundary face) and near the side, looking across.
+    const double eye[2][3] = { { 0.13, 0.07, 0.41 }, { -0.62, -0.09, 0.33 } };
+    for (const auto& e : eye)
+    {
+      const apc::RayCamera camera({ e[0], e[1], e[2] }, { e[0] + 0.3, e[1] - 0.1, e[2] - 2.0 },
+        { 0, 1, 0 }, 60.0, false, 1.0, kSize, kSize, 0.01, 20.0);
+      const apc::TransferTable table(0.0, 1.0,
+        { { 1.f, 0.f, 0.f }, { 0.f, 1.f, 0.f }, { 0.f, 0.f, 1.f }, { 1.f, 1.f, 0.f } },
+        { 0.05, 0.6, 0.0, 0.9 }, spacing, 1.0);
+      auto render = [&](bool lanes, Mode weights)
+      {
+        return apctest::RenderBlockFrame(block, table, camera, static_cast<size_t>(kSize) * kSize,
+          false,
+          [&](apc::VolumeRayMarcher& marcher)
+          {
+            marcher.SetEndWeightsMode(weights);
+            marcher.SetSampleLanes(lanes);
+          });
+      };
+      const auto lanes = render(true, Mode::Boundary);
+      const auto scalar = render(false, Mode::Boundary);
+      const auto plain = render(true, Mode::Off);
+      EXPECT_EQ(lanes.Pass1Samples, scalar.Pass1Samples);
+      int differ = 0;
+      int fromPlain = 0;
+      for (size_t v = 0; v < lanes.Moments.size(); ++v)
+      {
+        differ += lanes.Moments[v] != scalar.Moments[v] ? 1 : 0;
+        fromPlain += lanes.Moments[v] != plain.Moments[v] ? 1 : 0;
+      }
+      for (size_t v = 0; v < lanes.Colour.size(); ++v)
+      {
+        differ += lanes.Colour[v] != scalar.Colour[v] ? 1 : 0;
+      }
+      EXPECT_EQ(differ, 0) << "mesh " << mesh << " eye " << e[0];
+      differentFromPlain += fromPlain > 0 ? 1 : 0;
+    }
+  }
+  // The eye's weighted start shows: Boundary is not the plain lattice here.
+  EXPECT_EQ(differentFromPlain, 8);
+}
+
 } // namespace
