@@ -569,7 +569,7 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
   this->PlaneCounts[cell] = 0;
   this->PlaneFaces[cell] = 0;
   std::array<double, 6> b = { inf, -inf, inf, -inf, inf, -inf };
-  double centroid[3] = { 0, 0, 0 };
+  std::array<double, 3> centroid = { 0, 0, 0 };
   bool finite = true;
   std::array<std::array<double, 3>, 8> x;
   for (int i = 0; i < corners; ++i)
@@ -589,7 +589,9 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
     ++summary.NonFiniteCorners;
     return CellFate::NonFiniteCorners;
   }
-  const CellMeasure measure = MeasureCell(this->Shapes[cell], x);
+  // The centroid and bounds just summed are MeasureCell's own (the same sums in the same
+  // order): passed on, not summed again (24 divisions a hexahedron).
+  const CellMeasure measure = MeasureCell(this->Shapes[cell], x, centroid, b);
   if (!(measure.RelativeThickness > kMinRelativeThickness)) // IsFlat
   {
     ++summary.Flat;
