@@ -74,9 +74,10 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
   {
     normal[d] = static_cast<float>(n[d] / length);
   }
-  offset = (static_cast<double>(normal[0]) * c[0] + static_cast<double>(normal[1]) * c[1] +
-             static_cast<double>(normal[2]) * c[2]) /
-    size;
+  // Over 4 corners the product by 1/4, the same number as the quotient (see DeriveCell).
+  const double sum = static_cast<double>(normal[0]) * c[0] + static_cast<double>(normal[1]) * c[1] +
+    static_cast<double>(normal[2]) * c[2];
+  offset = size == 4 ? sum * 0.25 : sum / size;
   return true;
 }
 }
@@ -320,7 +321,58 @@ struct BucketedFace
       : this->Ids[1] != o.Ids[1]    ? this->Ids[1] < o.Ids[1]
                                     : this->Ids[2] < o.Ids[2];
   }
+  Index SlotOf() const { return this->Slot; }
 };
+
+// With 32-bit ids a bucketed face is one 128-bit integer: its ids from the most significant
+// bits down, its slot in the lowest. Sorted as integers (one compare of two words instead of
+// up to three branches on ids), equal faces still meet, each run of them in slot order.
+struct BucketKey
+{
+  unsigned __int128 Key;
+  bool SameFace(const BucketKey& o) const { return (this->Key >> 32) == (o.Key >> 32); }
+  bool operator<(const BucketKey& o) const { return this->Key < o.Key; }
+  uint32_t SlotOf() const { return static_cast<uint32_t>(this->Key); }
+};
+
+// Fills keys with the bucket's faces as BucketKeys, sorted (true), or leaves them for
+// BucketedFace's own order (false: ids of 64 bits).
+template <class Index>
+bool SortAsKeys(const BucketedFace<Index>*, const BucketedFace<Index>*, std::vector<BucketKey>&)
+{
+  return false;
+}
+
+template <>
+bool SortAsKeys<uint32_t>(const BucketedFace<uint32_t>* first, const BucketedFace<uint32_t>* last,
+  std::vector<BucketKey>& keys)
+{
+  keys.resize(static_cast<size_t>(last - first));
+  for (size_t k = 0; k < keys.size(); ++k)
+  {
+    const BucketedFace<uint32_t>& face = first[k];
+    keys[k].Key = (static_cast<unsigned __int128>(face.Ids[0]) << 96) |
+      (static_cast<unsigned __int128>(face.Ids[1]) << 64) |
+      (static_cast<unsigned __int128>(face.Ids[2]) << 32) | face.Slot;
+  }
+  std::sort(keys.begin(), keys.end());
+  return true;
+}
+
+// shared[slot] for a sorted bucket (equal faces side by side): 1 where another face of the
+// bucket is the same, 2 on the first copy of a face three or more cells hold (CrowdedFaces).
+template <class Face>
+void MarkBucket(const Face* first, const Face* last, uint8_t* shared)
+{
+  for (const Face* i = first; i != last; ++i)
+  {
+    const bool match =
+      (i != first && (i - 1)->SameFace(*i)) || (i + 1 != last && (i + 1)->SameFace(*i));
+    const bool crowded = (i == first || !(i - 1)->SameFace(*i)) && i + 2 < last &&
+      (i + 1)->SameFace(*i) && (i + 2)->SameFace(*i);
+    shared[i->SlotOf()] = crowded ? 2 : match ? 1 : 0;
+  }
+}
 }
 
 //------------------------------------------------------------------------------
@@ -541,20 +593,18 @@ void CellMesh::MatchFaces(uint8_t* shared) const
   ParallelFor(0, numPoints, 16384,
     [&](int64_t begin, int64_t end)
     {
+      std::vector<BucketKey> keys;
       for (int64_t b = begin; b < end; ++b)
       {
         BucketedFace<Index>* first = byBucket.data() + starts[b];
         BucketedFace<Index>* last = byBucket.data() + starts[b + 1];
-        std::sort(first, last);
-        for (BucketedFace<Index>* i = first; i != last; ++i)
+        if (SortAsKeys<Index>(first, last, keys))
         {
-          const bool match =
-            (i != first && (i - 1)->SameFace(*i)) || (i + 1 != last && (i + 1)->SameFace(*i));
-          // 2: the first copy of a face three or more cells hold (CrowdedFaces).
-          const bool crowded = (i == first || !(i - 1)->SameFace(*i)) && i + 2 < last &&
-            (i + 1)->SameFace(*i) && (i + 2)->SameFace(*i);
-          shared[i->Slot] = crowded ? 2 : match ? 1 : 0;
+          MarkBucket(keys.data(), keys.data() + keys.size(), shared);
+          continue;
         }
+        std::sort(first, last);
+        MarkBucket(first, last, shared);
       }
     });
 }
@@ -581,7 +631,30 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
       finite = finite && std::isfinite(p[d]);
       b[2 * d] = std::min(b[2 * d], p[d]);
       b[2 * d + 1] = std::max(b[2 * d + 1], p[d]);
-      centroid[d] += p[d] / corners;
+    }
+  }
+  // The mean of the corners, summed in corner order. A quotient by 4 or 8 corners is the
+  // product by 1/4 or 1/8 (both are the one rounding of the same number), at a fraction of a
+  // division's cost; pyramids and wedges divide.
+  if ((corners & (corners - 1)) == 0)
+  {
+    const double inverse = 1.0 / corners;
+    for (int i = 0; i < corners; ++i)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        centroid[d] += x[i][d] * inverse;
+      }
+    }
+  }
+  else
+  {
+    for (int i = 0; i < corners; ++i)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        centroid[d] += x[i][d] / corners;
+      }
     }
   }
   if (!finite)
