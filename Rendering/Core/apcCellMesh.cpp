@@ -16,10 +16,20 @@ namespace
 // Orders points by their coordinates (x, then y, then z), ids breaking ties between
 // coincident points. Coordinates, not ids, because the two cells sharing a face may number its
 // points differently: cells on different ranks, or in pieces appended without merging their
-// points, hold their own copies of the face's points.
+// points, hold their own copies of the face's points. One pass over the coordinates (Finalize
+// passes finite ones only: +0 and -0 are one value here as for == and <).
 bool Precedes(const std::vector<std::array<double, 3>>& points, int64_t a, int64_t b)
 {
-  return points[a] != points[b] ? points[a] < points[b] : a < b;
+  const std::array<double, 3>& p = points[a];
+  const std::array<double, 3>& q = points[b];
+  for (int d = 0; d < 3; ++d)
+  {
+    if (p[d] != q[d])
+    {
+      return p[d] < q[d];
+    }
+  }
+  return a < b;
 }
 
 // The plane of a face computed from its points in canonical order, so that both cells
@@ -36,19 +46,23 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
       first = i;
     }
   }
-  const int step =
-    Precedes(points, ids[(first + 1) % size], ids[(first + size - 1) % size]) ? 1 : size - 1;
+  // The corners' indices wrap by a subtraction, not a remainder (an integer division each).
+  const int after = first + 1 == size ? 0 : first + 1;
+  const int before = first == 0 ? size - 1 : first - 1;
+  const int step = Precedes(points, ids[after], ids[before]) ? 1 : size - 1;
   int64_t ordered[4];
-  for (int i = 0; i < size; ++i)
+  for (int i = 0, at = first; i < size; ++i)
   {
-    ordered[i] = ids[(first + i * step) % size];
+    ordered[i] = ids[at];
+    at += step;
+    at -= at >= size ? size : 0;
   }
   double n[3] = { 0, 0, 0 };
   double c[3] = { 0, 0, 0 };
   for (int i = 0; i < size; ++i)
   {
     const auto& p = points[ordered[i]];
-    const auto& q = points[ordered[(i + 1) % size]];
+    const auto& q = points[ordered[i + 1 == size ? 0 : i + 1]];
     n[0] += (p[1] - q[1]) * (p[2] + q[2]);
     n[1] += (p[2] - q[2]) * (p[0] + q[0]);
     n[2] += (p[0] - q[0]) * (p[1] + q[1]);
