@@ -16,10 +16,20 @@ namespace
 // Orders points by their coordinates (x, then y, then z), ids breaking ties between
 // coincident points. Coordinates, not ids, because the two cells sharing a face may number its
 // points differently: cells on different ranks, or in pieces appended without merging their
-// points, hold their own copies of the face's points.
+// points, hold their own copies of the face's points. One pass over the coordinates (Finalize
+// passes finite ones only: +0 and -0 are one value here as for == and <).
 bool Precedes(const std::vector<std::array<double, 3>>& points, int64_t a, int64_t b)
 {
-  return points[a] != points[b] ? points[a] < points[b] : a < b;
+  const std::array<double, 3>& p = points[a];
+  const std::array<double, 3>& q = points[b];
+  for (int d = 0; d < 3; ++d)
+  {
+    if (p[d] != q[d])
+    {
+      return p[d] < q[d];
+    }
+  }
+  return a < b;
 }
 
 // The plane of a face computed from its points in canonical order, so that both cells
@@ -36,19 +46,23 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
       first = i;
     }
   }
-  const int step =
-    Precedes(points, ids[(first + 1) % size], ids[(first + size - 1) % size]) ? 1 : size - 1;
+  // The corners' indices wrap by a subtraction, not a remainder (an integer division each).
+  const int after = first + 1 == size ? 0 : first + 1;
+  const int before = first == 0 ? size - 1 : first - 1;
+  const int step = Precedes(points, ids[after], ids[before]) ? 1 : size - 1;
   int64_t ordered[4];
-  for (int i = 0; i < size; ++i)
+  for (int i = 0, at = first; i < size; ++i)
   {
-    ordered[i] = ids[(first + i * step) % size];
+    ordered[i] = ids[at];
+    at += step;
+    at -= at >= size ? size : 0;
   }
   double n[3] = { 0, 0, 0 };
   double c[3] = { 0, 0, 0 };
   for (int i = 0; i < size; ++i)
   {
     const auto& p = points[ordered[i]];
-    const auto& q = points[ordered[(i + 1) % size]];
+    const auto& q = points[ordered[i + 1 == size ? 0 : i + 1]];
     n[0] += (p[1] - q[1]) * (p[2] + q[2]);
     n[1] += (p[2] - q[2]) * (p[0] + q[0]);
     n[2] += (p[0] - q[0]) * (p[1] + q[1]);
@@ -74,9 +88,10 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
   {
     normal[d] = static_cast<float>(n[d] / length);
   }
-  offset = (static_cast<double>(normal[0]) * c[0] + static_cast<double>(normal[1]) * c[1] +
-             static_cast<double>(normal[2]) * c[2]) /
-    size;
+  // Over 4 corners the product by 1/4, the same number as the quotient (see DeriveCell).
+  const double sum = static_cast<double>(normal[0]) * c[0] + static_cast<double>(normal[1]) * c[1] +
+    static_cast<double>(normal[2]) * c[2];
+  offset = size == 4 ? sum * 0.25 : sum / size;
   return true;
 }
 }
@@ -320,7 +335,58 @@ struct BucketedFace
       : this->Ids[1] != o.Ids[1]    ? this->Ids[1] < o.Ids[1]
                                     : this->Ids[2] < o.Ids[2];
   }
+  Index SlotOf() const { return this->Slot; }
 };
+
+// With 32-bit ids a bucketed face is one 128-bit integer: its ids from the most significant
+// bits down, its slot in the lowest. Sorted as integers (one compare of two words instead of
+// up to three branches on ids), equal faces still meet, each run of them in slot order.
+struct BucketKey
+{
+  unsigned __int128 Key;
+  bool SameFace(const BucketKey& o) const { return (this->Key >> 32) == (o.Key >> 32); }
+  bool operator<(const BucketKey& o) const { return this->Key < o.Key; }
+  uint32_t SlotOf() const { return static_cast<uint32_t>(this->Key); }
+};
+
+// Fills keys with the bucket's faces as BucketKeys, sorted (true), or leaves them for
+// BucketedFace's own order (false: ids of 64 bits).
+template <class Index>
+bool SortAsKeys(const BucketedFace<Index>*, const BucketedFace<Index>*, std::vector<BucketKey>&)
+{
+  return false;
+}
+
+template <>
+bool SortAsKeys<uint32_t>(const BucketedFace<uint32_t>* first, const BucketedFace<uint32_t>* last,
+  std::vector<BucketKey>& keys)
+{
+  keys.resize(static_cast<size_t>(last - first));
+  for (size_t k = 0; k < keys.size(); ++k)
+  {
+    const BucketedFace<uint32_t>& face = first[k];
+    keys[k].Key = (static_cast<unsigned __int128>(face.Ids[0]) << 96) |
+      (static_cast<unsigned __int128>(face.Ids[1]) << 64) |
+      (static_cast<unsigned __int128>(face.Ids[2]) << 32) | face.Slot;
+  }
+  std::sort(keys.begin(), keys.end());
+  return true;
+}
+
+// shared[slot] for a sorted bucket (equal faces side by side): 1 where another face of the
+// bucket is the same, 2 on the first copy of a face three or more cells hold (CrowdedFaces).
+template <class Face>
+void MarkBucket(const Face* first, const Face* last, uint8_t* shared)
+{
+  for (const Face* i = first; i != last; ++i)
+  {
+    const bool match =
+      (i != first && (i - 1)->SameFace(*i)) || (i + 1 != last && (i + 1)->SameFace(*i));
+    const bool crowded = (i == first || !(i - 1)->SameFace(*i)) && i + 2 < last &&
+      (i + 1)->SameFace(*i) && (i + 2)->SameFace(*i);
+    shared[i->SlotOf()] = crowded ? 2 : match ? 1 : 0;
+  }
+}
 }
 
 //------------------------------------------------------------------------------
@@ -541,20 +607,18 @@ void CellMesh::MatchFaces(uint8_t* shared) const
   ParallelFor(0, numPoints, 16384,
     [&](int64_t begin, int64_t end)
     {
+      std::vector<BucketKey> keys;
       for (int64_t b = begin; b < end; ++b)
       {
         BucketedFace<Index>* first = byBucket.data() + starts[b];
         BucketedFace<Index>* last = byBucket.data() + starts[b + 1];
-        std::sort(first, last);
-        for (BucketedFace<Index>* i = first; i != last; ++i)
+        if (SortAsKeys<Index>(first, last, keys))
         {
-          const bool match =
-            (i != first && (i - 1)->SameFace(*i)) || (i + 1 != last && (i + 1)->SameFace(*i));
-          // 2: the first copy of a face three or more cells hold (CrowdedFaces).
-          const bool crowded = (i == first || !(i - 1)->SameFace(*i)) && i + 2 < last &&
-            (i + 1)->SameFace(*i) && (i + 2)->SameFace(*i);
-          shared[i->Slot] = crowded ? 2 : match ? 1 : 0;
+          MarkBucket(keys.data(), keys.data() + keys.size(), shared);
+          continue;
         }
+        std::sort(first, last);
+        MarkBucket(first, last, shared);
       }
     });
 }
@@ -569,7 +633,7 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
   this->PlaneCounts[cell] = 0;
   this->PlaneFaces[cell] = 0;
   std::array<double, 6> b = { inf, -inf, inf, -inf, inf, -inf };
-  double centroid[3] = { 0, 0, 0 };
+  std::array<double, 3> centroid = { 0, 0, 0 };
   bool finite = true;
   std::array<std::array<double, 3>, 8> x;
   for (int i = 0; i < corners; ++i)
@@ -581,7 +645,30 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
       finite = finite && std::isfinite(p[d]);
       b[2 * d] = std::min(b[2 * d], p[d]);
       b[2 * d + 1] = std::max(b[2 * d + 1], p[d]);
-      centroid[d] += p[d] / corners;
+    }
+  }
+  // The mean of the corners, summed in corner order. A quotient by 4 or 8 corners is the
+  // product by 1/4 or 1/8 (both are the one rounding of the same number), at a fraction of a
+  // division's cost; pyramids and wedges divide.
+  if ((corners & (corners - 1)) == 0)
+  {
+    const double inverse = 1.0 / corners;
+    for (int i = 0; i < corners; ++i)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        centroid[d] += x[i][d] * inverse;
+      }
+    }
+  }
+  else
+  {
+    for (int i = 0; i < corners; ++i)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        centroid[d] += x[i][d] / corners;
+      }
     }
   }
   if (!finite)
@@ -589,7 +676,9 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
     ++summary.NonFiniteCorners;
     return CellFate::NonFiniteCorners;
   }
-  const CellMeasure measure = MeasureCell(this->Shapes[cell], x);
+  // The centroid and bounds just summed are MeasureCell's own (the same sums in the same
+  // order): passed on, not summed again (24 divisions a hexahedron).
+  const CellMeasure measure = MeasureCell(this->Shapes[cell], x, centroid, b);
   if (!(measure.RelativeThickness > kMinRelativeThickness)) // IsFlat
   {
     ++summary.Flat;

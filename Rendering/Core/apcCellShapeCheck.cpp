@@ -45,8 +45,6 @@ const CellFaces& FacesOf(CellShape shape)
 CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>, 8>& corners)
 {
   const int n = NumberOfCorners(shape);
-  // Everything relative to the centroid: far from the origin, absolute coordinates would
-  // cancel the cell's own digits away.
   Vec centroid = { 0, 0, 0 };
   Vec lo = corners[0];
   Vec hi = corners[0];
@@ -59,16 +57,26 @@ CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>,
       hi[d] = std::max(hi[d], corners[i][d]);
     }
   }
+  return MeasureCell(shape, corners, centroid, { lo[0], hi[0], lo[1], hi[1], lo[2], hi[2] });
+}
+
+//------------------------------------------------------------------------------
+CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>, 8>& corners,
+  const std::array<double, 3>& centroid, const std::array<double, 6>& bounds)
+{
+  const int n = NumberOfCorners(shape);
+  // Everything relative to the centroid: far from the origin, absolute coordinates would
+  // cancel the cell's own digits away.
   std::array<Vec, 8> x;
   for (int i = 0; i < n; ++i)
   {
     x[i] = Sub(corners[i], centroid);
   }
-  const Vec extent = Sub(hi, lo);
+  const Vec extent = { bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4] };
   const double diagonal = std::sqrt(Dot(extent, extent));
 
-  double volume6 = 0;  // six times the signed volume
-  double maxArea2 = 0; // twice the largest face area
+  double volume6 = 0;    // six times the signed volume
+  double maxSquared = 0; // the largest face's (twice its area) squared
   const CellFaces& faces = FacesOf(shape);
   for (int f = 0; f < faces.Count; ++f)
   {
@@ -86,8 +94,12 @@ CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>,
       }
       volume6 += Dot(a, Cross(b, d));
     }
-    maxArea2 = std::max(maxArea2, std::sqrt(Dot(area2, area2)));
+    // One square root for the largest face, not one per face: sqrt is correctly rounded and
+    // never decreasing, so the root of the largest square is the largest root, bit for bit
+    // (and a NaN square is passed over by max here as its root was).
+    maxSquared = std::max(maxSquared, Dot(area2, area2));
   }
+  const double maxArea2 = std::sqrt(maxSquared); // twice the largest face area
   CellMeasure measure;
   measure.Volume = std::abs(volume6) / 6.0;
   if (std::isnan(volume6) || std::isnan(maxArea2) || std::isnan(diagonal))

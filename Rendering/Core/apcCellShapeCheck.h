@@ -49,6 +49,11 @@ struct CellMeasure
   double RelativeThickness = 0;
 };
 CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>, 8>& corners);
+// The same, given the corners' centroid (the sum of corner / corners, in corner order) and
+// bounds (xmin, xmax, ymin, ymax, zmin, zmax), which CellMesh::Finalize has computed already:
+// with exactly these inputs the result is the one above, bit for bit.
+CellMeasure MeasureCell(CellShape shape, const std::array<std::array<double, 3>, 8>& corners,
+  const std::array<double, 3>& centroid, const std::array<double, 6>& bounds);
 
 // |V| / (A_max * D) as above for the corners of a cell (VTK's corner order for its shape); 0
 // for a cell with no face area or no extent; NaN or 0 if a corner is not finite.

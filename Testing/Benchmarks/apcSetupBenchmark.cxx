@@ -110,6 +110,12 @@ unsigned long long Checksum(const apc::CellMesh& mesh)
     Mix(hash, mesh.GetCellBounds(c).data(), 6 * sizeof(double));
     Mix(hash, mesh.GetScalarRange(c).data(), 2 * sizeof(float));
   }
+  // What Finalize summed (the default sample distance's input) and left out.
+  const double volume = mesh.GetCellVolume().Value();
+  Mix(hash, &volume, sizeof volume);
+  const int64_t skipped[2] = { mesh.GetNumberOfNonFiniteCornerCells(),
+    mesh.GetNumberOfFlatCells() };
+  Mix(hash, skipped, sizeof skipped);
   return hash;
 }
 
