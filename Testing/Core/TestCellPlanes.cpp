@@ -110,6 +110,33 @@ TEST(CellPlanes, ClipMatchesPerPlaneDivision)
 namespace
 {
 
+// A tile's width x width rays for trial `trial`: along the axes with integer origins (even
+// trials) or random, sharing the first ray's origin (a perspective camera) in half the trials.
+// Along an axis either way: a plane parallel to the ray then has a denominator of +0 or -0
+// (every product -0), and some pass through the ray's origin (0 / 0). ends(p, ray) sets each
+// ray's end and lattice offset right after its origin and direction, so the random stream is
+// the one the tests were checked with.
+template <typename Ends>
+std::vector<RaySetup> RandomTileRays(std::mt19937& rng, std::uniform_real_distribution<double>& u,
+  std::uniform_int_distribution<int>& small, int trial, int width, Ends ends)
+{
+  const bool axis = trial % 2 == 0;
+  const bool shared = trial % 4 < 2;
+  std::vector<RaySetup> rays(static_cast<size_t>(width) * width);
+  for (size_t p = 0; p < rays.size(); ++p)
+  {
+    RaySetup& ray = rays[p];
+    for (int d = 0; d < 3; ++d)
+    {
+      ray.O[d] = shared ? rays[0].O[d] : (axis ? small(rng) : 3 * u(rng));
+      ray.D[d] =
+        axis ? (d == static_cast<int>(p + trial) % 3 ? (p % 2 ? -1.0 : 1.0) : 0.0) : u(rng);
+    }
+    ends(p, ray);
+  }
+  return rays;
+}
+
 using ClipRaysForm = int (*)(const CellPlanes&, const TileRays&, const RayRect&, const double*,
   double, const Lattice*, ClippedRays&);
 
@@ -134,21 +161,12 @@ void CheckClipRays(ClipRaysForm form)
   {
     const bool axis = trial % 2 == 0;
     const bool shared = trial % 4 < 2;
-    std::vector<RaySetup> rays(kWidth * kWidth);
-    for (size_t p = 0; p < rays.size(); ++p)
-    {
-      RaySetup& ray = rays[p];
-      for (int d = 0; d < 3; ++d)
+    const std::vector<RaySetup> rays = RandomTileRays(rng, u, small, trial, kWidth,
+      [&](size_t p, RaySetup& ray)
       {
-        ray.O[d] = shared ? rays[0].O[d] : (axis ? small(rng) : 3 * u(rng));
-        // Along an axis either way: a plane parallel to the ray then has a denominator of
-        // +0 or -0 (every product -0), and some pass through the ray's origin (0 / 0).
-        ray.D[d] =
-          axis ? (d == static_cast<int>(p + trial) % 3 ? (p % 2 ? -1.0 : 1.0) : 0.0) : u(rng);
-      }
-      ray.End = p % 7 == 3 ? 0.5 : 10.0;
-      ray.Offset = p % 3 == 0 ? 0.5 * (u(rng) + 1.0) : 0.0;
-    }
+        ray.End = p % 7 == 3 ? 0.5 : 10.0;
+        ray.Offset = p % 3 == 0 ? 0.5 * (u(rng) + 1.0) : 0.0;
+      });
     const int count = 4 + trial % 3;
     FacePlane planes[6];
     for (int p = 0; p < count; ++p)
@@ -293,19 +311,12 @@ TEST(CellPlanes, BoundaryEndsFourAtATimeMatchRayByRay)
   {
     const bool axis = trial % 2 == 0;
     const bool shared = trial % 4 < 2;
-    std::vector<RaySetup> rays(kWidth * kWidth);
-    for (size_t p = 0; p < rays.size(); ++p)
-    {
-      RaySetup& ray = rays[p];
-      for (int d = 0; d < 3; ++d)
+    const std::vector<RaySetup> rays = RandomTileRays(rng, u, small, trial, kWidth,
+      [](size_t, RaySetup& ray)
       {
-        ray.O[d] = shared ? rays[0].O[d] : (axis ? small(rng) : 3 * u(rng));
-        ray.D[d] =
-          axis ? (d == static_cast<int>(p + trial) % 3 ? (p % 2 ? -1.0 : 1.0) : 0.0) : u(rng);
-      }
-      ray.End = 10.0;
-      ray.Offset = 0.0;
-    }
+        ray.End = 10.0;
+        ray.Offset = 0.0;
+      });
     const int count = 4 + trial % 3;
     FacePlane planes[6];
     for (int p = 0; p < count; ++p)
