@@ -77,12 +77,21 @@ int ExchangeVolume(const ProcessGroup& group, CellMesh* mesh)
   const MPI_Comm comm = CommunicatorOf(group.Controller);
   int status = comm == MPI_COMM_NULL ? NotMPI : Fine;
   std::vector<CellMesh::FaceCorners> faces;
-  std::vector<int> sendCounts(processes, 0);
-  std::vector<int> sendOffsets(processes, 0);
+  std::vector<int> sendCounts, sendOffsets, receiveCounts, receiveOffsets;
+  std::vector<int> sendDoubles, sendDoubleOffsets, receiveDoubles, receiveDoubleOffsets;
   std::vector<CellMesh::FaceCorners> sendFaces;
   std::vector<size_t> sentAs; // face i went out as sendFaces[sentAs[i]]
+  std::vector<uint8_t> answers, flags;
   try
   {
+    // Every buffer whose size this process knows now (the counts, the answers, the flags) is
+    // allocated before the first agreement: one that threw between two later collectives
+    // would leave the other processes waiting in the next one.
+    for (auto* counts : { &sendCounts, &sendOffsets, &receiveCounts, &receiveOffsets, &sendDoubles,
+           &sendDoubleOffsets, &receiveDoubles, &receiveDoubleOffsets })
+    {
+      counts->assign(static_cast<size_t>(processes), 0);
+    }
     if (ExchangeFailuresForTesting > 0)
     {
       --ExchangeFailuresForTesting;
@@ -122,6 +131,8 @@ int ExchangeVolume(const ProcessGroup& group, CellMesh* mesh)
       sentAs[i] = static_cast<size_t>(next[owners[i]]++);
       sendFaces[sentAs[i]] = faces[i];
     }
+    answers.assign(faces.size(), 0);
+    flags.resize(mesh ? faces.size() : 0);
   }
   catch (const std::exception&)
   {
@@ -135,18 +146,14 @@ int ExchangeVolume(const ProcessGroup& group, CellMesh* mesh)
   LastExchange.FacesSent = static_cast<int64_t>(faces.size());
 
   // How many faces each owner gets, then the faces (12 doubles each).
-  std::vector<int> receiveCounts(processes, 0);
   group.Collective("boundary",
     [&] { MPI_Alltoall(sendCounts.data(), 1, MPI_INT, receiveCounts.data(), 1, MPI_INT, comm); });
-  std::vector<int> receiveOffsets(processes, 0);
   int64_t received = 0;
   for (int p = 0; p < processes; ++p)
   {
     receiveOffsets[p] = static_cast<int>(received);
     received += receiveCounts[p];
   }
-  std::vector<int> sendDoubles(processes), sendDoubleOffsets(processes);
-  std::vector<int> receiveDoubles(processes), receiveDoubleOffsets(processes);
   for (int p = 0; p < processes; ++p)
   {
     sendDoubles[p] = 12 * sendCounts[p];
@@ -195,7 +202,6 @@ int ExchangeVolume(const ProcessGroup& group, CellMesh* mesh)
     return status;
   }
   // One byte a face back, in the order each process sent them.
-  std::vector<uint8_t> answers(faces.size(), 0);
   group.Collective("boundary",
     [&]
     {
@@ -204,7 +210,6 @@ int ExchangeVolume(const ProcessGroup& group, CellMesh* mesh)
     });
   if (mesh)
   {
-    std::vector<uint8_t> flags(faces.size());
     for (size_t i = 0; i < faces.size(); ++i)
     {
       flags[i] = answers[sentAs[i]];
