@@ -26,12 +26,12 @@ __attribute__((target("avx2"), always_inline)) inline void Transpose(
   c[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
 }
 
-} // namespace
-
-// Only AVX2, no FMA: each product and sum must round as Moments::RunAdd's do.
-__attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int taken,
-  const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
-  double quantaPerAbsorbance, LaneMoments& out)
+// Only AVX2, no FMA: each product and sum must round as Moments::RunAdd's do. Weighted: each
+// step's float absorbance times its float weight first (weights), as RunAddWeighted's.
+template <bool Weighted>
+__attribute__((target("avx2"), always_inline)) inline void Moments(const LaneSteps& steps,
+  int taken, const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
+  double quantaPerAbsorbance, const LaneWeights* weights, LaneMoments& out)
 {
   // The four pixels' sums, one pixel per lane.
   __m256d b[5];
@@ -53,12 +53,47 @@ __attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int
   __m256i count = _mm256_setzero_si256();
   __m256i visible = _mm256_setzero_si256();
   __m128i quanta = _mm_setzero_si128();
+  // Weighted: the steps of each lane's First and Last index (exact integers, far apart ones
+  // meet no step: the conversion's 0x80000000), and their weights.
+  __m128i firstStep = _mm_setzero_si128();
+  __m128i lastStep = _mm_setzero_si128();
+  __m128 firstWeight = _mm_setzero_ps();
+  __m128 lastWeight = _mm_setzero_ps();
+  const __m128 oneFloat = _mm_set1_ps(1.0f);
+  if constexpr (Weighted)
+  {
+    firstStep = _mm256_cvttpd_epi32(_mm256_sub_pd(_mm256_load_pd(weights->First), k));
+    lastStep = _mm256_cvttpd_epi32(_mm256_sub_pd(_mm256_load_pd(weights->Last), k));
+    firstWeight = _mm_load_ps(weights->FirstWeight);
+    lastWeight = _mm_load_ps(weights->LastWeight);
+  }
   for (int s = 0; s < taken; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
   {
     const __m256d t = _mm256_load_pd(steps.T[s]);
     const __m256d inside = _mm256_cmp_pd(t, tout, _CMP_LT_OQ);
-    __m256d a = _mm256_cvtps_pd(_mm_load_ps(steps.Absorbance[s]));
+    __m128 absorbance = _mm_load_ps(steps.Absorbance[s]);
+    __m128 weight = oneFloat;
+    if constexpr (Weighted)
+    {
+      // The scalar hand-over's k == first ? first weight : (k == last ? last weight : 1),
+      // and its float product.
+      const __m128i step = _mm_set1_epi32(s);
+      weight = _mm_blendv_ps(weight, lastWeight, _mm_castsi128_ps(_mm_cmpeq_epi32(lastStep, step)));
+      weight =
+        _mm_blendv_ps(weight, firstWeight, _mm_castsi128_ps(_mm_cmpeq_epi32(firstStep, step)));
+      absorbance = _mm_mul_ps(absorbance, weight);
+    }
+    __m256d a = _mm256_cvtps_pd(absorbance);
     const __m256d vis = _mm256_and_pd(inside, _mm256_cmp_pd(a, zero, _CMP_GT_OQ));
+    if constexpr (Weighted)
+    {
+      // A record's weight where its step is visible, else 1: the four lanes' low halves of
+      // the mask (each lane's 64 bits are all ones or all zeros).
+      const __m256 mask = _mm256_castpd_ps(vis);
+      const __m128 narrow = _mm_shuffle_ps(
+        _mm256_castps256_ps128(mask), _mm256_extractf128_ps(mask, 1), _MM_SHUFFLE(2, 0, 2, 0));
+      _mm_store_ps(out.Weight[s], _mm_blendv_ps(oneFloat, weight, narrow));
+    }
     // A step that is not visible adds a * z^m = +0 (z = 0): the sums stay as they are.
     a = _mm256_and_pd(a, vis);
     const __m256d index = _mm256_sub_pd(k, base);
@@ -115,6 +150,22 @@ __attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.Steps), count);
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.Visible), visible);
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.QuantaSum), _mm256_cvtepi32_epi64(quanta));
+}
+
+} // namespace
+
+__attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int taken,
+  const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
+  double quantaPerAbsorbance, LaneMoments& out)
+{
+  Moments<false>(steps, taken, rays, sums, warp, quantaPerAbsorbance, nullptr, out);
+}
+
+__attribute__((target("avx2"))) void LaneWeightedMomentsAvx2(const LaneSteps& steps, int taken,
+  const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
+  double quantaPerAbsorbance, const LaneWeights& weights, LaneMoments& out)
+{
+  Moments<true>(steps, taken, rays, sums, warp, quantaPerAbsorbance, &weights, out);
 }
 
 } // namespace walk
