@@ -68,6 +68,14 @@ void LaneWeightedMomentsAvx2(const LaneSteps& steps, int taken, const LaneRays& 
   const double* const sums[4], const LatticeDepthWarp& warp, double quantaPerAbsorbance,
   const LaneWeights& weights, LaneMoments& out);
 
+// GatherLaneRays for end-weighted pairs (the walker's LaneSamples<true>): rays as
+// GatherLaneRays fills them but each lane's first index from ends.First and its offset from
+// ends.LaneOffset, and weights with the pairs' First, Last and their weights rounded to float;
+// one vector store per field, so that the lanes' vector loads take them from the stores.
+// Only where HasAvx2().
+void GatherWeightedLaneRays(const TileRays& packed, const ClippedRays& clipped,
+  const ClippedWeights& ends, const uint16_t* list, int n, LaneRays& rays, LaneWeights& weights);
+
 } // namespace walk
 } // namespace apc
 

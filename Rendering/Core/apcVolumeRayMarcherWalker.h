@@ -770,7 +770,7 @@ struct VolumeRayMarcher::Walker
       int64_t lastK[4] = { 0, 0, 0, 0 };
       float firstWeight[4] = { 1, 1, 1, 1 };
       float lastWeight[4] = { 1, 1, 1, 1 };
-      // The same, as LaneWeightedMomentsAvx2 reads them.
+      // The same, as LaneWeightedMomentsAvx2 reads them (GatherWeightedLaneRays).
       walk::LaneWeights laneWeights;
       for (int i = 0; i < 4; ++i)
       {
@@ -783,18 +783,7 @@ struct VolumeRayMarcher::Walker
           lastK[i] = static_cast<int64_t>(ends.Last[l]);
           firstWeight[i] = static_cast<float>(ends.FirstWeight[l]);
           lastWeight[i] = static_cast<float>(ends.LastWeight[l]);
-          laneWeights.First[i] = ends.First[l];
-          laneWeights.Last[i] = ends.Last[l];
-          laneWeights.FirstWeight[i] = firstWeight[i];
-          laneWeights.LastWeight[i] = lastWeight[i];
           k[i] = firstK[i];
-          lanes.K[i] = ends.First[l];
-          lanes.Offset[i] = ends.LaneOffset[l];
-          lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
-          for (int d = 0; d < 3; ++d)
-          {
-            lanes.D[d][i] = rays[l].D[d];
-          }
         }
         else
         {
@@ -805,7 +794,13 @@ struct VolumeRayMarcher::Walker
           visitor.Segment(l, c.Tin[l], c.Tout[l]);
         }
       }
-      if constexpr (!Weighted)
+      // One vector store per field: the lanes' vector loads of fields stored one double at a
+      // time waited for those stores to reach the cache.
+      if constexpr (Weighted)
+      {
+        walk::GatherWeightedLaneRays(packed, c, ends, list + h, n, lanes, laneWeights);
+      }
+      else
       {
         walk::GatherLaneRays(packed, c, list + h, n, lanes);
       }
