@@ -4,6 +4,8 @@
 
 #include <immintrin.h>
 
+#include <limits>
+
 namespace apc
 {
 namespace walk
@@ -26,12 +28,19 @@ __attribute__((target("avx2"), always_inline)) inline void Transpose(
   c[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
 }
 
-} // namespace
+// Lanes i0 .. i3 of v.
+__attribute__((target("avx2"), always_inline)) inline __m256d Four(
+  const double* v, int i0, int i1, int i2, int i3)
+{
+  return _mm256_setr_pd(v[i0], v[i1], v[i2], v[i3]);
+}
 
-// Only AVX2, no FMA: each product and sum must round as Moments::RunAdd's do.
-__attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int taken,
-  const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
-  double quantaPerAbsorbance, LaneMoments& out)
+// Only AVX2, no FMA: each product and sum must round as Moments::RunAdd's do. Weighted: each
+// step's float absorbance times its float weight first (weights), as RunAddWeighted's.
+template <bool Weighted>
+__attribute__((target("avx2"), always_inline)) inline void Moments(const LaneSteps& steps,
+  int taken, const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
+  double quantaPerAbsorbance, const LaneWeights* weights, LaneMoments& out)
 {
   // The four pixels' sums, one pixel per lane.
   __m256d b[5];
@@ -53,12 +62,48 @@ __attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int
   __m256i count = _mm256_setzero_si256();
   __m256i visible = _mm256_setzero_si256();
   __m128i quanta = _mm_setzero_si128();
+  // Weighted: the steps of each lane's First and Last index (exact integers, far apart ones
+  // meet no step: the conversion's 0x80000000), and their weights.
+  __m128i firstStep = _mm_setzero_si128();
+  __m128i lastStep = _mm_setzero_si128();
+  __m128 firstWeight = _mm_setzero_ps();
+  __m128 lastWeight = _mm_setzero_ps();
+  const __m128 oneFloat = _mm_set1_ps(1.0f);
+  if constexpr (Weighted)
+  {
+    // Vector stores of GatherWeightedLaneRays: each load takes its store's value.
+    firstStep = _mm256_cvttpd_epi32(_mm256_sub_pd(_mm256_load_pd(weights->First), k));
+    lastStep = _mm256_cvttpd_epi32(_mm256_sub_pd(_mm256_load_pd(weights->Last), k));
+    firstWeight = _mm_load_ps(weights->FirstWeight);
+    lastWeight = _mm_load_ps(weights->LastWeight);
+  }
   for (int s = 0; s < taken; ++s, k = _mm256_add_pd(k, one)) // k + 1 is exact: an integer
   {
     const __m256d t = _mm256_load_pd(steps.T[s]);
     const __m256d inside = _mm256_cmp_pd(t, tout, _CMP_LT_OQ);
-    __m256d a = _mm256_cvtps_pd(_mm_load_ps(steps.Absorbance[s]));
+    __m128 absorbance = _mm_load_ps(steps.Absorbance[s]);
+    __m128 weight = oneFloat;
+    if constexpr (Weighted)
+    {
+      // The scalar hand-over's k == first ? first weight : (k == last ? last weight : 1),
+      // and its float product.
+      const __m128i step = _mm_set1_epi32(s);
+      weight = _mm_blendv_ps(weight, lastWeight, _mm_castsi128_ps(_mm_cmpeq_epi32(lastStep, step)));
+      weight =
+        _mm_blendv_ps(weight, firstWeight, _mm_castsi128_ps(_mm_cmpeq_epi32(firstStep, step)));
+      absorbance = _mm_mul_ps(absorbance, weight);
+    }
+    __m256d a = _mm256_cvtps_pd(absorbance);
     const __m256d vis = _mm256_and_pd(inside, _mm256_cmp_pd(a, zero, _CMP_GT_OQ));
+    if constexpr (Weighted)
+    {
+      // A record's weight where its step is visible, else 1: the four lanes' low halves of
+      // the mask (each lane's 64 bits are all ones or all zeros).
+      const __m256 mask = _mm256_castpd_ps(vis);
+      const __m128 narrow = _mm_shuffle_ps(
+        _mm256_castps256_ps128(mask), _mm256_extractf128_ps(mask, 1), _MM_SHUFFLE(2, 0, 2, 0));
+      _mm_store_ps(out.Weight[s], _mm_blendv_ps(oneFloat, weight, narrow));
+    }
     // A step that is not visible adds a * z^m = +0 (z = 0): the sums stay as they are.
     a = _mm256_and_pd(a, vis);
     const __m256d index = _mm256_sub_pd(k, base);
@@ -115,6 +160,49 @@ __attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.Steps), count);
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.Visible), visible);
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.QuantaSum), _mm256_cvtepi32_epi64(quanta));
+}
+
+} // namespace
+
+__attribute__((target("avx2"))) void GatherWeightedLaneRays(const TileRays& packed,
+  const ClippedRays& clipped, const ClippedWeights& ends, const uint16_t* list, int n,
+  LaneRays& rays, LaneWeights& weights)
+{
+  // Lanes n .. 3 read ray list[0] (their values are not used), as in GatherLaneRays.
+  const int i0 = list[0];
+  const int i1 = n > 1 ? list[1] : i0;
+  const int i2 = n > 2 ? list[2] : i0;
+  const int i3 = n > 3 ? list[3] : i0;
+  _mm256_store_pd(rays.D[0], Four(packed.Dx, i0, i1, i2, i3));
+  _mm256_store_pd(rays.D[1], Four(packed.Dy, i0, i1, i2, i3));
+  _mm256_store_pd(rays.D[2], Four(packed.Dz, i0, i1, i2, i3));
+  _mm256_store_pd(rays.Offset, Four(ends.LaneOffset, i0, i1, i2, i3));
+  const __m256d first = Four(ends.First, i0, i1, i2, i3);
+  _mm256_store_pd(rays.K, first);
+  const __m256d used =
+    _mm256_castsi256_pd(_mm256_cmpgt_epi64(_mm256_set1_epi64x(n), _mm256_setr_epi64x(0, 1, 2, 3)));
+  _mm256_store_pd(rays.Tout,
+    _mm256_blendv_pd(_mm256_set1_pd(-std::numeric_limits<double>::infinity()),
+      Four(clipped.Tout, i0, i1, i2, i3), used));
+  _mm256_store_pd(weights.First, first);
+  _mm256_store_pd(weights.Last, Four(ends.Last, i0, i1, i2, i3));
+  // static_cast<float> of each double: the same rounding (to nearest) as _mm256_cvtpd_ps.
+  _mm_store_ps(weights.FirstWeight, _mm256_cvtpd_ps(Four(ends.FirstWeight, i0, i1, i2, i3)));
+  _mm_store_ps(weights.LastWeight, _mm256_cvtpd_ps(Four(ends.LastWeight, i0, i1, i2, i3)));
+}
+
+__attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int taken,
+  const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
+  double quantaPerAbsorbance, LaneMoments& out)
+{
+  Moments<false>(steps, taken, rays, sums, warp, quantaPerAbsorbance, nullptr, out);
+}
+
+__attribute__((target("avx2"))) void LaneWeightedMomentsAvx2(const LaneSteps& steps, int taken,
+  const LaneRays& rays, const double* const sums[4], const LatticeDepthWarp& warp,
+  double quantaPerAbsorbance, const LaneWeights& weights, LaneMoments& out)
+{
+  Moments<true>(steps, taken, rays, sums, warp, quantaPerAbsorbance, &weights, out);
 }
 
 } // namespace walk

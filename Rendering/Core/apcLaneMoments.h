@@ -33,6 +33,20 @@ struct LaneMoments
   alignas(32) int64_t Steps[4];
   alignas(32) int64_t QuantaSum[4];
   alignas(32) int64_t Visible[4];
+  // With end weights (LaneWeightedMomentsAvx2): each step's record weight, step by step: its
+  // end weight where the step is visible, else 1 (Moments::RunAddWeighted's).
+  alignas(16) float Weight[kLaneSteps][4];
+};
+
+// With end weights: each lane's pair's first and last lattice index (integers, as doubles) and
+// their float weights (walk::EndWeights' as the walker casts them); every other step weighs 1.
+// A pair without a lattice point has First == Last and its middle weight in both.
+struct LaneWeights
+{
+  alignas(32) double First[4];
+  alignas(32) double Last[4];
+  alignas(16) float FirstWeight[4];
+  alignas(16) float LastWeight[4];
 };
 
 // Adds steps 0 .. taken - 1 of the four lanes (rays.K: each lane's first index, rays.Tout its
@@ -44,6 +58,23 @@ struct LaneMoments
 void LaneMomentsAvx2(const LaneSteps& steps, int taken, const LaneRays& rays,
   const double* const sums[4], const LatticeDepthWarp& warp, double quantaPerAbsorbance,
   LaneMoments& out);
+
+// LaneMomentsAvx2 of end-weighted steps: each step's float absorbance is first multiplied by
+// its weight in float (weights: the lane's FirstWeight at its First index, else LastWeight at
+// its Last index, else 1), as the walker's scalar hand-over does, and out.Weight keeps each
+// step's record weight. The same sums, depths, quanta and weights bit for bit as
+// Moments::RunAddWeighted per step.
+void LaneWeightedMomentsAvx2(const LaneSteps& steps, int taken, const LaneRays& rays,
+  const double* const sums[4], const LatticeDepthWarp& warp, double quantaPerAbsorbance,
+  const LaneWeights& weights, LaneMoments& out);
+
+// GatherLaneRays for end-weighted pairs (the walker's LaneSamples<true>): rays as
+// GatherLaneRays fills them but each lane's first index from ends.First and its offset from
+// ends.LaneOffset, and weights with the pairs' First, Last and their weights rounded to float;
+// one vector store per field, so that the lanes' vector loads take them from the stores.
+// Only where HasAvx2().
+void GatherWeightedLaneRays(const TileRays& packed, const ClippedRays& clipped,
+  const ClippedWeights& ends, const uint16_t* list, int n, LaneRays& rays, LaneWeights& weights);
 
 } // namespace walk
 } // namespace apc

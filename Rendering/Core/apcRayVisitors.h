@@ -336,7 +336,9 @@ struct Moments : NoSegments
   const double* PixelSums(int pixel) const { return this->Sums.data() + pixel * (N + 1); }
   // Keeps lane's run of m (steps from lattice index k, pixel's; the call took taken steps): its
   // sums, and the records of its visible steps in order, as RunBegin, RunAdd per step and
-  // RunEnd would.
+  // RunEnd would. Weighted (walk::LaneWeightedMomentsAvx2's m): with each record's weight, as
+  // RunBegin(weighted) and RunAddWeighted per step would.
+  template <bool Weighted = false>
   [[gnu::always_inline]] void LaneRunEnd(int pixel, const walk::LaneMoments& m, int lane, int64_t k,
     const walk::LaneSteps& steps, int taken)
   {
@@ -358,6 +360,16 @@ struct Moments : NoSegments
       // one (as RunAdd does): the call's step count is the same in its four lanes, where a
       // loop over each lane's visible steps ended at a count the processor could not predict.
       RecordedSample* record = this->Buffer->Room(static_cast<size_t>(taken));
+      float* weight = nullptr;
+      if constexpr (Weighted)
+      {
+        // The weights' room follows the records' (RunBegin's); past the kept records the
+        // weights stay 1 (an invisible step's record weight is 1).
+        RecordBuffer& buffer = *this->Buffer;
+        buffer.WeighUpTo(buffer.Recorded.size());
+        buffer.WeighedEnd = std::max(buffer.WeighedEnd, buffer.Used + static_cast<size_t>(taken));
+        weight = buffer.Weights.data() + buffer.Used;
+      }
       uint32_t kept = 0;
       for (int s = 0; s < taken; ++s)
       {
@@ -365,6 +377,10 @@ struct Moments : NoSegments
         record[kept].Scalar = static_cast<float>(steps.Scalar[s][lane]);
         record[kept].Pixel = static_cast<uint16_t>(pixel);
         record[kept].K16 = static_cast<uint16_t>(k + s);
+        if constexpr (Weighted)
+        {
+          weight[kept] = m.Weight[s][lane];
+        }
         kept += static_cast<uint32_t>(visible >> s & 1);
       }
       this->Buffer->Used += kept;

@@ -700,7 +700,9 @@ struct VolumeRayMarcher::Walker
   // hand-over multiplies each step's absorbance by its weight (1 but at the pair's first and
   // last index; a middle sample's MidWeight) as the scalar loop does, before the visitor and
   // the stop see it: the same weighted samples, sums, records, weights and cut as
-  // WeightedRay's.
+  // WeightedRay's. Its four pixels' sums are found at once as the plain ones' are
+  // (walk::LaneWeightedMomentsAvx2: the weights multiplied in the lanes, each record's weight
+  // kept by Moments::LaneRunEnd<true>).
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
   template <bool Weighted, class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, const TileRays& packed,
@@ -768,6 +770,8 @@ struct VolumeRayMarcher::Walker
       int64_t lastK[4] = { 0, 0, 0, 0 };
       float firstWeight[4] = { 1, 1, 1, 1 };
       float lastWeight[4] = { 1, 1, 1, 1 };
+      // The same, as LaneWeightedMomentsAvx2 reads them (GatherWeightedLaneRays).
+      walk::LaneWeights laneWeights;
       for (int i = 0; i < 4; ++i)
       {
         const int at = h + (i < n ? i : 0);
@@ -780,13 +784,6 @@ struct VolumeRayMarcher::Walker
           firstWeight[i] = static_cast<float>(ends.FirstWeight[l]);
           lastWeight[i] = static_cast<float>(ends.LastWeight[l]);
           k[i] = firstK[i];
-          lanes.K[i] = ends.First[l];
-          lanes.Offset[i] = ends.LaneOffset[l];
-          lanes.Tout[i] = i < n ? c.Tout[l] : -std::numeric_limits<double>::infinity();
-          for (int d = 0; d < 3; ++d)
-          {
-            lanes.D[d][i] = rays[l].D[d];
-          }
         }
         else
         {
@@ -797,7 +794,13 @@ struct VolumeRayMarcher::Walker
           visitor.Segment(l, c.Tin[l], c.Tout[l]);
         }
       }
-      if constexpr (!Weighted)
+      // One vector store per field: the lanes' vector loads of fields stored one double at a
+      // time waited for those stores to reach the cache.
+      if constexpr (Weighted)
+      {
+        walk::GatherWeightedLaneRays(packed, c, ends, list + h, n, lanes, laneWeights);
+      }
+      else
       {
         walk::GatherLaneRays(packed, c, list + h, n, lanes);
       }
@@ -805,8 +808,10 @@ struct VolumeRayMarcher::Walker
       {
         const int taken = walk::LaneSamplesAvx2(vectors, lanes, steps);
         more = false;
-        // Four pixels' sums at once: each step's warp, moments and quanta across the lanes.
-        constexpr bool acrossLanes = !Weighted && LaneMomentsVisitor<Visitor>::value;
+        // Four pixels' sums at once: each step's warp, moments and quanta across the lanes
+        // (Weighted: each step's weight first, and the records' weights).
+        constexpr bool acrossLanes =
+          LaneMomentsVisitor<Visitor>::value && (!Weighted || TakesWeights<Visitor>::value);
         if constexpr (acrossLanes)
         {
           const double* sums[4];
@@ -814,8 +819,16 @@ struct VolumeRayMarcher::Walker
           {
             sums[i] = visitor.PixelSums(local[i]);
           }
-          walk::LaneMomentsAvx2(steps, taken, lanes, sums, *visitor.Warp,
-            own ? progress.Bins->QuantaPerAbsorbance : 0.0, across);
+          const double perAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0.0;
+          if constexpr (Weighted)
+          {
+            walk::LaneWeightedMomentsAvx2(
+              steps, taken, lanes, sums, *visitor.Warp, perAbsorbance, laneWeights, across);
+          }
+          else
+          {
+            walk::LaneMomentsAvx2(steps, taken, lanes, sums, *visitor.Warp, perAbsorbance, across);
+          }
         }
         for (int i = 0; i < n; ++i)
         {
@@ -833,7 +846,7 @@ struct VolumeRayMarcher::Walker
             if (kept)
             {
               s = static_cast<int>(across.Steps[i]);
-              visitor.LaneRunEnd(l, across, i, kk, steps, taken);
+              visitor.template LaneRunEnd<Weighted>(l, across, i, kk, steps, taken);
               if (own)
               {
                 const uint64_t visible = static_cast<uint64_t>(across.Visible[i]);

@@ -1,10 +1,10 @@
 // The lanes' hand-over four pixels at a time (walk::LaneMomentsAvx2, with Moments::LaneRunEnd
-// in the walker) against the scalar path: each lane's five sums, its records' warped depths,
-// its quanta, its steps and visible steps the same bit for bit as Moments::RunAdd and
-// OpaqueBins::Quanta per visible sample, on random steps (steps past a lane's end, clear
-// steps, unused lanes, jittered depths and indices outside the depth warp's table); and the
-// marcher with the lanes against its scalar sample loops (pass 1's moments, the opaque
-// profile and cut, pass 2 from the cache) on a block of distorted hexahedra and pyramids.
+// in the walker; LaneWeightedMomentsAvx2 with end weights) against the scalar path: each lane's
+// five sums, its records' warped depths, its quanta, its steps and visible steps the same bit for
+// bit as Moments::RunAdd and OpaqueBins::Quanta per visible sample, on random steps (steps past a
+// lane's end, clear steps, unused lanes, jittered depths and indices outside the depth warp's
+// table); and the marcher with the lanes against its scalar sample loops (pass 1's moments, the
+// opaque profile and cut, pass 2 from the cache) on a block of distorted hexahedra and pyramids.
 #include "apcCellMesh.h"
 #include "apcDepthWarp.h"
 #include "apcLaneMoments.h"
@@ -36,13 +36,12 @@ bool Same(double a, double b)
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
-TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
+// Weighted: LaneWeightedMomentsAvx2 against RunAddWeighted's float product per step (random
+// first and last indices before, inside and past the call's steps, equal ones as a pair
+// without a lattice point has, weights of 0 and 1 among them), with each step's record weight.
+void CheckAgainstRunAdd(bool weighted)
 {
-  if (!apc::walk::HasAvx2())
-  {
-    GTEST_SKIP() << "no AVX2";
-  }
-  std::mt19937 rng(7);
+  std::mt19937 rng(weighted ? 11 : 7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const double spacing = 0.0137;
   const apc::LogDepthWarp log(1.0, 9.0);
@@ -56,10 +55,13 @@ TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
   int jittered = 0;
   int outside = 0;
   int opaqueQuanta = 0;
+  int firstSteps = 0;
+  int lastSteps = 0;
   for (int trial = 0; trial < 20000; ++trial)
   {
     apc::walk::LaneRays rays;
     apc::walk::LaneSteps steps;
+    apc::walk::LaneWeights weights;
     const int taken = 1 + static_cast<int>(u(rng) * kLaneSteps) % kLaneSteps;
     const bool withQuanta = trial % 3 != 0;
     std::array<std::array<double, 5>, 4> sums;
@@ -78,6 +80,20 @@ TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
         k = base + entries - 4 + static_cast<int64_t>(u(rng) * 8);
       }
       rays.K[i] = static_cast<double>(k);
+      // The pair's ends: its first index up to two steps before the call's first or past its
+      // last, its last from that on (equal to it in a fifth of the lanes).
+      const int64_t first = k - 2 + static_cast<int64_t>(u(rng) * (kLaneSteps + 4));
+      const int64_t last =
+        first + (u(rng) < 0.2 ? 0 : 1 + static_cast<int64_t>(u(rng) * (kLaneSteps + 2)));
+      weights.First[i] = static_cast<double>(first);
+      weights.Last[i] = static_cast<double>(last);
+      const auto weight = [&]()
+      {
+        const double v = u(rng);
+        return v < 0.05 ? 0.f : (v < 0.1 ? 1.f : static_cast<float>(u(rng)));
+      };
+      weights.FirstWeight[i] = weight();
+      weights.LastWeight[i] = weight();
       // Jittered lanes' depths are not k times the spacing.
       rays.Offset[i] = u(rng) < 0.2 ? u(rng) - 0.5 : 0.0;
       const double tout =
@@ -103,8 +119,16 @@ TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
       pointers[i] = sums[i].data();
     }
     apc::walk::LaneMoments out;
-    apc::walk::LaneMomentsAvx2(
-      steps, taken, rays, pointers, warp, withQuanta ? bins.QuantaPerAbsorbance : 0.0, out);
+    const double perAbsorbance = withQuanta ? bins.QuantaPerAbsorbance : 0.0;
+    if (weighted)
+    {
+      apc::walk::LaneWeightedMomentsAvx2(
+        steps, taken, rays, pointers, warp, perAbsorbance, weights, out);
+    }
+    else
+    {
+      apc::walk::LaneMomentsAvx2(steps, taken, rays, pointers, warp, perAbsorbance, out);
+    }
     for (int i = 0; i < 4; ++i)
     {
       double expected[5];
@@ -115,13 +139,34 @@ TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
       for (int s = 0; s < taken && steps.T[s][i] < rays.Tout[i]; ++s)
       {
         ++count;
-        const float a = steps.Absorbance[s][i];
+        const int64_t k = static_cast<int64_t>(rays.K[i]) + s;
+        float a = steps.Absorbance[s][i];
+        float weight = 1;
+        if (weighted)
+        {
+          // The walker's scalar hand-over: a float weight and a float product.
+          const int64_t first = static_cast<int64_t>(weights.First[i]);
+          const int64_t last = static_cast<int64_t>(weights.Last[i]);
+          weight = k == first ? weights.FirstWeight[i] : (k == last ? weights.LastWeight[i] : 1.f);
+          firstSteps += k == first ? 1 : 0;
+          lastSteps += k == last && k != first ? 1 : 0;
+          a *= weight;
+        }
         if (!(a > 0))
         {
           EXPECT_EQ(out.Quanta[s][i], 0u);
+          if (weighted)
+          {
+            EXPECT_EQ(out.Weight[s][i], 1.f) << "trial " << trial << " lane " << i;
+          }
           continue;
         }
-        const int64_t k = static_cast<int64_t>(rays.K[i]) + s;
+        if (weighted)
+        {
+          // RunAddWeighted keeps a visible step's weight bit for bit.
+          EXPECT_EQ(std::memcmp(&out.Weight[s][i], &weight, sizeof weight), 0)
+            << "trial " << trial << " lane " << i << " step " << s;
+        }
         const double t = steps.T[s][i];
         const double z = warp(k, t);
         jittered += rays.Offset[i] != 0 ? 1 : 0;
@@ -151,6 +196,29 @@ TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
   EXPECT_GT(jittered, 1000);
   EXPECT_GT(outside, 1000);
   EXPECT_GT(opaqueQuanta, 100);
+  if (weighted)
+  {
+    EXPECT_GT(firstSteps, 5000);
+    EXPECT_GT(lastSteps, 5000);
+  }
+}
+
+TEST(LaneMoments, FourPixelsAtOnceMatchRunAddBitForBit)
+{
+  if (!apc::walk::HasAvx2())
+  {
+    GTEST_SKIP() << "no AVX2";
+  }
+  CheckAgainstRunAdd(false);
+}
+
+TEST(LaneMoments, WeightedStepsMatchRunAddWeightedBitForBit)
+{
+  if (!apc::walk::HasAvx2())
+  {
+    GTEST_SKIP() << "no AVX2";
+  }
+  CheckAgainstRunAdd(true);
 }
 
 constexpr int kSize = 64;
