@@ -86,6 +86,41 @@ struct WeightSpan
   void resize(size_t n) { this->Size = std::min(n, this->Size); } // only ever shrinks
 };
 
+// A compact tile's depth slot for a sample whose depth or weight the slot cannot hold: its
+// record is the tile's next escape (CompactSpan::Escapes, in sample order).
+constexpr uint16_t kEscapedDepth = 0xFFFF;
+
+// A sample of a compact tile kept whole: a depth that is not the depth table's entry for its
+// lattice bits (a pair's middle sample, a jittered ray, a depth outside the table), or an end
+// weight other than 1.
+struct EscapedSample
+{
+  float Z;
+  float Weight;
+  uint16_t K16;
+  uint16_t Unused;
+};
+static_assert(sizeof(EscapedSample) == 12, "an escape is two floats and the lattice bits");
+
+// A tile's samples in compact form (SampleCache::SetDepthTable): each sample's scalar, and
+// instead of its depth, its lattice bits and its end weight, the index of its depth in the
+// frame's depth table, whose entry is that depth bit for bit and whose index gives back the
+// lattice bits (the table's base plus the index, low 16 bits); the few samples the index
+// cannot stand for are escapes. 6 bytes a sample instead of 8 + 2 (lattice bits) + 4 (end
+// weight): pass 1 writes fewer bytes of fresh memory on the first frame, pass 2 reads fewer.
+// Expanded (SampleCache::Expand) into exactly the samples, lattice bits and weights the full
+// form holds.
+struct CompactSpan
+{
+  float* Scalars = nullptr;
+  uint16_t* Depths = nullptr; // index into the depth table, or kEscapedDepth
+  EscapedSample* Escapes = nullptr;
+  size_t Size = 0;
+  size_t EscapeCount = 0;
+  bool Ordered = false;  // kept with its lattice bits (K16)
+  bool Weighted = false; // kept with end weights (Weights)
+};
+
 // A tile's samples grouped by pixel: pixel p's are Samples[Starts[p] .. Starts[p + 1]), in
 // the order pass 1 took them. K16, kept only for a pass 1 that keeps its own moments
 // (Hybrid), holds the low 16 bits of each sample's lattice index, which order the samples of
@@ -94,22 +129,34 @@ struct WeightSpan
 // vectors of K16 took ~13,000 fresh 4 KiB pages on the first 1024^2 wind frame); Starts keeps
 // its memory from frame to frame. Weights, kept only for a pass 1 with end weights
 // (apcEndWeights.h), holds each sample's weight, by which pass 2 multiplies the absorbance
-// it looks up (the same float product pass 1 took).
+// it looks up (the same float product pass 1 took). A tile kept in compact form holds its
+// samples in Compact instead (Samples, K16 and Weights empty).
 struct CachedTile
 {
   UninitializedVector<uint32_t> Starts;
   SampleSpan Samples;
   OrderSpan K16;
   WeightSpan Weights;
+  CompactSpan Compact;
 
   // K16's room in the arena after n samples (whole 8-byte words: the arena's unit).
   static size_t OrderBytes(size_t n) { return (n * sizeof(uint16_t) + 7) / 8 * 8; }
   static size_t WeightBytes(size_t n) { return (n * sizeof(float) + 7) / 8 * 8; }
+  static size_t EscapeBytes(size_t n) { return (n * sizeof(EscapedSample) + 7) / 8 * 8; }
+  // A compact tile's room in the arena: scalars, depth indices, escapes.
+  static size_t CompactBytes(size_t n, size_t escapes)
+  {
+    return WeightBytes(n) + OrderBytes(n) + EscapeBytes(escapes);
+  }
+  bool IsCompact() const { return this->Compact.Size > 0; }
+  // The samples it holds, in either form.
+  size_t Count() const { return this->Samples.size() + this->Compact.Size; }
   size_t Bytes() const
   {
     return this->Starts.capacity() * sizeof(uint32_t) +
       this->Samples.size() * sizeof(CachedSample) + OrderBytes(this->K16.size()) +
-      WeightBytes(this->Weights.size());
+      WeightBytes(this->Weights.size()) +
+      (this->IsCompact() ? CompactBytes(this->Compact.Size, this->Compact.EscapeCount) : 0);
   }
   void Clear()
   {
@@ -117,6 +164,7 @@ struct CachedTile
     this->Samples = SampleSpan();
     this->K16 = OrderSpan();
     this->Weights = WeightSpan();
+    this->Compact = CompactSpan();
   }
   void Free() { *this = CachedTile(); }
 };
@@ -212,6 +260,27 @@ struct SampleCache
   double WarpNear = 0;
   double WarpFar = 0;
   int Moments = 0;
+  // The frame's depth table (SetDepthTable): DepthTable[i] is the float depth pass 1 records
+  // for lattice index DepthBase + i. While it holds entries, tiles are kept in compact form
+  // (CompactSpan) unless CompactRecords is off (the full form, for tests and measurements).
+  std::vector<float> DepthTable;
+  int64_t DepthBase = 0;
+  bool CompactRecords = true;
+
+  // The table from a frame's lattice warp (entries: warp of index base + i, as doubles, the
+  // depths pass 1 rounds to float). The last index (kEscapedDepth) is never an entry. Set
+  // before a frame records and kept until the next: Expand reads what Keep wrote with it.
+  void SetDepthTable(const double* entries, int64_t count, int64_t base)
+  {
+    const size_t n = static_cast<size_t>(
+      std::max<int64_t>(0, std::min<int64_t>(count, static_cast<int64_t>(kEscapedDepth))));
+    this->DepthTable.resize(n);
+    for (size_t i = 0; i < n; ++i)
+    {
+      this->DepthTable[i] = static_cast<float>(entries[i]);
+    }
+    this->DepthBase = base;
+  }
 
   // The samples go, the memory stays: refilling last frame's vectors costs no page faults
   // and no reallocation (at 1024^2 on the gear teeth, ~100 MB a frame).
@@ -361,6 +430,16 @@ struct SampleCache
     const size_t orderBytes = withOrder ? CachedTile::OrderBytes(n) : 0;
     const size_t weightBytes = weights ? CachedTile::WeightBytes(n) : 0;
     const size_t arenaBytes = n * sizeof(CachedSample) + orderBytes + weightBytes;
+    if (this->CompactRecords && !this->DepthTable.empty())
+    {
+      // Compact unless its escapes make it larger (a tile of jittered rays, say).
+      const size_t escapes = this->Escapes(recorded, n, weights);
+      if (CachedTile::CompactBytes(n, escapes) < arenaBytes)
+      {
+        this->KeepCompact(tile, recorded, n, escapes, counts, pixels, withOrder, weights);
+        return;
+      }
+    }
     const size_t bytes = cached.Bytes() + arenaBytes;
     CachedSample* memory = nullptr;
     if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes ||
@@ -426,7 +505,216 @@ struct SampleCache
     starts[0] = 0;
     this->Kept[tile] = 1;
   }
+
+  // A record's slot in a compact tile: the index of its depth in the depth table, or
+  // kEscapedDepth if the entry there is not its depth bit for bit or its weight is not 1 (the
+  // table holds at most kEscapedDepth entries, so the low 16 bits of the index find the entry).
+  static uint16_t DepthSlot(const RecordedSample& r, const float* table, uint32_t entries,
+    uint16_t base16, const float* weight)
+  {
+    const uint16_t i = static_cast<uint16_t>(r.K16 - base16);
+    uint32_t want = 0;
+    uint32_t have = 0;
+    if (i < entries)
+    {
+      std::memcpy(&want, &r.Z, sizeof want);
+      std::memcpy(&have, table + i, sizeof have);
+    }
+    uint32_t w = 0x3f800000u; // 1.0f
+    if (weight)
+    {
+      std::memcpy(&w, weight, sizeof w);
+    }
+    return i < entries && want == have && w == 0x3f800000u ? i : kEscapedDepth;
+  }
+  // How many of recorded[0, n) a compact tile keeps as escapes.
+  size_t Escapes(const RecordedSample* recorded, size_t n, const float* weights) const
+  {
+    const float* table = this->DepthTable.data();
+    const uint32_t entries = static_cast<uint32_t>(this->DepthTable.size());
+    const uint16_t base16 = static_cast<uint16_t>(this->DepthBase);
+    size_t escapes = 0;
+    for (size_t r = 0; r < n; ++r)
+    {
+      escapes += DepthSlot(recorded[r], table, entries, base16, weights ? weights + r : nullptr) ==
+        kEscapedDepth;
+    }
+    return escapes;
+  }
+  // Keep in compact form (the depth table set, the tile's Starts sized, escapes counted).
+  void KeepCompact(size_t tile, const RecordedSample* recorded, size_t n, size_t escapes,
+    const uint32_t* counts, int pixels, bool withOrder, const float* weights)
+  {
+    CachedTile& cached = this->Tiles[tile];
+    const float* table = this->DepthTable.data();
+    const uint32_t entries = static_cast<uint32_t>(this->DepthTable.size());
+    const uint16_t base16 = static_cast<uint16_t>(this->DepthBase);
+    const size_t arenaBytes = CachedTile::CompactBytes(n, escapes);
+    const size_t bytes = cached.Bytes() + arenaBytes;
+    char* memory = nullptr;
+    if (this->Bytes.fetch_add(bytes) + bytes > this->MaxBytes ||
+      !(memory = static_cast<char*>(this->Arena.Take(arenaBytes))))
+    {
+      this->Bytes.fetch_sub(bytes);
+      this->Record = false;
+      cached.Free();
+      return;
+    }
+    CompactSpan& compact = cached.Compact;
+    compact.Scalars = reinterpret_cast<float*>(memory);
+    compact.Depths = reinterpret_cast<uint16_t*>(memory + CachedTile::WeightBytes(n));
+    compact.Escapes = reinterpret_cast<EscapedSample*>(
+      memory + CachedTile::WeightBytes(n) + CachedTile::OrderBytes(n));
+    compact.Size = n;
+    compact.EscapeCount = escapes;
+    compact.Ordered = withOrder;
+    compact.Weighted = weights != nullptr;
+    uint32_t* starts = cached.Starts.data();
+    starts[0] = 0;
+    for (int p = 0; p < pixels; ++p)
+    {
+      starts[p + 1] = starts[p] + counts[p];
+    }
+    thread_local std::vector<uint32_t> slots;
+    if (slots.size() < n)
+    {
+      slots.resize(std::max(n, 2 * slots.size()));
+    }
+    Slots(recorded, n, starts, slots.data());
+    if (weights)
+    {
+      CopyCompact<true>(recorded, slots.data(), n, compact, table, entries, base16, weights);
+    }
+    else
+    {
+      CopyCompact<false>(recorded, slots.data(), n, compact, table, entries, base16, nullptr);
+    }
+    StreamFence();
+    for (int p = pixels; p > 0; --p)
+    {
+      starts[p] = starts[p - 1];
+    }
+    starts[0] = 0;
+    this->Kept[tile] = 1;
+  }
+  // Copy's compact form: the scalars and depth slots written front to back by streaming
+  // stores (four samples a step: two words of scalars, one of slots), the escapes in order.
+  template <bool WithWeights>
+  static void CopyCompact(const RecordedSample* recorded, const uint32_t* slots, size_t n,
+    CompactSpan& compact, const float* table, uint32_t entries, uint16_t base16,
+    const float* weights)
+  {
+    float* scalars = compact.Scalars;
+    uint16_t* depths = compact.Depths;
+    EscapedSample* escape = compact.Escapes;
+    auto slotOf = [&](size_t at, const RecordedSample& r)
+    {
+      const uint16_t slot =
+        DepthSlot(r, table, entries, base16, WithWeights ? weights + slots[at] : nullptr);
+      if (slot == kEscapedDepth)
+      {
+        *escape++ = { r.Z, WithWeights ? weights[slots[at]] : 1.0f, r.K16, 0 };
+      }
+      return slot;
+    };
+    size_t at = 0;
+#ifdef __SSE2__
+    for (; at + 4 <= n; at += 4)
+    {
+      uint64_t depthBits = 0;
+      uint32_t scalarBits[4];
+      for (size_t j = 0; j < 4; ++j)
+      {
+        const RecordedSample& r = recorded[slots[at + j]];
+        std::memcpy(scalarBits + j, &r.Scalar, sizeof(float));
+        depthBits |= static_cast<uint64_t>(slotOf(at + j, r)) << (16 * j);
+      }
+      _mm_stream_si64(reinterpret_cast<long long*>(scalars + at),
+        static_cast<long long>(scalarBits[0] | static_cast<uint64_t>(scalarBits[1]) << 32));
+      _mm_stream_si64(reinterpret_cast<long long*>(scalars + at + 2),
+        static_cast<long long>(scalarBits[2] | static_cast<uint64_t>(scalarBits[3]) << 32));
+      _mm_stream_si64(reinterpret_cast<long long*>(depths + at), static_cast<long long>(depthBits));
+    }
+#endif
+    for (; at < n; ++at)
+    {
+      const RecordedSample& r = recorded[slots[at]];
+      scalars[at] = r.Scalar;
+      depths[at] = slotOf(at, r);
+    }
+  }
 };
+
+// A compact tile expanded into the full form (SampleCache::Expand): the samples, lattice bits
+// and weights in this thread's scratch, which stays in the processor's cache from tile to tile.
+struct ExpandedTile
+{
+  CachedTile View;
+  UninitializedVector<CachedSample> Samples;
+  UninitializedVector<uint16_t> Order;
+  UninitializedVector<float> Weights;
+};
+
+// tile itself if it is in the full form, else its samples, lattice bits (if kept) and end
+// weights (if kept) as the full form holds them, bit for bit, in scratch.View (valid until
+// scratch's next Expand). table and base: the depth table the tile was kept with
+// (SampleCache::DepthTable, DepthBase).
+inline const CachedTile& Expand(
+  const CachedTile& tile, const std::vector<float>& table, int64_t base, ExpandedTile& scratch)
+{
+  if (!tile.IsCompact())
+  {
+    return tile;
+  }
+  const CompactSpan& compact = tile.Compact;
+  const size_t n = compact.Size;
+  if (scratch.Samples.size() < n)
+  {
+    scratch.Samples.resize(n);
+    scratch.Order.resize(n);
+  }
+  const bool weighted = compact.Weighted;
+  if (weighted && scratch.Weights.size() < n)
+  {
+    scratch.Weights.resize(n);
+  }
+  const float* z = table.data();
+  const uint16_t base16 = static_cast<uint16_t>(base);
+  const EscapedSample* escape = compact.Escapes;
+  CachedSample* samples = scratch.Samples.data();
+  uint16_t* order = scratch.Order.data();
+  float* weights = scratch.Weights.data();
+  for (size_t s = 0; s < n; ++s)
+  {
+    const uint16_t slot = compact.Depths[s];
+    if (slot != kEscapedDepth)
+    {
+      samples[s] = { z[slot], compact.Scalars[s] };
+      order[s] = static_cast<uint16_t>(base16 + slot);
+      if (weighted)
+      {
+        weights[s] = 1.0f;
+      }
+    }
+    else
+    {
+      samples[s] = { escape->Z, compact.Scalars[s] };
+      order[s] = escape->K16;
+      if (weighted)
+      {
+        weights[s] = escape->Weight;
+      }
+      ++escape;
+    }
+  }
+  CachedTile& view = scratch.View;
+  view.Starts.assign(tile.Starts.begin(), tile.Starts.end());
+  view.Samples = { samples, n };
+  view.K16 = compact.Ordered ? OrderSpan{ order, n } : OrderSpan();
+  view.Weights = weighted ? WeightSpan{ weights, n } : WeightSpan();
+  view.Compact = CompactSpan();
+  return view;
+}
 
 } // namespace apc
 

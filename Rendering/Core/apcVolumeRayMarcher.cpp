@@ -37,6 +37,12 @@ VolumeRayMarcher::VolumeRayMarcher()
 
 VolumeRayMarcher::~VolumeRayMarcher() = default;
 
+void VolumeRayMarcher::SetCompactSampleCache(bool compact)
+{
+  this->Cache->CompactRecords = compact;
+}
+
+//------------------------------------------------------------------------------
 void VolumeRayMarcher::SetMaxSampleCacheBytes(size_t bytes)
 {
   if (bytes < this->Cache->MaxBytes)
@@ -284,6 +290,9 @@ void VolumeRayMarcher::AccumulateMoments(const TransferTable& table, const LogDe
   cache.Empty(static_cast<size_t>(this->Bins->Grid.Count()), static_cast<size_t>(first),
     static_cast<size_t>(last));
   const LatticeDepthWarp latticeWarp(warp, table.GetSampleSpacing());
+  // The cache keeps its samples' depths as indices into this frame's table where it can.
+  cache.SetDepthTable(latticeWarp.GetEntries(),
+    cache.MaxBytes > 0 ? latticeWarp.GetNumberOfEntries() : 0, latticeWarp.GetBase());
   visitors::Moments<N> visitor(moments, this->Width(), &latticeWarp, &cache);
   visitor.Weighted = this->SampleEndWeights != EndWeightsMode::Off; // the cache keeps the weights
   this->OwnMomentsOrder = 0;
@@ -379,7 +388,7 @@ void VolumeRayMarcher::ApplyOpaqueCut(const TransferTable& table, const LogDepth
         if (cached && cache.Kept[t])
         {
           CutCachedTile<N>(cache.Tiles[t], inBand, width, this->Opaque, this->Cut.data(),
-            this->LastBin.data(), table, moments);
+            this->LastBin.data(), table, moments, cache.DepthTable.data(), cache.DepthBase);
           continue;
         }
         for (int p = 0; p < inBand.Pixels(); ++p)
@@ -529,6 +538,8 @@ int64_t VolumeRayMarcher::ReplayColour(
   const TileGrid& grid = this->Bins->Grid;
   tbb::combinable<Visitor> perThread([&prototype] { return prototype; });
   tbb::combinable<int64_t> samples([] { return int64_t(0); });
+  // Each thread's compact tiles expanded in its own scratch (in the processor's cache).
+  tbb::enumerable_thread_specific<ExpandedTile> expanded;
   const SampleCache& cache = *this->Cache;
   int64_t first = 0;
   int64_t last = 0;
@@ -541,12 +552,13 @@ int64_t VolumeRayMarcher::ReplayColour(
       for (int64_t t = first + begin; t < first + end; ++t)
       {
         const CachedTile& recorded = cache.Tiles[t];
-        if (!cache.Kept[t] || recorded.Samples.empty())
+        if (!cache.Kept[t] || recorded.Count() == 0)
         {
           continue;
         }
-        visitor.ReplayTile(Walker::Shifted(grid.Tile(t), rows.J0), recorded, table);
-        samples.local() += static_cast<int64_t>(recorded.Samples.size());
+        visitor.ReplayTile(Walker::Shifted(grid.Tile(t), rows.J0),
+          Expand(recorded, cache.DepthTable, cache.DepthBase, expanded.local()), table);
+        samples.local() += static_cast<int64_t>(recorded.Count());
       }
     });
   return samples.combine(std::plus<int64_t>());

@@ -211,12 +211,16 @@ public:
   double GetLastHiddenShare() const { return this->LastHiddenShare; }
   int64_t GetLastHiddenCount() const { return this->LastHidden; }
 
-  // Pass 1 keeps its samples (depth and scalar, 8 bytes each, 10 with keepOwn) for pass 2 up
-  // to this many bytes, so that pass 2 only re-weights them instead of clipping and
-  // interpolating again; the tiles beyond the budget are marched again. 0 disables. Default
-  // 1 GiB (the frame engine sets the node's share, apc::NodeShareOfMemory). Lowering it frees
-  // the memory the cache holds.
+  // Pass 1 keeps its samples (scalar and depth, 6 bytes each in the compact form, else 8, 10
+  // with the lattice bits, 4 more with end weights) for pass 2 up to this many bytes, so that
+  // pass 2 only re-weights them instead of clipping and interpolating again; the tiles beyond
+  // the budget are marched again. 0 disables. Default 1 GiB (the frame engine sets the node's
+  // share, apc::NodeShareOfMemory). Lowering it frees the memory the cache holds.
   void SetMaxSampleCacheBytes(size_t bytes);
+  // The cache keeps a sample's depth as the index of its entry in the frame's depth table
+  // where it can (apcSampleCache.h's CompactSpan: fewer bytes of memory written and read);
+  // off, every sample whole (for tests and measurements). The same images bit for bit.
+  void SetCompactSampleCache(bool compact);
   // The share of the last AccumulateColour's samples replayed from the cache (0 to 1), and
   // their number.
   double GetLastColourCacheShare() const { return this->LastColourCacheShare; }

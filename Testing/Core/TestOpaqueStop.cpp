@@ -22,6 +22,7 @@
 #include <limits>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace
@@ -661,4 +662,66 @@ TEST(OpaqueStop, TilesMarchedAgainStartTheirProfilesAfresh)
   EXPECT_TRUE(std::equal(fresh.begin(), fresh.end(), marcher.GetOpaqueProfile().data()))
     << "and the marcher's own memory used again";
   EXPECT_NE(marcher.GetOpaqueProfile().data(), reinterpret_cast<const uint16_t*>(lent.data()));
+}
+
+// The sample cache's compact form (SampleCache's depth table) changes no bit of a frame: the
+// same moments after the cut (summed again from the cached samples of the cut pixels), the
+// same colour sums replayed, the same sample counts, on one and on three processes, with and
+// without end weights, with and without a predicted bound (whose unresolved tiles are
+// recorded again).
+TEST(OpaqueStop, TheCompactCacheChangesNoBit)
+{
+  const Scene scene;
+  for (int parts : { 1, 3 })
+  {
+    for (bool weights : { false, true })
+    {
+      for (bool bounded : { false, true })
+      {
+        std::vector<uint8_t> free;
+        Frame frames[2];
+        for (int compact = 0; compact < 2; ++compact)
+        {
+          std::vector<apc::CellMesh> meshes;
+          for (int p = 0; p < parts; ++p)
+          {
+            meshes.push_back(parts == 1 ? BlockMesh(-1) : BlockMesh(p, parts, 7));
+          }
+          std::vector<std::unique_ptr<apc::VolumeRayMarcher>> marchers;
+          std::vector<apc::VolumeRayMarcher*> pointers;
+          for (const apc::CellMesh& mesh : meshes)
+          {
+            marchers.emplace_back(new apc::VolumeRayMarcher);
+            marchers.back()->SetMesh(&mesh);
+            marchers.back()->SetCompactSampleCache(compact == 1);
+            marchers.back()->SetSampleEndWeights(weights);
+            marchers.back()->SetOpaqueAbsorbance(
+              apc::VolumeRayMarcher::kRecommendedOpaqueAbsorbance);
+            pointers.push_back(marchers.back().get());
+          }
+          std::vector<uint8_t> cut;
+          size_t unresolved = 0;
+          if (bounded)
+          {
+            // A bound two bins too shallow: pixels left unresolved, their tiles marched again.
+            RenderPredicted(scene, pointers, nullptr, free, unresolved);
+            for (uint8_t& b : free)
+            {
+              b = b >= 2 && b < apc::OpaqueBins::kBins - 1 ? b - 2 : b;
+            }
+          }
+          frames[compact] =
+            RenderPredicted(scene, pointers, bounded ? &free : nullptr, cut, unresolved);
+          EXPECT_EQ(unresolved > 0, bounded);
+        }
+        const std::string what = std::to_string(parts) + " processes" +
+          (weights ? ", end weights" : "") + (bounded ? ", bounded" : "");
+        EXPECT_GT(frames[0].Pass2Samples, 0) << what;
+        EXPECT_EQ(frames[1].Pass1Samples, frames[0].Pass1Samples) << what;
+        EXPECT_EQ(frames[1].Pass2Samples, frames[0].Pass2Samples) << what;
+        EXPECT_TRUE(frames[1].Moments == frames[0].Moments) << what;
+        EXPECT_TRUE(frames[1].Sums == frames[0].Sums) << what;
+      }
+    }
+  }
 }

@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 namespace
@@ -205,4 +207,149 @@ TEST(SampleCache, DefaultBudgetIsTheNodesShare)
   EXPECT_EQ(apc::NodeShareOfMemory(24 * gib, 4), 3 * gib / 2);
   EXPECT_EQ(apc::NodeShareOfMemory(24 * gib, 0), 6 * gib); // at least one process
   EXPECT_EQ(apc::NodeShareOfMemory(0, 2), gib);            // unknown memory: 1 GiB
+}
+
+// The compact form: every sample's depth replaced by the index of the depth table's entry that
+// is its depth bit for bit (that index also gives back its lattice bits), end weights of 1
+// left out, everything else kept whole as escapes. Expanded, a compact tile is the full form
+// bit for bit: the same grouping, depths, scalars, lattice bits and weights, in fewer bytes.
+TEST(SampleCache, CompactTilesExpandToTheFullForm)
+{
+  // A full table (the lattice warp's largest): its last index is never an entry. Its base
+  // does not start at a multiple of 2^16, so the lattice bits wrap inside it.
+  const int64_t entries = 65536;
+  const int64_t base = 3 * 65536 - 1000;
+  std::vector<double> table(static_cast<size_t>(entries));
+  for (int64_t i = 0; i < entries; ++i)
+  {
+    table[static_cast<size_t>(i)] = -1.0 + 2.0 * std::sqrt(static_cast<double>(i) / entries);
+  }
+  auto depthOf = [&](int64_t k)
+  { return static_cast<float>(table[static_cast<size_t>(k - base)]); };
+  std::vector<apc::RecordedSample> recorded;
+  std::vector<float> weights;
+  std::vector<uint32_t> counts(kPixels, 0);
+  std::vector<int> escaped;
+  uint32_t random = 12345;
+  auto next = [&random]() { return random = random * 1664525u + 1013904223u; };
+  for (int i = 0; i < 3000; ++i)
+  {
+    const uint16_t pixel = static_cast<uint16_t>(next() % kPixels);
+    int64_t k = base + static_cast<int64_t>(next() % 4000) + (i % 2 ? 0 : 990);
+    float z = depthOf(k);
+    float weight = 1.0f;
+    const uint32_t kind = next() % 40;
+    if (kind == 0)
+    {
+      z = std::nextafter(z, 2.0f); // a depth off the lattice (a pair's middle sample)
+    }
+    else if (kind == 1)
+    {
+      weight = 0.25f + static_cast<float>(next() % 100) / 64; // an end weight
+    }
+    else if (kind == 2)
+    {
+      k = base - 1 - static_cast<int64_t>(next() % 50); // in front of the table
+      z = -1.0f;
+    }
+    else if (kind == 3)
+    {
+      k = base + entries - 1; // the last entry: kEscapedDepth, never an index
+      z = static_cast<float>(table.back());
+    }
+    else if (kind == 4)
+    {
+      z = -0.0f; // equal to entry 16384 (+0) but not its bits
+      k = base + entries / 4;
+    }
+    recorded.push_back({ z, 0.001f * static_cast<float>(i), pixel, static_cast<uint16_t>(k) });
+    weights.push_back(weight);
+    ++counts[pixel];
+  }
+  for (bool withOrder : { false, true })
+  {
+    for (bool withWeights : { false, true })
+    {
+      const float* w = withWeights ? weights.data() : nullptr;
+      apc::SampleCache full;
+      full.CompactRecords = false;
+      full.SetDepthTable(table.data(), entries, base);
+      full.Empty(1, 0, 1);
+      full.Keep(0, recorded.data(), recorded.size(), counts.data(), kPixels, withOrder, w);
+      apc::SampleCache compact;
+      compact.SetDepthTable(table.data(), entries, base);
+      ASSERT_EQ(compact.DepthTable.size(), size_t(entries - 1));
+      compact.Empty(1, 0, 1);
+      compact.Keep(0, recorded.data(), recorded.size(), counts.data(), kPixels, withOrder, w);
+      ASSERT_TRUE(full.Kept[0] && compact.Kept[0]);
+      const apc::CachedTile& f = full.Tiles[0];
+      const apc::CachedTile& c = compact.Tiles[0];
+      ASSERT_FALSE(f.IsCompact());
+      ASSERT_TRUE(c.IsCompact());
+      EXPECT_TRUE(c.Samples.empty());
+      EXPECT_EQ(c.Count(), recorded.size());
+      // Most samples are on the table: 6 bytes each, against 8, 10 or 14.
+      EXPECT_LT(c.Compact.EscapeCount, recorded.size() / 5);
+      EXPECT_GT(c.Compact.EscapeCount, recorded.size() / 20);
+      EXPECT_LT(compact.Bytes.load(), full.Bytes.load());
+      EXPECT_EQ(compact.Bytes.load(), c.Bytes());
+      apc::ExpandedTile scratch;
+      const apc::CachedTile& e = apc::Expand(c, compact.DepthTable, compact.DepthBase, scratch);
+      ASSERT_TRUE(std::equal(f.Starts.begin(), f.Starts.end(), e.Starts.begin(), e.Starts.end()));
+      ASSERT_EQ(e.Samples.size(), f.Samples.size());
+      ASSERT_EQ(e.K16.size(), f.K16.size());
+      ASSERT_EQ(e.Weights.size(), f.Weights.size());
+      for (size_t i = 0; i < f.Samples.size(); ++i)
+      {
+        EXPECT_EQ(std::memcmp(&e.Samples[i], &f.Samples[i], sizeof(apc::CachedSample)), 0)
+          << i << (withOrder ? ", lattice bits" : "") << (withWeights ? ", weights" : "");
+        if (withOrder)
+        {
+          EXPECT_EQ(e.K16[i], f.K16[i]) << i;
+        }
+        if (withWeights)
+        {
+          EXPECT_EQ(std::memcmp(&e.Weights[i], &f.Weights[i], sizeof(float)), 0) << i;
+        }
+      }
+      // A full-form tile expands to itself.
+      EXPECT_EQ(&apc::Expand(f, full.DepthTable, full.DepthBase, scratch), &f);
+    }
+  }
+}
+
+// Without a depth table (a lattice too fine for one), or where the escapes would make the
+// compact form larger (depths off the table: jittered rays), the cache keeps the full form.
+TEST(SampleCache, TheFullFormWhereCompactIsNotSmaller)
+{
+  std::vector<uint32_t> counts;
+  const std::vector<apc::RecordedSample> recorded = Recorded(counts);
+  apc::SampleCache cache;
+  cache.SetDepthTable(nullptr, 0, 0);
+  cache.Empty(1, 0, 1);
+  cache.Keep(0, recorded, counts.data(), kPixels, true);
+  EXPECT_FALSE(cache.Tiles[0].IsCompact());
+  EXPECT_EQ(cache.Tiles[0].Samples.size(), recorded.size());
+
+  // Recorded's lattice bits 100 to 105, its depths 0.5 to 5.5: 0.5 is entry 100's, the others
+  // are off the table.
+  const std::vector<double> table(200, 0.5);
+  cache.SetDepthTable(table.data(), 200, 0);
+  for (bool withOrder : { false, true })
+  {
+    cache.Empty(1, 0, 1);
+    cache.Keep(0, recorded, counts.data(), kPixels, withOrder);
+    EXPECT_FALSE(cache.Tiles[0].IsCompact()) << withOrder;
+    EXPECT_EQ(cache.Tiles[0].Samples.size(), recorded.size());
+  }
+  // On the table: compact.
+  std::vector<apc::RecordedSample> onTable = recorded;
+  for (apc::RecordedSample& r : onTable)
+  {
+    r.Z = 0.5f;
+  }
+  cache.Empty(1, 0, 1);
+  cache.Keep(0, onTable, counts.data(), kPixels, true);
+  EXPECT_TRUE(cache.Tiles[0].IsCompact());
+  EXPECT_EQ(cache.Tiles[0].Compact.EscapeCount, 0u);
 }
