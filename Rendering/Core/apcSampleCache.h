@@ -344,6 +344,26 @@ struct SampleCache
       starts[pixel] = at;
     }
   }
+  // A stable counting sort of a tile's n records by pixel (each pixel's samples stay in the
+  // order they were taken): starts[p] set from the pixels' counts, then, slot by slot, which
+  // record goes where (Slots; starts[p] then ends at pixel p's end), in a thread's own scratch,
+  // which stays in the processor's cache. For Keep and KeepCompact alike.
+  static const uint32_t* PixelSlots(
+    const RecordedSample* recorded, size_t n, const uint32_t* counts, int pixels, uint32_t* starts)
+  {
+    starts[0] = 0;
+    for (int p = 0; p < pixels; ++p)
+    {
+      starts[p + 1] = starts[p] + counts[p];
+    }
+    thread_local std::vector<uint32_t> slots;
+    if (slots.size() < n)
+    {
+      slots.resize(std::max(n, 2 * slots.size()));
+    }
+    Slots(recorded, n, starts, slots.data());
+    return slots.data();
+  }
   // The records in slot order, written front to back. The cache's memory is far larger than
   // the processor's caches, so its lines are not there when a frame writes them again: the
   // records scattered straight to their pixels' slots (a stream per pixel) waited on a read
@@ -460,41 +480,28 @@ struct SampleCache
       cached.Weights = { reinterpret_cast<float*>(reinterpret_cast<char*>(memory + n) + orderBytes),
         n };
     }
-    // A stable counting sort: each pixel's samples stay in the order they were taken.
     uint32_t* starts = cached.Starts.data();
-    starts[0] = 0;
-    for (int p = 0; p < pixels; ++p)
-    {
-      starts[p + 1] = starts[p] + counts[p];
-    }
-    // Slot by slot: which record goes where (in a thread's own scratch, which stays in the
-    // processor's cache), then the records in that order.
-    thread_local std::vector<uint32_t> slots;
-    if (slots.size() < n)
-    {
-      slots.resize(std::max(n, 2 * slots.size()));
-    }
-    Slots(recorded, n, starts, slots.data());
+    const uint32_t* slots = PixelSlots(recorded, n, counts, pixels, starts);
     if (weights)
     {
       if (withOrder)
       {
-        Copy<true, true>(recorded, slots.data(), n, cached.Samples.data(), cached.K16.data(),
-          weights, cached.Weights.data());
+        Copy<true, true>(recorded, slots, n, cached.Samples.data(), cached.K16.data(), weights,
+          cached.Weights.data());
       }
       else
       {
-        Copy<false, true>(recorded, slots.data(), n, cached.Samples.data(), nullptr, weights,
-          cached.Weights.data());
+        Copy<false, true>(
+          recorded, slots, n, cached.Samples.data(), nullptr, weights, cached.Weights.data());
       }
     }
     else if (withOrder)
     {
-      Copy<true>(recorded, slots.data(), n, cached.Samples.data(), cached.K16.data());
+      Copy<true>(recorded, slots, n, cached.Samples.data(), cached.K16.data());
     }
     else
     {
-      Copy<false>(recorded, slots.data(), n, cached.Samples.data(), nullptr);
+      Copy<false>(recorded, slots, n, cached.Samples.data(), nullptr);
     }
     StreamFence();
     // starts[p] now holds pixel p's end: shift back to the starts.
@@ -570,24 +577,14 @@ struct SampleCache
     compact.Ordered = withOrder;
     compact.Weighted = weights != nullptr;
     uint32_t* starts = cached.Starts.data();
-    starts[0] = 0;
-    for (int p = 0; p < pixels; ++p)
-    {
-      starts[p + 1] = starts[p] + counts[p];
-    }
-    thread_local std::vector<uint32_t> slots;
-    if (slots.size() < n)
-    {
-      slots.resize(std::max(n, 2 * slots.size()));
-    }
-    Slots(recorded, n, starts, slots.data());
+    const uint32_t* slots = PixelSlots(recorded, n, counts, pixels, starts);
     if (weights)
     {
-      CopyCompact<true>(recorded, slots.data(), n, compact, table, entries, base16, weights);
+      CopyCompact<true>(recorded, slots, n, compact, table, entries, base16, weights);
     }
     else
     {
-      CopyCompact<false>(recorded, slots.data(), n, compact, table, entries, base16, nullptr);
+      CopyCompact<false>(recorded, slots, n, compact, table, entries, base16, nullptr);
     }
     StreamFence();
     for (int p = pixels; p > 0; --p)
