@@ -3,6 +3,7 @@
 
 #include "apcBoundaryFaces.h"
 #include "apcFrameEngine.h"
+#include "apcStageAgreement.h"
 
 #include "vtkCommunicator.h"
 #include "vtkMPI.h"
@@ -13,7 +14,9 @@
 #include <climits>
 #include <ctime>
 #include <exception>
+#include <new>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace apc
@@ -22,6 +25,7 @@ namespace
 {
 BoundaryExchangeRecord LastExchange;
 int ExchangeFailuresForTesting = 0;
+int SetUpFailuresForTesting = 0;
 
 // Why an exchange stops, agreed by the largest code over the processes.
 enum Status : int
@@ -232,12 +236,36 @@ bool ShareBoundaryFaces(
   }
   // The volumes some process needs matched, agreed (a process whose own data did not change
   // joins when another's did: the faces between them may have).
-  std::vector<int> need(static_cast<size_t>(frame.Volumes), 0);
-  for (size_t v = 0; v < frame.Engines.size() && v < need.size(); ++v)
+  // Their memory is taken inside the frame's failure agreement, before the first allreduce.
+  std::vector<int> need;
+  std::vector<int> anyNeeds;
+  const std::string failure = AgreeOnFailure(group, "boundary", "the set-up",
+    CatchFailure(
+      [&]
+      {
+        if (SetUpFailuresForTesting > 0)
+        {
+          --SetUpFailuresForTesting;
+          throw std::bad_alloc();
+        }
+        need.assign(static_cast<size_t>(frame.Volumes), 0);
+        for (size_t v = 0; v < frame.Engines.size() && v < need.size(); ++v)
+        {
+          need[v] = frame.Engines[v]->NeedsSharedBoundary() ? 1 : 0;
+        }
+        anyNeeds.assign(need.size(), 0);
+      }));
+  if (!failure.empty())
   {
-    need[v] = frame.Engines[v]->NeedsSharedBoundary() ? 1 : 0;
+    // As a failed exchange: nothing was matched, each process weights its own piece's
+    // boundary in this frame, and the next frame tries again.
+    problem = "Sample End Weights = Boundary: the faces between the processes' pieces were "
+              "not matched (" +
+      failure +
+      "); each process weights its own piece's boundary in this frame, and the next "
+      "frame tries again";
+    return false;
   }
-  std::vector<int> anyNeeds(need.size(), 0);
   group.Collective("boundary",
     [&]
     {
@@ -285,6 +313,11 @@ const BoundaryExchangeRecord& GetLastBoundaryExchange()
 void FailBoundaryExchangesForTesting(int count)
 {
   ExchangeFailuresForTesting = count;
+}
+
+void FailBoundarySetUpsForTesting(int count)
+{
+  SetUpFailuresForTesting = count;
 }
 
 } // namespace apc

@@ -2,6 +2,7 @@
 #include "apcCompositeFrame.h"
 
 #include "apcFrameEngine.h"
+#include "apcStageAgreement.h"
 
 #include "vtkAbstractVolumeMapper.h"
 #include "vtkCommunicator.h"
@@ -126,8 +127,8 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
   return depth;
 }
 
-void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
-  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth)
+bool PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
+  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth, FrameRecord& record)
 {
   ImageSetup image;
   image.Width = frame.Width;
@@ -137,17 +138,23 @@ void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
   image.Aspect = frame.Aspect();
   image.SampleFactor = frame.SampleFactor();
   image.Crop = frame.Rect;
-  for (size_t v = 0; v < volumes.size(); ++v)
-  {
-    frame.Engines[v]->Prepare(frame.Renderer, volumes[v]->GetProperty(), frame.Bounds, frame.Cells,
-      frame.CellVolume, depth.data(), image);
-    // The same on every process (global bounds): said once, by the display process.
-    const std::string note = frame.Engines[v]->TakeSpacingNote();
-    if (!note.empty() && group.IsDisplay())
+  // The set-up (the transfer table, the rays' ends, the boundary's planes) runs inside the
+  // frame's failure agreement: the next collective is the first of the compositing.
+  return RunAgreedStage(group, "setup", "the volumes' set-up", record,
+    [&]
     {
-      vtkWarningWithObjectMacro(volumes[v]->GetMapper(), << note);
-    }
-  }
+      for (size_t v = 0; v < volumes.size(); ++v)
+      {
+        frame.Engines[v]->Prepare(frame.Renderer, volumes[v]->GetProperty(), frame.Bounds,
+          frame.Cells, frame.CellVolume, depth.data(), image);
+        // The same on every process (global bounds): said once, by the display process.
+        const std::string note = frame.Engines[v]->TakeSpacingNote();
+        if (!note.empty() && group.IsDisplay())
+        {
+          vtkWarningWithObjectMacro(volumes[v]->GetMapper(), << note);
+        }
+      }
+    });
 }
 
 } // namespace apc

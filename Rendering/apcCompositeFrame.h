@@ -223,8 +223,9 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
 // Step 3: every engine of the frame (this process's volumes, in order) prepares its rays over
 // the agreed image, stopping at depth (ShareDepth's). A sample distance capped to the limit of
 // samples per ray is the same on every process: the display process says it, on the mapper.
-void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
-  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth);
+// False if some process's set-up failed (agreed: record.Failed and record.Problem set).
+bool PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
+  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth, FrameRecord& record);
 
 // The modes: each runs the frame's stages and collectives on every process and fills
 // result on the display process.

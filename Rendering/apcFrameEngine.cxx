@@ -405,6 +405,28 @@ std::string FrameEngine::TakeSpacingNote()
   return std::exchange(this->SpacingNote, std::string());
 }
 
+namespace
+{
+// FrameEngine::FailPassesForTesting: calls of pass 1 and pass 2 left to fail.
+int PassOneFailuresForTesting = 0;
+int PassTwoFailuresForTesting = 0;
+
+void FailIfAsked(int& failures)
+{
+  if (failures > 0)
+  {
+    --failures;
+    throw std::bad_alloc();
+  }
+}
+}
+
+void FrameEngine::FailPassesForTesting(int passOne, int passTwo)
+{
+  PassOneFailuresForTesting = passOne;
+  PassTwoFailuresForTesting = passTwo;
+}
+
 //------------------------------------------------------------------------------
 void FrameEngine::RenderMoments(
   const MomentParameters& parameters, double* moments, const RowBand& band, const uint8_t* bound)
@@ -413,6 +435,7 @@ void FrameEngine::RenderMoments(
   {
     return;
   }
+  FailIfAsked(PassOneFailuresForTesting);
   // Hybrid's pass 2 needs this volume's own moments next to the global ones.
   const bool hybrid = parameters.Resolve == ResolveMode::Hybrid;
   this->Marcher.SetOpaqueBound(bound);
@@ -552,6 +575,7 @@ void FrameEngine::RenderColour(const MomentParameters& parameters, const double*
   {
     return;
   }
+  FailIfAsked(PassTwoFailuresForTesting);
   DispatchMoments(parameters.Moments,
     [&](auto n)
     {

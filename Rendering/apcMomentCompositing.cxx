@@ -15,6 +15,7 @@
 #include "apcFrameEngine.h"
 #include "apcOpaqueBins.h"
 #include "apcResolve.h"
+#include "apcStageAgreement.h"
 #include "apcWireMessages.h"
 
 #include "vtkCommunicator.h"
@@ -292,20 +293,32 @@ void SumImage(const ProcessGroup& group, const CompositeFrame& frame, const Tile
 
 // A band's pass 1 into moments (pixels * stride values, zeroed here), the tiles' agreement
 // (covered), the opaque cut if stops, and the moments' allreduce; ownCovered: the pixels this
-// process's volumes cover.
-void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+// process's volumes cover. False if some process's pass 1 failed (agreed, record.Failed set):
+// every process leaves the band before its next collective.
+bool PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
   const TileGrid& tiles, bool stops, size_t pixels, double* moments,
   std::vector<unsigned char>& covered, vtkIdType& ownCovered, MomentBuffers& buffers,
   FrameRecord& record)
 {
-  const bool bounded = stops && PredictOpaqueBand(frame, band, pixels, buffers);
   const int stride = frame.Moments.Moments + 1;
-  std::fill_n(moments, pixels * stride, 0.0);
-  // The cut needs each volume's own moments: several volumes keep them apart until then.
-  std::vector<std::vector<double>> own(
-    stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
-  RenderPassOne(frame, band, pixels, moments, own, bounded ? buffers.Bound.data() : nullptr);
+  bool bounded = false;
+  std::vector<std::vector<double>> own;
+  // This process's work up to the tiles' allreduce (the prediction, pass 1 and its memory)
+  // runs inside the frame's failure agreement.
+  const bool fine = RunAgreedStage(group, "pass1", "pass 1", record,
+    [&]
+    {
+      bounded = stops && PredictOpaqueBand(frame, band, pixels, buffers);
+      std::fill_n(moments, pixels * stride, 0.0);
+      // The cut needs each volume's own moments: several volumes keep them apart until then.
+      own.resize(stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
+      RenderPassOne(frame, band, pixels, moments, own, bounded ? buffers.Bound.data() : nullptr);
+    });
   record.Clock.Lap("pass1");
+  if (!fine)
+  {
+    return false;
+  }
   ownCovered = 0;
   for (size_t p = 0; p < pixels; ++p)
   {
@@ -341,6 +354,7 @@ void PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
     SumImage(group, frame, tiles, covered, moments, stride, true, buffers, record);
   }
   record.Clock.Lap("allreduce");
+  return true;
 }
 
 // Lends one volume's pass 1 the colour sums' memory for its opaque profile, and takes it back
@@ -376,8 +390,9 @@ private:
 // agreement, the opaque cut, the moments' allreduce, pass 2 and the colour sums' reduce; the
 // display process resolves the band into result at its rows.
 // tryWithoutStop: pass 1 marches without the stop first (agreed: frame.TryWithoutOpaqueStop,
-// or a probe that found no ray near opaque).
-void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+// or a probe that found no ray near opaque). False if some process's pass 1 or pass 2 failed
+// (agreed, record.Failed set): every process gives the frame up.
+bool CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
   bool tryWithoutStop, MomentBuffers& buffers, FrameRecord& record, FrameResult& result)
 {
   const MomentParameters& parameters = frame.Moments;
@@ -411,8 +426,11 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
       // One process with one volume: its own absorbance is the global one.
       engine->SetOpaqueStopAlone(!group.Parallel && frame.Engines.size() == 1);
     }
-    PassOne(
-      group, frame, band, tiles, stops, pixels, moments, covered, ownCovered, buffers, record);
+    if (!PassOne(
+          group, frame, band, tiles, stops, pixels, moments, covered, ownCovered, buffers, record))
+    {
+      return false;
+    }
     // Such a band is marched again with the stop. The global moments are the same integer
     // sums on every process, so all decide alike.
     if (stops || !stopping || !AnyPixelReaches(moments, pixels, stride, opaque))
@@ -432,13 +450,22 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     record.OpaquePixels += moments[p * stride] >= opaque ? 1 : 0;
   }
 
-  double* colourSums = HoldAs<double>(buffers.ColourSums, pixels * 4);
-  std::fill_n(colourSums, pixels * 4, 0.0);
-  for (FrameEngine* engine : frame.Engines)
-  {
-    engine->RenderColour(parameters, moments, colourSums, band);
-  }
+  double* colourSums = nullptr;
+  const bool fine = RunAgreedStage(group, "pass2", "pass 2", record,
+    [&]
+    {
+      colourSums = HoldAs<double>(buffers.ColourSums, pixels * 4);
+      std::fill_n(colourSums, pixels * 4, 0.0);
+      for (FrameEngine* engine : frame.Engines)
+      {
+        engine->RenderColour(parameters, moments, colourSums, band);
+      }
+    });
   record.Clock.Lap("pass2");
+  if (!fine)
+  {
+    return false;
+  }
   SumImage(group, frame, tiles, covered, colourSums, 4, false, buffers, record);
   record.Clock.Lap("reduce");
   if (group.IsDisplay())
@@ -446,6 +473,7 @@ void CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
     ResolveBand(frame, static_cast<size_t>(width) * band.J0, pixels, moments, colourSums, result);
     record.Clock.Lap("resolve");
   }
+  return true;
 }
 }
 
@@ -499,6 +527,15 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
   // Without a previous cut for this image (a first frame), a probe of a few rays gives one.
   // Agreed: the cuts every process remembers, the frame's settings and its try without the stop.
   bool tryWithoutStop = frame.TryWithoutOpaqueStop;
+  // A stage failed on some process (agreed): every process gives the frame up at the same
+  // point, before any other collective, with nothing to blend.
+  auto giveUp = [&]
+  {
+    buffers.Cuts.Valid = false;
+    result.RGBA.clear();
+    result.Moments.clear();
+    result.ColourSums.clear();
+  };
   if (buffers.Cuts.Valid && frame.Settings.OpaqueProbeStep > 0 && !frame.TryWithoutOpaqueStop &&
     !(buffers.PreviousCuts.Valid && buffers.PreviousCuts.Image == buffers.Cuts.Image))
   {
@@ -506,11 +543,7 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     const ProbeResult probe = ProbeOpaqueCuts(group, frame, buffers, record);
     if (probe == ProbeResult::Failed)
     {
-      // Agreed: every process gives the frame up here, before any other collective.
-      buffers.Cuts.Valid = false;
-      result.RGBA.clear();
-      result.Moments.clear();
-      result.ColourSums.clear();
+      giveUp();
       return;
     }
     // No probe ray near opaque: the frame is marched as one after a faint frame, without the
@@ -535,7 +568,11 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
     "one process's bands must keep its pass 1's tiles without the stop");
   for (const RowBand& band : MomentBands(frame.RectWidth(), frame.RectHeight(), bandPixels))
   {
-    CompositeBand(group, frame, band, tryWithoutStop, buffers, record, result);
+    if (!CompositeBand(group, frame, band, tryWithoutStop, buffers, record, result))
+    {
+      giveUp();
+      return;
+    }
     ++record.Bands;
   }
   for (const FrameEngine* engine : frame.Engines)

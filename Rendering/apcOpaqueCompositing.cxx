@@ -10,6 +10,7 @@
 #include "apcOpaqueBins.h"
 #include "apcOpaquePrediction.h"
 #include "apcOpaqueSummary.h"
+#include "apcStageAgreement.h"
 #include "apcWireMessages.h"
 
 #include "vtkCommunicator.h"
@@ -312,39 +313,22 @@ ProbeResult ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& fra
   const size_t pixels = static_cast<size_t>(width) * height;
   std::vector<uint16_t> profile;
   // A process whose probe throws (memory for the probe's marcher or profile) must not leave
-  // the others waiting in the profiles' allreduce: every process says whether its probe
-  // failed, and all give the frame up alike.
-  std::string failure;
-  try
+  // the others waiting in the profiles' allreduce: the frame's failure agreement.
+  if (!RunAgreedStage(group, "opaque_prepass", "Stop Where Opaque's probe", record,
+        [&]
+        {
+          profile.assign(pixels * bins, uint16_t(0));
+          for (FrameEngine* engine : frame.Engines)
+          {
+            if (engine->GetWidth() == frame.RectWidth() &&
+              engine->GetHeight() == frame.RectHeight())
+            {
+              record.OpaquePrepassSamples +=
+                engine->ProbeOpaqueProfile(frame.Moments, step, offset, profile.data());
+            }
+          }
+        }))
   {
-    profile.assign(pixels * bins, uint16_t(0));
-    for (FrameEngine* engine : frame.Engines)
-    {
-      if (engine->GetWidth() == frame.RectWidth() && engine->GetHeight() == frame.RectHeight())
-      {
-        record.OpaquePrepassSamples +=
-          engine->ProbeOpaqueProfile(frame.Moments, step, offset, profile.data());
-      }
-    }
-  }
-  catch (const std::exception& e)
-  {
-    failure = e.what();
-  }
-  int failed = failure.empty() ? 0 : 1;
-  if (group.Parallel)
-  {
-    int anyFailed = 0;
-    group.Collective("opaque_prepass",
-      [&] { group.Controller->AllReduce(&failed, &anyFailed, 1, vtkCommunicator::MAX_OP); });
-    failed = anyFailed;
-  }
-  if (failed)
-  {
-    record.Failed = true;
-    record.Problem = failure.empty() ? "Stop Where Opaque's probe failed on another process"
-                                     : "Stop Where Opaque's probe failed on process " +
-        std::to_string(group.Rank) + ": " + failure;
     record.Clock.Lap("opaque_prepass");
     return ProbeResult::Failed;
   }

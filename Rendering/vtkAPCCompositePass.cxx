@@ -303,12 +303,23 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   {
     internal.Record.Clock.Lap("boundary");
   }
-  apc::PrepareEngines(group, frame, volumes, depth);
+  const bool prepared = apc::PrepareEngines(group, frame, volumes, depth, internal.Record);
   depth = std::vector<float>(); // the engines hold their rays' ends
+  apc::FrameResult& result = internal.Result;
+  if (!prepared)
+  {
+    // Agreed: every process skips the frame before its first compositing collective.
+    vtkErrorMacro("APC frame skipped: " << internal.Record.Problem);
+    result.RGBA.clear();
+    result.Moments.clear();
+    result.ColourSums.clear();
+    apc::GatherRankTimes(group, internal.Record);
+    this->FinishFrame(group, frame, result);
+    return;
+  }
 
   const int mode = this->ChooseMode(group, frame);
   internal.LastMode = mode;
-  apc::FrameResult& result = internal.Result;
   result.RGBA.clear();
   result.Moments.clear();
   result.ColourSums.clear();

@@ -147,6 +147,27 @@ int main(int argc, char* argv[])
       Check(apctest::MaxAbsDifference(matched, whole) <= 1e-5, rank,
         "after a failed exchange, a new frame matches the faces again");
     }
+
+    // The last rank fails while it sets the exchange up, before its first collective: every
+    // rank must leave the exchange as from a failed one (the same image), and the next frame
+    // of the same pass matches the faces.
+    if (rank == ranks - 1)
+    {
+      apc::FailBoundarySetUpsForTesting(1);
+    }
+    vtkNew<vtkAPCCompositePass> setUp;
+    const std::vector<float> unmatched =
+      apctest::RenderDistributed(controller, wind, piece, bounds, size, false, setUp);
+    Check(!setUp->GetLastFrameFailed(), rank, "a failed set-up: the frame still renders");
+    const std::vector<float> rematched =
+      apctest::RenderDistributed(controller, wind, piece, bounds, size, false, setUp);
+    if (rank == 0)
+    {
+      Check(apctest::MaxAbsDifference(unmatched, fallback) == 0, rank,
+        "a failed set-up: the image of a failed exchange");
+      Check(apctest::MaxAbsDifference(rematched, whole) <= 1e-5, rank,
+        "after a failed set-up, the next frame matches the faces");
+    }
   }
   return apctest::FinishMPITest(controller);
 }

@@ -3,7 +3,8 @@
 // APC volume, viewports of different sizes, different compositing modes or wire precisions)
 // is skipped on every process instead of leaving one waiting in a collective; settings one
 // process alone changes that can be agreed (Stop Where Opaque) still render, and so does a
-// 1x1 window. A process whose Stop Where Opaque probe throws makes every process skip the frame.
+// 1x1 window. A process whose Stop Where Opaque probe, pass 1 or pass 2 throws makes every
+// process skip the frame, and the next frame renders.
 
 #include "apcCompositePassRenders.h"
 #include "apcFrameEngine.h"
@@ -71,6 +72,44 @@ int main(int argc, char* argv[])
     RenderDistributed(controller, puzzle, piece, bounds, 32, false, again);
     Check(!again->GetLastFrameFailed() && again->GetLastTimings().OpaquePrepassSamples > 0, rank,
       "after a probe that threw: the next first frame probes and renders");
+  }
+
+  // Pass 1 or pass 2 throwing on one process (its memory ran out): every process must give the
+  // frame up with the same error instead of waiting in the next collective (the tiles'
+  // allreduce after pass 1, the colour sums' reduce after pass 2), and the next frame of the
+  // same pass renders the image of an undisturbed one.
+  if (ranks > 1)
+  {
+    vtkNew<vtkAPCCompositePass> undisturbed;
+    const std::vector<float> reference =
+      RenderDistributed(controller, puzzle, piece, bounds, 32, false, undisturbed);
+    Check(!undisturbed->GetLastFrameFailed(), rank, "an undisturbed frame renders");
+    for (int pass2 : { 0, 1 })
+    {
+      if (rank == ranks - 1)
+      {
+        apc::FrameEngine::FailPassesForTesting(1 - pass2, pass2);
+      }
+      vtkNew<vtkAPCCompositePass> pass;
+      pass->KeepLastImageOn();
+      const std::vector<float> failed =
+        RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+      const char* what = pass2 ? "pass 2 that throws" : "pass 1 that throws";
+      Check(pass->GetLastFrameFailed(), rank, what);
+      Check(failed.empty(), rank, "a failed frame leaves no image");
+      if (!pass2)
+      {
+        Check(pass->GetLastTimings().Pass1Samples == 0, rank, "no pass 1 counted after it");
+      }
+      const std::vector<float> next =
+        RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+      Check(!pass->GetLastFrameFailed(), rank, "after a failed pass: the next frame renders");
+      if (rank == 0)
+      {
+        Check(!next.empty() && apctest::MaxAbsDifference(next, reference) == 0, rank,
+          "after a failed pass: the next frame is the undisturbed image");
+      }
+    }
   }
 
   // A process without any APC volume (a misconfigured in-situ code): every process must skip
