@@ -305,7 +305,7 @@ bool PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   std::vector<std::vector<double>> own;
   // This process's work up to the tiles' allreduce (the prediction, pass 1 and its memory)
   // runs inside the frame's failure agreement.
-  const bool fine = RunAgreedStage(group, "pass1", "pass 1", record,
+  const std::string failure = CatchFailure(
     [&]
     {
       bounded = stops && PredictOpaqueBand(frame, band, pixels, buffers);
@@ -315,8 +315,11 @@ bool PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
       RenderPassOne(frame, band, pixels, moments, own, bounded ? buffers.Bound.data() : nullptr);
     });
   record.Clock.Lap("pass1");
-  if (!fine)
+  // The agreement is where a process now waits for the slowest one's pass 1: in the tiles'
+  // stage, as the mask's allreduce after it was.
+  if (!AgreeOnStage(group, "tiles", "pass 1", failure, record))
   {
+    record.Clock.Lap("tiles");
     return false;
   }
   ownCovered = 0;
@@ -451,7 +454,7 @@ bool CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   }
 
   double* colourSums = nullptr;
-  const bool fine = RunAgreedStage(group, "pass2", "pass 2", record,
+  const std::string failure = CatchFailure(
     [&]
     {
       colourSums = HoldAs<double>(buffers.ColourSums, pixels * 4);
@@ -462,8 +465,10 @@ bool CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
       }
     });
   record.Clock.Lap("pass2");
-  if (!fine)
+  // Where a process waits for the slowest one's pass 2: in the reduce's stage, as before.
+  if (!AgreeOnStage(group, "reduce", "pass 2", failure, record))
   {
+    record.Clock.Lap("reduce");
     return false;
   }
   SumImage(group, frame, tiles, covered, colourSums, 4, false, buffers, record);

@@ -44,13 +44,12 @@ std::string CatchFailure(F&& work)
 APCRENDERING_EXPORT std::string AgreeOnFailure(
   const ProcessGroup& group, const char* stage, const char* what, const std::string& failure);
 
-// Runs work (this process's part of a stage) and agrees on its outcome (AgreeOnFailure):
-// true if it succeeded everywhere, otherwise record.Failed and record.Problem are set.
-template <class F>
-bool RunAgreedStage(
-  const ProcessGroup& group, const char* stage, const char* what, FrameRecord& record, F&& work)
+// AgreeOnFailure for a stage of the frame record describes: true if no process failed,
+// otherwise record.Failed and record.Problem are set.
+inline bool AgreeOnStage(const ProcessGroup& group, const char* stage, const char* what,
+  const std::string& failure, FrameRecord& record)
 {
-  std::string problem = AgreeOnFailure(group, stage, what, CatchFailure(work));
+  std::string problem = AgreeOnFailure(group, stage, what, failure);
   if (problem.empty())
   {
     return true;
@@ -58,6 +57,14 @@ bool RunAgreedStage(
   record.Failed = true;
   record.Problem = std::move(problem);
   return false;
+}
+
+// Runs work (this process's part of a stage) and agrees on its outcome (AgreeOnStage).
+template <class F>
+bool RunAgreedStage(
+  const ProcessGroup& group, const char* stage, const char* what, FrameRecord& record, F&& work)
+{
+  return AgreeOnStage(group, stage, what, CatchFailure(work), record);
 }
 
 } // namespace apc
