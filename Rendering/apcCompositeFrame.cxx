@@ -139,9 +139,12 @@ bool PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
   image.SampleFactor = frame.SampleFactor();
   image.Crop = frame.Rect;
   // The set-up (the transfer table, the rays' ends, the boundary's planes) runs inside the
-  // frame's failure agreement: the next collective is the first of the compositing. Its wait
-  // is pass 1's, where the frame's timings count the set-up.
-  return RunAgreedStage(group, "pass1", "the volumes' set-up", record,
+  // frame's failure agreement: the next collective is the first of the compositing. The
+  // frame's timings count the set-up in pass 1, a stage without collectives of its own: the
+  // agreement's wait for the slowest set-up stays in pass 1's time, not in a named wait.
+  ProcessGroup untimed = group;
+  untimed.Times = nullptr;
+  return RunAgreedStage(untimed, "setup", "the volumes' set-up", record,
     [&]
     {
       for (size_t v = 0; v < volumes.size(); ++v)
