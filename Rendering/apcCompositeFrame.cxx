@@ -53,7 +53,13 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
     const int j0 = rect.J0 * r;
     const int i1 = std::min(frame.ViewWidth, rect.I1 * r);
     const int j1 = std::min(frame.ViewHeight, rect.J1 * r);
-    std::vector<float> packed(static_cast<size_t>(i1 - i0) * (j1 - j0));
+    // At full resolution over a rectangle inside the window, the window's pixels are the
+    // rectangle's row for row: read them straight into depth instead of into a second
+    // rectangle-sized buffer (4 MB at 1024², fresh memory in a first frame), then take
+    // min(1, z) in place, the same values bit for bit as the reduced path's min.
+    const bool direct = r == 1 && i1 == rect.I1 && j1 == rect.J1;
+    std::vector<float> packed(direct ? 0 : static_cast<size_t>(i1 - i0) * (j1 - j0));
+    float* window = direct ? depth.data() : packed.data();
     if (delegateDepth && group.IsDisplay() && composited &&
       delegateDepth->GetNumberOfTuples() ==
         static_cast<vtkIdType>(frame.ViewWidth) * frame.ViewHeight)
@@ -62,20 +68,30 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
       for (int j = j0; j < j1; ++j)
       {
         std::copy_n(z + static_cast<size_t>(j) * frame.ViewWidth + i0, i1 - i0,
-          &packed[static_cast<size_t>(j - j0) * (i1 - i0)]);
+          window + static_cast<size_t>(j - j0) * (i1 - i0));
       }
     }
     else
     {
       frame.Renderer->GetRenderWindow()->GetZbufferData(
-        frame.X0 + i0, frame.Y0 + j0, frame.X0 + i1 - 1, frame.Y0 + j1 - 1, packed.data());
+        frame.X0 + i0, frame.Y0 + j0, frame.X0 + i1 - 1, frame.Y0 + j1 - 1, window);
     }
-    for (int j = j0; j < j1; ++j)
+    if (direct)
     {
-      for (int i = i0; i < i1; ++i)
+      for (float& d : depth)
       {
-        float& d = depth[static_cast<size_t>(j / r - rect.J0) * rect.Width() + (i / r - rect.I0)];
-        d = std::min(d, packed[static_cast<size_t>(j - j0) * (i1 - i0) + (i - i0)]);
+        d = std::min(1.0f, d);
+      }
+    }
+    else
+    {
+      for (int j = j0; j < j1; ++j)
+      {
+        for (int i = i0; i < i1; ++i)
+        {
+          float& d = depth[static_cast<size_t>(j / r - rect.J0) * rect.Width() + (i / r - rect.I0)];
+          d = std::min(d, packed[static_cast<size_t>(j - j0) * (i1 - i0) + (i - i0)]);
+        }
       }
     }
   }
