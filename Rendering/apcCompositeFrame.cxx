@@ -3,6 +3,7 @@
 
 #include "apcFrameEngine.h"
 
+#include "vtkAPCCompositePass.h"
 #include "vtkAbstractVolumeMapper.h"
 #include "vtkCommunicator.h"
 #include "vtkFloatArray.h"
@@ -136,6 +137,7 @@ void PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
   image.Y0 = frame.Y0;
   image.Aspect = frame.Aspect();
   image.SampleFactor = frame.SampleFactor();
+  image.PlainLattice = vtkAPCCompositePass::SamplesPlainLattice(frame.Settings.CompositeMode);
   image.Crop = frame.Rect;
   for (size_t v = 0; v < volumes.size(); ++v)
   {
