@@ -4,6 +4,7 @@
 #include "apcFrameEngine.h"
 #include "apcStageAgreement.h"
 
+#include "vtkAPCCompositePass.h"
 #include "vtkAbstractVolumeMapper.h"
 #include "vtkCommunicator.h"
 #include "vtkFloatArray.h"
@@ -153,6 +154,7 @@ bool PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
   image.Y0 = frame.Y0;
   image.Aspect = frame.Aspect();
   image.SampleFactor = frame.SampleFactor();
+  image.PlainLattice = vtkAPCCompositePass::SamplesPlainLattice(frame.Settings.CompositeMode);
   image.Crop = frame.Rect;
   // The set-up (the transfer table, the rays' ends, the boundary's planes) runs inside the
   // frame's failure agreement: the next collective is the first of the compositing. The

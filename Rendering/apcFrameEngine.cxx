@@ -289,8 +289,10 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   }
   const double diagonal = BoundsDiagonal(bounds.data());
   const double distance = this->Settings.SampleDistance;
+  this->DefaultWeighted = this->WeightsEnds() && !image.PlainLattice;
   this->Spacing = image.SampleFactor *
-    (distance > 0 ? distance : DefaultSampleDistance(bounds.data(), cells, volume));
+    (distance > 0 ? distance
+                  : DefaultSampleDistance(bounds.data(), cells, volume, this->DefaultWeighted));
   if (!(this->Spacing > 0))
   {
     return false; // a mesh with no extent
@@ -361,6 +363,12 @@ VolumeRayMarcher::EndWeightsMode FrameEngine::EndWeightsMode() const
   return static_cast<VolumeRayMarcher::EndWeightsMode>(this->Settings.SampleEndWeights);
 }
 
+bool FrameEngine::WeightsEnds() const
+{
+  // The exact blend keeps the plain lattice whatever the setting (VolumeRayMarcher).
+  return !this->Settings.Exact && this->EndWeightsMode() != VolumeRayMarcher::EndWeightsMode::Off;
+}
+
 bool FrameEngine::RendersBoundaryWeights() const
 {
   return this->EndWeightsMode() == VolumeRayMarcher::EndWeightsMode::Boundary;
@@ -385,14 +393,19 @@ void FrameEngine::CapSpacing(double distance, double diagonal)
     }
     else
     {
-      note << "The default Sample Distance (" << this->Spacing << ", the data's mean cell size)";
+      note << "The default Sample Distance (" << this->Spacing
+           << ", from the data's mean cell size)";
     }
     note << " would take up to " << static_cast<long long>(diagonal / this->Spacing)
          << " samples along a ray through the data (its bounding-box diagonal is " << diagonal
          << "); the limit is " << static_cast<long long>(kMaxSamplesPerRay) << ", so " << finest
          << " is used. " << (distance > 0 ? "Raise" : "Set") << " Sample Distance to at least "
-         << finest << " (0 picks the mean cell size, at least diagonal / "
-         << static_cast<long long>(kMinDefaultSamples) << ").";
+         << finest << " (0 picks "
+         << (this->DefaultWeighted ? kDefaultSpacingPerCell : kPlainSpacingPerCell)
+         << " times the mean cell size, at least diagonal / "
+         << static_cast<long long>(
+              this->DefaultWeighted ? kMinDefaultSamples : kPlainMinDefaultSamples)
+         << ").";
     this->SpacingNote = note.str();
     this->CappedDistance = distance;
     this->CappedDiagonal = diagonal;

@@ -53,6 +53,10 @@ struct APCRENDERING_EXPORT ImageSetup
   int Y0 = 0;
   double Aspect = 1.0;
   double SampleFactor = 1.0;
+  // The frame blends the plain lattice exactly (vtkAPCCompositePass::SamplesPlainLattice
+  // decides it from the composite mode): a sample distance of 0 is then the plain lattice's
+  // default, as for the mapper's EXACT mode (apcDefaultSpacing.h).
+  bool PlainLattice = false;
   std::optional<ScreenRect> Crop;
 
   // ren's viewport (the tile of a large screenshot) at full quality, all of it.
@@ -107,6 +111,10 @@ public:
   bool RendersBoundaryWeights() const;
   /// The ends the marcher weights: the volume's Sample End Weights, but none for Hybrid.
   VolumeRayMarcher::EndWeightsMode EndWeightsMode() const;
+  /// This volume samples with weighted ends (MBOIT, not Hybrid, Sample End Weights not Off):
+  /// its default sample distance is the coarser one those allow (apcDefaultSpacing.h), unless
+  /// the frame blends the plain lattice (ImageSetup::PlainLattice).
+  bool WeightsEnds() const;
   bool NeedsSharedBoundary() const
   {
     return this->RendersBoundaryWeights() && !this->Mesh.SharesBoundary();
@@ -247,6 +255,7 @@ private:
   int Y0 = 0;
   ScreenRect Crop;
   double Spacing = 0.0;
+  bool DefaultWeighted = true; // this frame's default distance: the weighted ends' (Prepare)
   std::string SpacingNote;
   double CappedDistance = -1; // the setting and extent last capped (said once)
   double CappedDiagonal = -1;

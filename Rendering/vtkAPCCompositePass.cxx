@@ -207,6 +207,11 @@ vtkIdType vtkAPCCompositePass::GetLastMaxSegmentsPerPixel() const
   return static_cast<vtkIdType>(this->Internal->Record.Segments.MaxPerPixel);
 }
 
+bool vtkAPCCompositePass::SamplesPlainLattice(int compositeMode)
+{
+  return compositeMode == SEGMENTS || compositeMode == LOCAL_EXACT;
+}
+
 void vtkAPCCompositePass::GetScreenRectangle(
   vtkRenderer* ren, const double bounds[6], int width, int height, int rectangle[4])
 {

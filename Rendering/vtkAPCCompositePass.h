@@ -547,6 +547,14 @@ public:
   static void GetScreenRectangle(
     vtkRenderer* ren, const double bounds[6], int width, int height, int rectangle[4]);
 
+  /**
+   * Whether compositeMode's frames sample the plain lattice's default distance (SEGMENTS and
+   * LOCAL_EXACT blend exactly, as the mapper's EXACT mode; apcDefaultSpacing.h). AUTO keeps
+   * the volumes' own default, one lattice whichever mode it picks. The one place that decides
+   * it: the pass's frames and the tools that model them (apcSegmentAnalysis) ask here.
+   */
+  static bool SamplesPlainLattice(int compositeMode);
+
 protected:
   vtkAPCCompositePass();
   ~vtkAPCCompositePass() override;

@@ -54,24 +54,35 @@ inline double MeanCellVolumeSize(double volume, double cells)
 }
 
 // What a sample distance of 0 stands for: one mean cell size (from the cells' own volume,
-// MeanCellVolumeSize), but at least kMinDefaultSamples samples along the bounding-box
-// diagonal. The floor is for meshes whose cells are large next to the features they draw:
-// the flange (5,712 cells, thin walls; its cells fill a quarter of its box) keeps 40 dB
-// against the exact picture down to about 96 samples along its diagonal, not at one sample
-// per cell, so 128 leaves a margin; the wind data (331,699 cells) takes its mean cell size,
-// about 139 samples along its diagonal (41.3 dB). The cells' volume, not the box's, keeps a
-// mesh that fills its box sparsely from being sampled coarser than its cells.
-// docs/evaluation.md, section 4.2, has the measurement. Without a volume (flat cells only)
-// the box's mean cell size stands in.
+// MeanCellVolumeSize), but at least 128 samples along the bounding-box diagonal. The floor is
+// for meshes whose cells are large next to the features they draw: the flange (5,712 cells,
+// thin walls; its cells fill a quarter of its box) keeps 40 dB against the exact picture down
+// to about 96 samples along its diagonal, not at one sample per cell, so 128 leaves a margin;
+// the wind data (331,699 cells) takes its mean cell size, about 139 samples along its diagonal
+// (41.3 dB). The cells' volume, not the box's, keeps a mesh that fills its box sparsely from
+// being sampled coarser than its cells. docs/evaluation.md, section 4.2, has the measurement.
+// Without a volume (flat cells only) the box's mean cell size stands in.
+// Two pairs: a volume whose boundary ends are weighted (Sample End Weights Boundary, the
+// default, or All) has no lattice staircase where rays graze the mesh's boundary, which sets
+// the plain lattice's error, so it may take its own (kDefaultSpacingPerCell,
+// kMinDefaultSamples); the plain lattice (Sample End Weights Off, the exact modes, the Hybrid
+// resolve) takes kPlainSpacingPerCell, kPlainMinDefaultSamples. For now both are the same.
 constexpr double kDefaultSpacingPerCell = 1.0;
 constexpr double kMinDefaultSamples = 128.0;
+constexpr double kPlainSpacingPerCell = 1.0;
+constexpr double kPlainMinDefaultSamples = 128.0;
 
-inline double DefaultSampleDistance(const double bounds[6], double cells, double volume)
+// weightedEnds: the volume weights its boundary ends (VolumeRayMarcher::EndWeightsMode
+// Boundary or All, in MBOIT without the Hybrid resolve); false for the plain lattice.
+inline double DefaultSampleDistance(
+  const double bounds[6], double cells, double volume, bool weightedEnds)
 {
-  const double coarsest = BoundsDiagonal(bounds) / kMinDefaultSamples;
+  const double perCell = weightedEnds ? kDefaultSpacingPerCell : kPlainSpacingPerCell;
+  const double samples = weightedEnds ? kMinDefaultSamples : kPlainMinDefaultSamples;
+  const double coarsest = BoundsDiagonal(bounds) / samples;
   double cell = MeanCellVolumeSize(volume, cells);
   cell = cell > 0 ? cell : MeanCellSize(bounds, cells);
-  return cell > 0 ? std::min(kDefaultSpacingPerCell * cell, coarsest) : coarsest;
+  return cell > 0 ? std::min(perCell * cell, coarsest) : coarsest;
 }
 
 } // namespace apc

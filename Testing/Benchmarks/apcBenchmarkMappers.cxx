@@ -9,20 +9,24 @@
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
 //     [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] [--end-weights]
-//     [--boundary-weights] [--no-lanes]
+//     [--boundary-weights] [--no-end-weights] [--no-lanes]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
 // the resolved image's largest difference from the exact blend. --setup paraview renders as
 // ParaView does by default: a linear opacity ramp over the data range, a cool-to-warm colour
 // map, the opacity unit distance ParaView derives from the bounds (diagonal / cells^(1/3)) and
-// APC's default sample distance (bounding-box diagonal / 256; with --spacing-scale F, F times the
-// mean cell size).
+// APC's default sample distance and Sample End Weights (Boundary; --no-end-weights: Off), as the
+// mapper takes them (apcDefaultSpacing.h; with --spacing-scale F, F times that distance); the
+// sampler takes the same distance.
 //
 // Run under an X server (xvfb-run); Testing/Benchmarks/run-benchmark.sh does everything.
 #include "vtkAPCPuzzleSource.h"
 #include "vtkAPCVolumeMapper.h"
 
+#include "apcCellMesh.h"
+#include "apcCellMeshFromVTK.h"
+#include "apcDefaultSpacing.h"
 #include "apcImageMetrics.h"
 #include "apcSamplerTiming.h"
 #include "apcTestImages.h"
@@ -48,6 +52,7 @@
 #include "vtkStaticCleanUnstructuredGrid.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
+#include "vtkUnstructuredGridBase.h"
 #include "vtkUnstructuredGridPreIntegration.h"
 #include "vtkUnstructuredGridVolumeRayCastMapper.h"
 #include "vtkUnstructuredGridVolumeRayIntegrator.h"
@@ -147,14 +152,16 @@ struct Options
   vtkIdType ZSweepMaxCells = 100000;
   double TimeCap = 120.0;
   double SpacingScale = 1.0;
-  bool SpacingScaleGiven = false; // --setup paraview: the mean cell size times SpacingScale
+  bool SpacingScaleGiven = false; // --setup paraview: APC's default distance times SpacingScale
   double LinearTolerance = NAN;   // sampler: the linear inverse's tolerance in bins (NaN: default)
   bool Lower60 = false;        // --setup paraview: the ramp with the lower 60 % of the range clear
   std::string WindField = "p"; // --field: the wind's point array (paraview_vs_apc.py: U_mag)
-  bool Stop = true;   // sampler: time with the recommended opaque stop (off: as ParaView renders)
-  int EndWeights = 0; // APC and sampler: vtkAPCVolumeMapper::SetSampleEndWeights (2: boundary)
-  bool Lanes = true;  // sampler: VolumeRayMarcher::SetSampleLanes (--no-lanes: scalar loops)
-  int Moments = 4;    // APC's MBOIT moments
+  bool Stop = true; // sampler: time with the recommended opaque stop (off: as ParaView renders)
+  // APC and sampler: vtkAPCVolumeMapper::SetSampleEndWeights (2: boundary); -1: the mapper's
+  // default with --setup paraview, off with --setup benchmark
+  int EndWeights = -1;
+  bool Lanes = true; // sampler: VolumeRayMarcher::SetSampleLanes (--no-lanes: scalar loops)
+  int Moments = 4;   // APC's MBOIT moments
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
   bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
@@ -219,6 +226,23 @@ double MeanCellSize(vtkDataSet* grid)
   grid->GetBounds(b);
   const double volume = (b[1] - b[0]) * (b[3] - b[2]) * (b[5] - b[4]);
   return std::cbrt(volume / static_cast<double>(grid->GetNumberOfCells()));
+}
+
+// What vtkAPCVolumeMapper takes for sample distance 0 on grid alone (its cells' own volume),
+// with or without weighted ends.
+double MapperDefaultSpacing(vtkDataSet* grid, bool weightedEnds)
+{
+  auto* cells = vtkUnstructuredGridBase::SafeDownCast(grid);
+  apc::CellMesh mesh;
+  std::string error;
+  if (!cells ||
+    !apc::CellMeshFromVTK(cells, grid->GetPointData()->GetScalars(), false, mesh, error))
+  {
+    std::cerr << "error: the mapper's default spacing: " << error << "\n";
+    std::exit(2);
+  }
+  return apc::DefaultSampleDistance(mesh.GetBounds().data(),
+    static_cast<double>(mesh.GetNumberOfCells()), mesh.GetCellVolume().Value(), weightedEnds);
 }
 
 vtkSmartPointer<vtkUnstructuredGrid> ReadGrid(const std::string& path)
@@ -365,7 +389,10 @@ MapperScene MakeScene(const std::string& name, const Options& options, bool tetr
     }
     if (options.SpacingScaleGiven)
     {
-      scene.SampleDistance = options.SpacingScale * MeanCellSize(scene.Grid);
+      // F times what the mapper takes by default with these end weights (the box's mean cell
+      // size, 3.458 on the wind, is not the mapper's default, 3.375 or 4.219 there).
+      scene.SampleDistance =
+        options.SpacingScale * MapperDefaultSpacing(scene.Grid, options.EndWeights != 0);
     }
   }
 
@@ -1005,7 +1032,7 @@ void Usage()
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
                "  [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] "
-               "[--end-weights] [--boundary-weights] [--no-lanes]\n";
+               "[--end-weights] [--boundary-weights] [--no-end-weights] [--no-lanes]\n";
 }
 
 } // namespace
@@ -1098,6 +1125,10 @@ int main(int argc, char* argv[])
     {
       options.EndWeights = 2;
     }
+    else if (arg == "--no-end-weights")
+    {
+      options.EndWeights = 0;
+    }
     else if (arg == "--no-lanes")
     {
       options.Lanes = false;
@@ -1135,6 +1166,12 @@ int main(int argc, char* argv[])
       Usage();
       return arg == "--help" || arg == "-h" ? 0 : 2;
     }
+  }
+  if (options.EndWeights < 0)
+  {
+    options.EndWeights = options.Setup == "paraview"
+      ? vtkSmartPointer<vtkAPCVolumeMapper>::New()->GetSampleEndWeights()
+      : vtkAPCVolumeMapper::END_WEIGHTS_OFF;
   }
   if (options.Quick)
   {

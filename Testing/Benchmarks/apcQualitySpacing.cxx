@@ -4,13 +4,17 @@
 // the cool-to-warm map, a linear opacity ramp from 0 to 1 over the range and the opacity unit
 // distance of ParaView's "approximate_cell_length" domain (diagonal / cells^(1/3)). The
 // reference is vtkAPCVolumeMapper's EXACT mode (ordered blending) at a quarter of the finest
-// spacing compared. Against it: MBOIT at the mapper's defaults (beta, moments, resolve) at
-// the old default spacing (bounding-box diagonal / 256), at multiples of the mean cell size
-// (apcDefaultSpacing.h), with and without Lattice Jitter, EXACT at the same spacings (the
-// lattice's own error, without the moments'), the mapper's default (sample distance 0, what
-// a user gets), and VTK's projected tetrahedra (ParaView's default Volume mapper) on VTK's
-// tetrahedralisation. Premultiplied RGB over black, compared by apc::CompareImages; CPU time
-// of the process (all threads) for one frame after a first one (mesh conversion excluded).
+// spacing compared. Against it: MBOIT at the mapper's defaults (beta, moments, resolve) on the
+// plain lattice at the old default spacing (bounding-box diagonal / 256), at multiples of the
+// mean cell size (apcDefaultSpacing.h), with and without Lattice Jitter; EXACT at some of them
+// (the lattice's own error, without the moments'); Sample End Weights = Boundary (the
+// default) at the previous default, at 1 to 3 mean cell sizes and at 128 / 96 / 64 samples
+// along the diagonal, with and without jitter; All at a few; the mapper's default (sample
+// distance 0 and every setting at its default, what a user gets), also with Sample End
+// Weights Off and in EXACT mode (their own default distance); and VTK's projected tetrahedra
+// (ParaView's default Volume mapper) on VTK's tetrahedralisation. Premultiplied RGB over black,
+// compared by apc::CompareImages; CPU time of the process (all threads) for one frame after a first
+// one (mesh conversion excluded).
 #include "apcQualitySpacing.h"
 
 #include "apcCellMesh.h"
@@ -207,12 +211,21 @@ public:
     this->View.Window->Render();
   }
 
+  // endWeights -1: the mapper's default.
   Picture Render(int mode, double spacing, bool jitter, int endWeights = 0)
   {
+    endWeights = endWeights < 0 ? this->DefaultEndWeights : endWeights;
     this->Mapper->SetMode(mode);
     this->Mapper->SetSampleDistance(spacing);
     this->Mapper->SetLatticeJitter(jitter);
     this->Mapper->SetSampleEndWeights(endWeights);
+    if (endWeights != this->LastEndWeights)
+    {
+      // An untimed frame: the first with Boundary matches the mesh's boundary faces (once per
+      // data change), which is not a frame's cost.
+      this->View.Window->Render();
+      this->LastEndWeights = endWeights;
+    }
     Picture picture;
     picture.CpuSeconds = this->View.TimedRender();
     const apctest::Frame frame =
@@ -223,10 +236,13 @@ public:
     return picture;
   }
 
+  const int DefaultEndWeights = vtkNew<vtkAPCVolumeMapper>()->GetSampleEndWeights();
+
 private:
   const apctest::Scene& Scene;
   vtkNew<vtkAPCVolumeMapper> Mapper;
   Stage View;
+  int LastEndWeights = -1;
 };
 
 // VTK's projected tetrahedra on VTK's tetrahedralisation: what the window shows over black,
@@ -271,10 +287,16 @@ struct Case
   int Mode = vtkAPCVolumeMapper::MBOIT;
   double Spacing = 0; // 0: the mapper's default
   bool Jitter = false;
-  int EndWeights = 0; // vtkAPCVolumeMapper::SetSampleEndWeights (1 all, 2 boundary)
+  // vtkAPCVolumeMapper::SetSampleEndWeights (0 off, 1 all, 2 boundary); -1: the mapper's default
+  int EndWeights = 0;
 };
 
-std::vector<Case> Cases(double diagonal, double cell)
+constexpr int kOff = vtkAPCVolumeMapper::END_WEIGHTS_OFF;
+constexpr int kBoundary = vtkAPCVolumeMapper::END_WEIGHTS_BOUNDARY;
+
+// previous: the default before Sample End Weights = Boundary chose its own (one mean cell size,
+// at least diagonal / 128, apc::DefaultSampleDistance's plain-lattice rule).
+std::vector<Case> Cases(double diagonal, double cell, double previous)
 {
   std::vector<Case> cases;
   const double old = diagonal / 256;
@@ -290,11 +312,11 @@ std::vector<Case> Cases(double diagonal, double cell)
         cases.push_back({ m + "-diag" + std::to_string(n), mode, diagonal / n, false });
       }
     }
-    for (double f : { 0.5, 0.75, 1.0, 1.5, 2.0 })
+    for (double f : { 0.5, 0.75, 1.0, 1.25, 1.5, 2.0 })
     {
       std::ostringstream name;
       name << m << "-cell" << f;
-      if (mode == vtkAPCVolumeMapper::MBOIT || f == 1.0 || f == 2.0)
+      if (mode == vtkAPCVolumeMapper::MBOIT || f == 1.0 || f == 1.25 || f == 2.0)
       {
         cases.push_back({ name.str(), mode, f * cell, false });
       }
@@ -304,12 +326,32 @@ std::vector<Case> Cases(double diagonal, double cell)
       }
     }
   }
-  cases.push_back({ "mboit-default", vtkAPCVolumeMapper::MBOIT, 0.0, false });
-  // The end weights (no lattice staircase on grazing silhouettes; MBOIT only, EXACT keeps the
-  // plain lattice) at the default and at coarser spacings.
+  // What a user gets: every setting at the mapper's default (Sample End Weights = Boundary),
+  // and the default of the plain lattice's modes (Sample End Weights Off; EXACT).
+  cases.push_back({ "mboit-default", vtkAPCVolumeMapper::MBOIT, 0.0, false, -1 });
+  cases.push_back({ "mboit-default-off", vtkAPCVolumeMapper::MBOIT, 0.0, false, kOff });
+  cases.push_back({ "exact-default", vtkAPCVolumeMapper::EXACT, 0.0, false, -1 });
+  // Boundary (the default end weights) at the previous default, at multiples of the mean cell
+  // size and at fixed numbers of samples along the diagonal, with and without Lattice Jitter.
+  cases.push_back(
+    { "mboit-previous-boundary", vtkAPCVolumeMapper::MBOIT, previous, false, kBoundary });
+  for (bool jitter : { false, true })
+  {
+    const std::string j = jitter ? "-jitter" : "";
+    for (double f : { 1.0, 1.25, 1.5, 2.0, 3.0 })
+    {
+      std::ostringstream name;
+      name << "mboit-cell" << f << "-boundary" << j;
+      cases.push_back({ name.str(), vtkAPCVolumeMapper::MBOIT, f * cell, jitter, kBoundary });
+    }
+    for (int n : { 128, 96, 64 })
+    {
+      cases.push_back({ "mboit-diag" + std::to_string(n) + "-boundary" + j,
+        vtkAPCVolumeMapper::MBOIT, diagonal / n, jitter, kBoundary });
+    }
+  }
+  // Every cell's ends weighted (All) at the default and at coarser spacings.
   cases.push_back({ "mboit-default-weights", vtkAPCVolumeMapper::MBOIT, 0.0, false, 1 });
-  // Only the ends on the mesh's boundary weighted (end_weights 2).
-  cases.push_back({ "mboit-default-boundary", vtkAPCVolumeMapper::MBOIT, 0.0, false, 2 });
   for (double f : { 1.0, 1.25, 1.5, 2.0 })
   {
     std::ostringstream name;
@@ -350,8 +392,10 @@ int SpacingStudy(const std::string& data, const std::string& out, int size,
     }
     const double cells = static_cast<double>(mesh.GetNumberOfCells());
     const double cell = apc::MeanCellVolumeSize(mesh.GetCellVolume().Value(), cells);
-    const std::vector<Case> cases = Cases(diagonal, cell);
-    double finest = apc::DefaultSampleDistance(b, cells, mesh.GetCellVolume().Value());
+    const double previous =
+      apc::DefaultSampleDistance(b, cells, mesh.GetCellVolume().Value(), false);
+    const std::vector<Case> cases = Cases(diagonal, cell, previous);
+    double finest = previous;
     for (const Case& c : cases)
     {
       finest = c.Spacing > 0 ? std::min(finest, c.Spacing) : finest;
@@ -383,7 +427,8 @@ int SpacingStudy(const std::string& data, const std::string& out, int size,
         continue;
       }
       row(c.Name, c.Mode == vtkAPCVolumeMapper::EXACT ? "exact" : "mboit", c.Jitter,
-        stage.Render(c.Mode, c.Spacing, c.Jitter, c.EndWeights), c.EndWeights);
+        stage.Render(c.Mode, c.Spacing, c.Jitter, c.EndWeights),
+        c.EndWeights < 0 ? stage.DefaultEndWeights : c.EndWeights);
     }
     if (wantedCases.empty() ||
       ("," + wantedCases + ",").find(",projected-tetra,") != std::string::npos)

@@ -3,6 +3,7 @@
 
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
+#include "apcDefaultSpacing.h"
 #include "apcDepthWarp.h"
 #include "apcRayCamera.h"
 #include "apcResolve.h"
@@ -328,9 +329,9 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   const auto& b = mesh.GetBounds();
   if (!(spacing > 0))
   {
-    spacing = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
-                (b[5] - b[4]) * (b[5] - b[4])) /
-      256.0;
+    // What the mapper takes for sample distance 0 with these end weights (one process).
+    spacing = apc::DefaultSampleDistance(
+      b.data(), static_cast<double>(result.Cells), mesh.GetCellVolume().Value(), endWeights != 0);
   }
   result.Spacing = spacing;
   const apc::TransferTable table = MakeTable(property, spacing);

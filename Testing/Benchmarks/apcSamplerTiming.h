@@ -66,8 +66,8 @@ struct SamplerTiming
 
 // Marches grid's point scalars (the active ones) as renderer's camera sees them, through
 // property's transfer function, at size x size with the given sample spacing (0: the mapper's
-// default, the bounding-box diagonal / 256) and 4 moments. compare: also render the exact and
-// the non-stopping images for the two errors (one untimed frame each).
+// default for these end weights, apc::DefaultSampleDistance) and 4 moments. compare: also render
+// the exact and the non-stopping images for the two errors (one untimed frame each).
 // linearTolerance: the marcher's linear-inverse tolerance in table bins (NaN: its default).
 // withStop false: timed without the opaque stop, as the mapper renders by default (pass 2 then
 // finds hidden depths where rays are opaque). endWeights: VolumeRayMarcher::EndWeightsMode (0 off,

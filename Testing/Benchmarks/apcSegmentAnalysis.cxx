@@ -152,13 +152,17 @@ public:
       volumeSum.Add(engines[r].GetCellVolume());
     }
     const double cellVolume = volumeSum.Value();
+    // The lattice the pass's SEGMENTS frames sample at sample distance 0 (the plain lattice's
+    // default), so that the counts are the distributed compositing's.
+    apc::ImageSetup image = apc::ImageSetup::FullQuality(this->Renderer);
+    image.PlainLattice = vtkAPCCompositePass::SamplesPlainLattice(vtkAPCCompositePass::SEGMENTS);
     for (size_t r = 0; r < pieces.size(); ++r)
     {
       mapper->SetInputData(pieces[r]);
       apc::FrameEngine& engine = engines[r];
       if (usable[r] &&
-        engine.Prepare(this->Renderer, volume->GetProperty(), bounds, cells, cellVolume,
-          depth.data(), apc::ImageSetup::FullQuality(this->Renderer)))
+        engine.Prepare(
+          this->Renderer, volume->GetProperty(), bounds, cells, cellVolume, depth.data(), image))
       {
         engine.RenderSegments(images[r]);
       }

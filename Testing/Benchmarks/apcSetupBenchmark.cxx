@@ -123,8 +123,9 @@ unsigned long long Checksum(const apc::CellMesh& mesh)
 void TimePass1(const apc::CellMesh& mesh, const apc::RayCamera& camera, int cacheMiB)
 {
   const auto& b = mesh.GetBounds();
+  // The plain lattice's default: this marcher weights no ends.
   const double spacing = apc::DefaultSampleDistance(
-    b.data(), static_cast<double>(mesh.GetNumberOfCells()), mesh.GetCellVolume().Value());
+    b.data(), static_cast<double>(mesh.GetNumberOfCells()), mesh.GetCellVolume().Value(), false);
   double lo = 1e300;
   double hi = -1e300;
   for (float v : mesh.PointScalars)

@@ -29,12 +29,12 @@ TEST(DefaultSpacing, TheCellsOwnVolumeDecides)
   const double diagonal = std::sqrt(350.0 * 350 + 280 * 280 + 140 * 140);
   const double volume = 0.981 * 350 * 280 * 140;
   EXPECT_DOUBLE_EQ(apc::MeanCellVolumeSize(volume, 331699), 3.375);
-  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(wind, 331699, volume), 3.375);
-  EXPECT_GT(apc::DefaultSampleDistance(wind, 331699, volume), diagonal / 192 * 1.3);
+  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(wind, 331699, volume, false), 3.375);
+  EXPECT_GT(apc::DefaultSampleDistance(wind, 331699, volume, false), diagonal / 192 * 1.3);
   // 64 times the cells in the same volume: a quarter of the size, and 8 times again half.
-  const double fine = apc::DefaultSampleDistance(wind, 64 * 331699.0, volume);
+  const double fine = apc::DefaultSampleDistance(wind, 64 * 331699.0, volume, false);
   EXPECT_NEAR(fine, 3.375 / 4, 1e-12);
-  EXPECT_NEAR(apc::DefaultSampleDistance(wind, 512 * 331699.0, volume), 0.5 * fine, 1e-12);
+  EXPECT_NEAR(apc::DefaultSampleDistance(wind, 512 * 331699.0, volume, false), 0.5 * fine, 1e-12);
 }
 
 TEST(DefaultSpacing, SparseMeshesGetTheFloor)
@@ -44,10 +44,11 @@ TEST(DefaultSpacing, SparseMeshesGetTheFloor)
   // kMinDefaultSamples along the diagonal when the cells are few and large.
   const double box[6] = { 0, 2, 0, 2, 0, 2 };
   const double diagonal = 2 * std::sqrt(3.0);
-  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(box, 8, 2.0), diagonal / apc::kMinDefaultSamples);
+  EXPECT_DOUBLE_EQ(
+    apc::DefaultSampleDistance(box, 8, 2.0, true), diagonal / apc::kMinDefaultSamples);
   // 1e6 cells in a quarter of the box: cbrt(2e-6) = 0.0126 (0.0122 after rounding), against
   // cbrt(8e-6) = 0.02 from the box.
-  const double d = apc::DefaultSampleDistance(box, 1e6, 2.0);
+  const double d = apc::DefaultSampleDistance(box, 1e6, 2.0, false);
   EXPECT_LT(d, std::cbrt(2e-6));
   EXPECT_GT(d, 0.96 * std::cbrt(2e-6));
 }
@@ -75,19 +76,19 @@ TEST(DefaultSpacing, DegenerateInputs)
   // A flat box (all cells in a plane) or no cells: no mean cell size, the diagonal rule.
   const double flat[6] = { 0, 4, 0, 3, 1, 1 };
   EXPECT_EQ(apc::MeanCellSize(flat, 100), 0.0);
-  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(flat, 100, 0), 5.0 / apc::kMinDefaultSamples);
+  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(flat, 100, 0, true), 5.0 / apc::kMinDefaultSamples);
   const double box[6] = { 0, 4, 0, 3, 0, 1 };
   EXPECT_EQ(apc::MeanCellSize(box, 0), 0.0);
   EXPECT_EQ(apc::MeanCellVolumeSize(5.0, 0), 0.0);
   EXPECT_EQ(apc::MeanCellVolumeSize(NAN, 10), 0.0);
   EXPECT_EQ(apc::MeanCellVolumeSize(INFINITY, 10), 0.0);
   EXPECT_DOUBLE_EQ(
-    apc::DefaultSampleDistance(box, 0, 0), std::sqrt(26.0) / apc::kMinDefaultSamples);
+    apc::DefaultSampleDistance(box, 0, 0, true), std::sqrt(26.0) / apc::kMinDefaultSamples);
   // No volume (every cell flat): the box's mean cell size stands in.
-  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(box, 1e6, 0), std::cbrt(12e-6));
+  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(box, 1e6, 0, false), std::cbrt(12e-6));
   // Never zero, never NaN, for any box with an extent.
   const double thin[6] = { 0, 1, 0, 1, 0, 1e-12 };
-  const double d = apc::DefaultSampleDistance(thin, 1e6, 1e-300);
+  const double d = apc::DefaultSampleDistance(thin, 1e6, 1e-300, true);
   EXPECT_GT(d, 0.0);
   EXPECT_TRUE(std::isfinite(d));
 }

@@ -47,7 +47,7 @@ int main(int argc, char* argv[])
     const double wholeCells = static_cast<double>(whole.GetNumberOfCells());
     const double wholeVolume = whole.GetCellVolume().Value();
     const double wholeDistance =
-      apc::DefaultSampleDistance(whole.GetBounds().data(), wholeCells, wholeVolume);
+      apc::DefaultSampleDistance(whole.GetBounds().data(), wholeCells, wholeVolume, true);
 
     // This process's pieces, agreed with the others' as the composite pass agrees them.
     apc::CellMesh mine;
@@ -58,7 +58,8 @@ int main(int argc, char* argv[])
     local.Volume = mine.GetCellVolume();
     const apc::FrameAgreement agreed =
       apc::FrameAgreement::Agree(apc::ProcessGroup(controller, 0), local);
-    const double distance = apc::DefaultSampleDistance(agreed.Bounds, agreed.Cells, agreed.Volume);
+    const double distance =
+      apc::DefaultSampleDistance(agreed.Bounds, agreed.Cells, agreed.Volume, true);
 
     if (rank == 0)
     {
@@ -70,11 +71,13 @@ int main(int argc, char* argv[])
     Check(
       SameBits(agreed.Volume, wholeVolume), rank, "the volume is the whole data's, bit for bit");
     Check(SameBits(distance, wholeDistance), rank, "the distance is one process's, bit for bit");
-    // The rule on the wind: one sample per mean cell (its cells fill 98 % of the box), finer
-    // than the floor of kMinDefaultSamples along the diagonal.
+    // The rule on the wind (Sample End Weights = Boundary, the default): kDefaultSpacingPerCell
+    // mean cell sizes (its cells fill 98 % of the box), finer than the floor of
+    // kMinDefaultSamples along the diagonal.
     const double meanCell = apc::MeanCellVolumeSize(agreed.Volume, agreed.Cells);
-    Check(distance == meanCell && meanCell > 3.3 && meanCell < 3.44, rank,
-      "the wind's default is its mean cell size, " + std::to_string(distance));
+    Check(distance == apc::kDefaultSpacingPerCell * meanCell && meanCell > 3.3 && meanCell < 3.44,
+      rank,
+      "the wind's default is kDefaultSpacingPerCell mean cell sizes, " + std::to_string(distance));
     // Every process the same bits: the largest and smallest over the processes agree.
     double range[2] = { distance, -distance };
     double extreme[2] = { 0, 0 };
