@@ -119,15 +119,20 @@ int main(int argc, char* argv[])
 
   if (ranks > 1)
   {
+    // The last rank alone fails once (hook: the failure to inject), then renders with target.
+    auto renderFailingOnLastRank = [&](void (*hook)(int), vtkAPCCompositePass* target)
+    {
+      if (rank == ranks - 1)
+      {
+        hook(1);
+      }
+      return apctest::RenderDistributed(controller, wind, piece, bounds, size, false, target);
+    };
     // The last rank fails before it sends anything: every rank must leave the exchange (none
     // waits in an Alltoallv), render the frame with its own piece's boundary and say why.
-    if (rank == ranks - 1)
-    {
-      apc::FailBoundaryExchangesForTesting(1);
-    }
     vtkNew<vtkAPCCompositePass> pass;
     const std::vector<float> fallback =
-      apctest::RenderDistributed(controller, wind, piece, bounds, size, false, pass);
+      renderFailingOnLastRank(apc::FailBoundaryExchangesForTesting, pass);
     Check(!pass->GetLastFrameFailed(), rank, "a failed exchange: the frame still renders");
     if (rank == 0)
     {
@@ -151,13 +156,9 @@ int main(int argc, char* argv[])
     // The last rank fails while it sets the exchange up, before its first collective: every
     // rank must leave the exchange as from a failed one (the same image), and the next frame
     // of the same pass matches the faces.
-    if (rank == ranks - 1)
-    {
-      apc::FailBoundarySetUpsForTesting(1);
-    }
     vtkNew<vtkAPCCompositePass> setUp;
     const std::vector<float> unmatched =
-      apctest::RenderDistributed(controller, wind, piece, bounds, size, false, setUp);
+      renderFailingOnLastRank(apc::FailBoundarySetUpsForTesting, setUp);
     Check(!setUp->GetLastFrameFailed(), rank, "a failed set-up: the frame still renders");
     const std::vector<float> rematched =
       apctest::RenderDistributed(controller, wind, piece, bounds, size, false, setUp);
