@@ -402,7 +402,23 @@ struct VolumeRayMarcher::Walker
     {
       return 0; // no sample (Boundary: no lattice point and no weighted end): no set-up
     }
-    return this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
+    const int64_t samples = this->WeightedSamples(local, ray, tout, w, visitor, state, progress);
+    return w.End ? samples + this->EndSample(local, ray, tout, w, visitor, state, progress)
+                 : samples;
+  }
+
+  // Boundary: the end sample of a pair with lattice samples and a weighted end
+  // (EndWeights::End), after them; where they turned the pixel opaque, only if it lies before
+  // the stop they set (its lattice index is the pair's last, so it shares that sample's bin).
+  template <class Visitor>
+  int64_t EndSample(int local, const RaySetup& ray, double tout, const walk::EndWeights& w,
+    Visitor& visitor, CellState& state, RayProgress& progress) const
+  {
+    if (Visitor::StopsWhenOpaque)
+    {
+      tout = std::min(tout, progress.Stop[local]);
+    }
+    return this->WeightedSamples(local, ray, tout, w.EndSample(), visitor, state, progress);
   }
 
   // Boundary: whether a cell without a boundary face may still hold a pair that
@@ -419,17 +435,16 @@ struct VolumeRayMarcher::Walker
   // with ClipRays' own arithmetic (clipped again only there: else [tin, tout) is already
   // Clip's interval from [0, min(End, far)), bit for bit).
   //
-  // The ray's own end (an opaque surface's depth) counts exactly too, whichever
-  // cell it falls in. A plain end leaves the half spacing before the next lattice point to
-  // that point's sample; where the ray ends before the next lattice point nobody takes that
-  // sample, so the pair ends weighted at the ray's end instead (the pair the end cuts, and one
-  // left through a shared face with no lattice point between it and the ray's end), and a
-  // later pair entered through a shared face with no lattice point of its own adds nothing
-  // (the pair before it, with the same next lattice point, counted it). The ray's integral is
-  // then continuous in its end across every face, shared or on the boundary: processes
-  // composite an opaque depth a rounding apart, and a rule that switched at a face (a plain
-  // end in one cell, a weighted one in the next, or a sliver's clamp) turned that rounding
-  // into up to half a sample. The eye inside the mesh: the pair it cuts starts weighted.
+  // The ray's own end (an opaque surface's depth) counts exactly too, whichever cell it falls
+  // in, by the rule of a weighted end (walk::EndWeightsAt): no lattice sample covers more than
+  // its half spacing past its point, nor past the ray's end, and the pair that holds the end
+  // takes the rest in one sample at the end itself. Each pair decides from its own interval,
+  // its flags and the ray's end, so every partition weighs alike; and the ray's integral is
+  // continuous in its end across every face and every lattice point: processes composite an
+  // opaque depth a rounding apart, and a rule that switched there (a plain end in one cell, a
+  // weighted one in the next, a sliver's clamp, or half a spacing moved from one lattice
+  // sample to the next as the end crossed a lattice point) turned that rounding into up to
+  // half a sample. The eye inside the mesh: the pair it cuts starts weighted.
   // first: Grid.First(tin, ray.Offset) (BoundaryLaneSamples hands its plain pairs that index).
   template <class Visitor>
   [[gnu::always_inline]] walk::EndWeights BoundaryPairWeights(int local, const RaySetup& ray,
@@ -460,38 +475,18 @@ struct VolumeRayMarcher::Walker
     // The ray's own end, not the clip's min(end, far bound): the far bound is each process's
     // own piece's, and N processes must weigh what one process weighs.
     const double rayEnd = ray.End;
-    const double own[2] = { tin, end };
-    // The ray's next lattice point after the pair: none is sampled at or past the ray's end.
     const int64_t next = this->Grid.First(end, ray.Offset);
-    const bool lastBeforeEnd = this->Grid.At(next, ray.Offset) >= rayEnd;
     in = in || tin <= 0.0;
-    if (lastBeforeEnd && !in && first == next)
-    {
-      // Entered through a shared face with no lattice point before the ray's end: the pair
-      // before it, which reaches the same next lattice point, counts up to the ray's end.
-      plain = false;
-      walk::EndWeights none;
-      none.First = next;
-      none.Last = next - 1;
-      return none;
-    }
-    if (!out && lastBeforeEnd)
-    {
-      out = true;
-      end = std::max(end, rayEnd);
-    }
-    plain = !in && !out;
-    // Grid.First(end, ray.Offset) is next, also where end moved out to the ray's end: that
-    // lies after next - 1's point (as end did) and at or before next's (lastBeforeEnd).
-    walk::EndWeights w = walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out, first, next);
-    if (w.Mid && end != own[1])
-    {
-      // No lattice point up to the ray's end: the sample stays in the pair.
-      w.MidOffset =
-        0.5 * (own[0] + own[1]) * this->Grid.InverseSpacing - static_cast<double>(w.First);
-      w.MidT = this->Grid.At(w.First, w.MidOffset);
-    }
-    return w;
+    // The pair that holds the ray's end is weighted there (with an end sample past its last
+    // lattice point's half spacing), whichever cell it is.
+    out = out || end >= rayEnd;
+    // The ray's next lattice point after the pair is never sampled where it lies at or past
+    // the ray's end: the pair's last sample covers only up to the ray's end, and the pair
+    // holding the end takes what lies past that sample's half spacing.
+    const double cap =
+      this->Grid.At(next, ray.Offset) >= rayEnd ? rayEnd : std::numeric_limits<double>::infinity();
+    plain = !in && !out && cap == std::numeric_limits<double>::infinity();
+    return walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out, first, next, cap);
   }
 
   // The end weights of the pair of ray local over [tin, tout) (tout: up to the ray's stop).
@@ -540,6 +535,7 @@ struct VolumeRayMarcher::Walker
     // Whether each pair enters or leaves through a boundary plane (CellPlanes::BoundaryEnds),
     // four pairs at a time; a cell here only for its rays' ends (NearRayEnds) has none (and
     // BoundaryEnds would find none: tout is at most the mesh's finite far bound).
+    int64_t samples = 0;
     uint8_t boundary[walk::kTilePixels + 3];
     const bool onBoundary = state.Planes.BoundaryMask != 0;
     if (onBoundary)
@@ -585,6 +581,15 @@ struct VolumeRayMarcher::Walker
         }
         w = this->BoundaryPairWeightsAt(ray, tin, tout, first, in, out, plainEnds);
       }
+      if (w.End)
+      {
+        // Lattice samples and an end sample: the scalar loop, at once (a few pairs at the
+        // ray's end or a boundary exit; a pixel holds one pair of the cell).
+        visitor.Segment(l, tin, tout);
+        samples += this->WeightedSamples(l, ray, tout, w, visitor, state, progress);
+        samples += this->EndSample(l, ray, tout, w, visitor, state, progress);
+        continue;
+      }
       if (w.Mid)
       {
         ends.MidHits[ends.MidCount++] = static_cast<uint16_t>(l);
@@ -612,7 +617,6 @@ struct VolumeRayMarcher::Walker
       ends.LaneOffset[l] = w.Mid ? w.MidOffset : ray.Offset;
       ends.Mid[l] = w.Mid ? 1.0 : 0.0;
     }
-    int64_t samples = 0;
     if (plainCount > 0)
     {
       // LaneSamples takes its rays from Clipped.Hits: the weighted ones wait meanwhile.

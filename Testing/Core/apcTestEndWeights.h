@@ -10,14 +10,15 @@
 namespace apctest
 {
 
-// The sum of the pair's sample weights: its middle sample's alone, or each lattice sample's.
+// The sum of the pair's sample weights: its middle sample's alone, or each lattice sample's
+// and its end sample's.
 inline double Sum(const apc::walk::EndWeights& w)
 {
   if (w.Mid)
   {
     return w.MidWeight;
   }
-  double sum = 0;
+  double sum = w.End ? w.EndWeight : 0.0;
   for (int64_t k = w.First; k <= w.Last; ++k)
   {
     sum += w.Of(k);
