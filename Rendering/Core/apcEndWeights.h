@@ -188,7 +188,7 @@ struct EndWeights
     w.First -= 1;
     w.Last = w.First;
     w.MidWeight = w.FirstWeight = w.LastWeight = weight;
-    if (weightedOut)
+    if (weightedOut || weightedIn)
     {
       EndSampleAt(lattice, tout, w.First, w.MidT, w.MidOffset);
     }
@@ -231,6 +231,81 @@ struct EndWeights
 {
   return EndWeightsAt(lattice, tin, tout, offset, weightedIn, weightedOut,
     lattice.First(tin, offset), lattice.First(tout, offset), cap);
+}
+
+// The weights of the pair [tin, end) of a ray that ends at rayEnd (an opaque surface's depth;
+// infinity for none), with Sample End Weights = Boundary (VolumeRayMarcher::Walker's
+// BoundaryPairWeights): in / out whether its ends lie on the mesh's boundary (or the eye in
+// the pair), first = lattice.First(tin, offset); cellExit(face, faceOut) gives where the ray
+// leaves the pair's cell and whether through the boundary, asked for only where the pair holds
+// the ray's end and the entry is late (below). plain: whether the weights are the plain
+// lattice's (the lanes take those pairs).
+//
+// The ray's end counts exactly too, whichever cell it falls in: the pair that holds it is
+// weighted there (EndWeightsAt's weighted end: no lattice sample covers more than its half
+// spacing past its point, and what lies past goes to one sample at the end itself), and where
+// the ray's next lattice point t_next after a pair lies at or past the ray's end nobody
+// samples it, so the pair's last sample covers only up to the ray's end (cap) and the pair
+// holding the end takes what lies past h = t_next - s/2. Each pair decides from its own
+// interval, its flags and the ray's end, so every partition weighs alike, and the ray's
+// integral is continuous in its end across every face and every lattice point: processes
+// composite an opaque depth a few roundings apart, and a rule that switched there (a plain
+// end in one cell and a weighted one in the next, or half a spacing moved from one lattice
+// sample to the next) turned those roundings into half a sample's difference.
+//
+// A late entry (through the boundary past h, in a pair without a lattice point before the
+// ray's end): the pairs after it in that spacing cannot tell it from a mesh that goes on to h,
+// so the pair holding the end counts from h, and the late entry leaves [h, tin) to it as if
+// its entry were plain: the ray counts up to s/2 more there (as a late entry whose t_next is
+// sampled does: EndWeightsAt's clamped sliver), and its integral stays continuous where its end
+// crosses the face F that ends the entry's pair. Where the entry's pair holds the ray's end
+// itself, its weight rises from 0 at tin to (F - h) / s at F, continuous at both.
+template <class CellExit>
+[[gnu::always_inline]] inline EndWeights RayPairWeights(const Lattice& lattice, double tin,
+  double end, double offset, bool in, bool out, int64_t first, double rayEnd,
+  const CellExit& cellExit, bool& plain)
+{
+  const int64_t next = lattice.First(end, offset);
+  const bool holdsEnd = end >= rayEnd;
+  out = out || holdsEnd;
+  const double tNext = lattice.At(next, offset);
+  const double cap = tNext >= rayEnd ? rayEnd : std::numeric_limits<double>::infinity();
+  const double h = tNext - 0.5 * lattice.Spacing;
+  if (in && tin > h && tin > 0.0 && first == next && cap == rayEnd)
+  {
+    double face = end;
+    bool faceOut = out;
+    if (holdsEnd)
+    {
+      cellExit(face, faceOut);
+      face = std::max(face, end);
+    }
+    if (!faceOut && lattice.First(face, offset) == next)
+    {
+      if (!holdsEnd)
+      {
+        in = false;
+      }
+      else
+      {
+        plain = false;
+        EndWeights w;
+        w.First = w.Last = next - 1;
+        const double weight = (end - tin) * ((face - h) / (face - tin)) * lattice.InverseSpacing;
+        if (!(weight > 0))
+        {
+          w.Last = w.First - 1; // no sample
+          return w;
+        }
+        w.Mid = true;
+        w.MidWeight = w.FirstWeight = w.LastWeight = weight;
+        EndSampleAt(lattice, end, w.First, w.MidT, w.MidOffset);
+        return w;
+      }
+    }
+  }
+  plain = !in && !out && cap == std::numeric_limits<double>::infinity();
+  return EndWeightsAt(lattice, tin, end, offset, in, out, first, next, cap);
 }
 
 } // namespace walk

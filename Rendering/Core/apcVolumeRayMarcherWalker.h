@@ -436,15 +436,8 @@ struct VolumeRayMarcher::Walker
   // Clip's interval from [0, min(End, far)), bit for bit).
   //
   // The ray's own end (an opaque surface's depth) counts exactly too, whichever cell it falls
-  // in, by the rule of a weighted end (walk::EndWeightsAt): no lattice sample covers more than
-  // its half spacing past its point, nor past the ray's end, and the pair that holds the end
-  // takes the rest in one sample at the end itself. Each pair decides from its own interval,
-  // its flags and the ray's end, so every partition weighs alike; and the ray's integral is
-  // continuous in its end across every face and every lattice point: processes composite an
-  // opaque depth a rounding apart, and a rule that switched there (a plain end in one cell, a
-  // weighted one in the next, a sliver's clamp, or half a spacing moved from one lattice
-  // sample to the next as the end crossed a lattice point) turned that rounding into up to
-  // half a sample. The eye inside the mesh: the pair it cuts starts weighted.
+  // in, continuous in where it falls (walk::RayPairWeights). The eye inside the mesh: the pair
+  // it cuts starts weighted.
   // first: Grid.First(tin, ray.Offset) (BoundaryLaneSamples hands its plain pairs that index).
   template <class Visitor>
   [[gnu::always_inline]] walk::EndWeights BoundaryPairWeights(int local, const RaySetup& ray,
@@ -464,29 +457,25 @@ struct VolumeRayMarcher::Walker
     {
       state.Planes.BoundaryEnds(ray, tin, tout, in, out);
     }
-    return this->BoundaryPairWeightsAt(ray, tin, end, first, in, out, plain);
+    return this->BoundaryPairWeightsAt(ray, tin, end, first, in, out, plain, state);
   }
 
   // BoundaryPairWeights once the pair's end (end: before the stop cut it) and whether its ends
   // lie on the boundary (in, out) are known.
   [[gnu::always_inline]] walk::EndWeights BoundaryPairWeightsAt(const RaySetup& ray, double tin,
-    double end, int64_t first, bool in, bool out, bool& plain) const
+    double end, int64_t first, bool in, bool out, bool& plain, const CellState& state) const
   {
     // The ray's own end, not the clip's min(end, far bound): the far bound is each process's
     // own piece's, and N processes must weigh what one process weighs.
-    const double rayEnd = ray.End;
-    const int64_t next = this->Grid.First(end, ray.Offset);
-    in = in || tin <= 0.0;
-    // The pair that holds the ray's end is weighted there (with an end sample past its last
-    // lattice point's half spacing), whichever cell it is.
-    out = out || end >= rayEnd;
-    // The ray's next lattice point after the pair is never sampled where it lies at or past
-    // the ray's end: the pair's last sample covers only up to the ray's end, and the pair
-    // holding the end takes what lies past that sample's half spacing.
-    const double cap =
-      this->Grid.At(next, ray.Offset) >= rayEnd ? rayEnd : std::numeric_limits<double>::infinity();
-    plain = !in && !out && cap == std::numeric_limits<double>::infinity();
-    return walk::EndWeightsAt(this->Grid, tin, end, ray.Offset, in, out, first, next, cap);
+    const auto cellExit = [&](double& face, bool& faceOut)
+    {
+      double start = 0;
+      bool faceIn = false;
+      face = this->FarLimit;
+      state.Planes.ClipEnds(ray, start, face, faceIn, faceOut);
+    };
+    return walk::RayPairWeights(
+      this->Grid, tin, end, ray.Offset, in || tin <= 0.0, out, first, ray.End, cellExit, plain);
   }
 
   // The end weights of the pair of ray local over [tin, tout) (tout: up to the ray's stop).
@@ -579,7 +568,7 @@ struct VolumeRayMarcher::Walker
           }
           continue;
         }
-        w = this->BoundaryPairWeightsAt(ray, tin, tout, first, in, out, plainEnds);
+        w = this->BoundaryPairWeightsAt(ray, tin, tout, first, in, out, plainEnds, state);
       }
       if (w.End)
       {
