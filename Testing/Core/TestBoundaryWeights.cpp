@@ -643,6 +643,133 @@ TEST(BoundaryWeights, ExitsAtALatticePointAreContinuousInALinearField)
   EXPECT_EQ(jumps, 0);
 }
 
+// The weighted integral of f (and the weights' sum) along a run of cells [t0, t1), ...,
+// [t_{n-1}, t_n) of a ray that ends at rayEnd, entered through the boundary at t0, plain
+// between, left through the boundary at t_n if exits (else the mesh goes on past rayEnd): the
+// weights the walker takes (RayPairWeights, with each cell's exit as the clip finds it).
+struct RunValue
+{
+  double Integral = 0;
+  double Weights = 0;
+};
+template <class F>
+RunValue RayRun(const Lattice& lattice, double offset, const std::vector<double>& t, double rayEnd,
+  bool exits, F f)
+{
+  RunValue run;
+  const size_t cells = t.size() - 1;
+  for (size_t c = 0; c < cells && t[c] < rayEnd; ++c)
+  {
+    const double end = std::min(t[c + 1], rayEnd);
+    if (!(t[c] < end))
+    {
+      continue;
+    }
+    const bool exitFace = exits && c + 1 == cells;
+    const auto cellExit = [&](double& face, bool& faceOut)
+    {
+      face = t[c + 1];
+      faceOut = exitFace;
+    };
+    bool plain = false;
+    const EndWeights w = apc::walk::RayPairWeights(lattice, t[c], end, offset, c == 0,
+      exitFace && end == t[c + 1], lattice.First(t[c], offset), rayEnd, cellExit, plain);
+    run.Weights += Sum(w);
+    if (w.Mid)
+    {
+      run.Integral += w.MidWeight * f(w.MidT);
+      continue;
+    }
+    for (int64_t k = w.First; k <= w.Last; ++k)
+    {
+      run.Integral += w.Of(k) * f(lattice.At(k, offset));
+    }
+    run.Integral += w.End ? w.EndWeight * f(w.EndT) : 0.0;
+  }
+  return run;
+}
+
+// Rays that end (an opaque surface's depth) a rounding before and after each face of a run of
+// cells, each of its lattice points and the half spacings before them, its entry and its
+// exit: in a field linear along the ray the weighted samples' sum moves by the rounding's
+// share and no more, so N processes compositing the depth a few roundings apart weigh what one
+// process weighs. The weights sum to the ray's length in the mesh, or up to half a sample more
+// where the ray enters within half a spacing before a lattice point from a pair without one
+// (a late entry) or leaves through the boundary past a plain face within half a spacing after
+// its last lattice point. Before, a late entry in the ray's last spacing before its end
+// counted from its entry while the pair holding the end counted from h, so the sum jumped
+// by up to half a sample as the end crossed a face between them (PvbatchAPC.pvvolume).
+TEST(BoundaryWeights, RaysEndingAnywhereInARunAreContinuousInTheirEnd)
+{
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double offset = 0.29;
+  const Lattice lattice(0.013);
+  const double s = lattice.Spacing;
+  const auto f = [](double t) { return 2.0 + 30.0 * t; };
+  int ends = 0;
+  int jumps = 0;
+  int lateEnds = 0; // ends in the last half spacing after a late entry, past a face after it
+  int exact = 0;
+  for (int i = 0; i < 10000; ++i)
+  {
+    const int cells = 2 + static_cast<int>(4 * u(rng));
+    std::vector<double> t{ 1.0 + 3.0 * u(rng) };
+    for (int c = 0; c < cells; ++c)
+    {
+      t.push_back(t.back() + 0.02 * u(rng) * u(rng));
+    }
+    if (!(t.front() < t[1]) || !(t.front() < t.back()))
+    {
+      continue;
+    }
+    const bool exits = i % 3 == 0;
+    std::vector<double> at(t.begin(), t.end() - (exits ? 0 : 1));
+    for (int64_t k = lattice.First(t.front(), offset); lattice.At(k, offset) < t.back(); ++k)
+    {
+      at.push_back(lattice.At(k, offset));
+      at.push_back(lattice.At(k, offset) - 0.5 * s);
+    }
+    const int64_t entryNext = lattice.First(t.front(), offset);
+    const bool late = t.front() > lattice.At(entryNext, offset) - 0.5 * s;
+    for (const double e : at)
+    {
+      const double before = std::nextafter(e, 0.0);
+      const double after = std::nextafter(e, 10.0);
+      if (!(before > t.front()) || (!exits && !(after < t.back())))
+      {
+        continue;
+      }
+      const RunValue a = RayRun(lattice, offset, t, before, exits, f);
+      const RunValue b = RayRun(lattice, offset, t, after, exits, f);
+      ++ends;
+      const double grows = after < t.back() || !exits ? f(e) * (after - before) / s : 0.0;
+      // A late entry's pair holding the end weighs (e - t0) (t1 - h) / (t1 - t0): continuous,
+      // but rising that much faster than the end moves (sliver pairs: a steep slope).
+      const double steep = late ? f(e) * (after - before) * 0.5 / (t[1] - t.front()) : 0.0;
+      const bool jumped =
+        std::abs(b.Integral - a.Integral - grows) > 1e-9 * std::abs(a.Integral) + 1e-12 + steep;
+      jumps += jumped ? 1 : 0;
+      EXPECT_FALSE(jumped) << "run " << i << " end " << e << ": " << a.Integral << " then "
+                           << b.Integral;
+      // The sum's bounds: the length in the mesh, up to half a sample more per late entry
+      // and per exit sliver.
+      const double length = (std::min(before, t.back()) - t.front()) / s;
+      EXPECT_GE(a.Weights, length - 1e-9);
+      EXPECT_LE(a.Weights, length + 1.0 + 1e-9);
+      if (late && before > t[1] && lattice.At(entryNext, offset) >= before)
+      {
+        ++lateEnds;
+      }
+      exact += std::abs(a.Weights - length) < 1e-9 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(ends, 40000);
+  EXPECT_GT(lateEnds, 1000);
+  EXPECT_GT(exact, ends / 2);
+  EXPECT_EQ(jumps, 0);
+}
+
 // A block whose point scalars are linear in position.
 apc::CellMesh LinearBlock(int nz, const double lo[3])
 {
