@@ -136,9 +136,11 @@ public:
 
   ///@{
   /**
-   * World distance between samples along a ray. 0 (default) picks the data's mean cell size
-   * (the cube root of its cells' own volume per cell, over all processes' cells under
-   * vtkAPCCompositePass), but at least 128 samples along the bounding-box diagonal.
+   * World distance between samples along a ray. 0 (default) picks 1.25 times the data's mean
+   * cell size (the cube root of its cells' own volume per cell, over all processes' cells
+   * under vtkAPCCompositePass), but at least 96 samples along the bounding-box diagonal; on
+   * the plain lattice (Sample End Weights Off, EXACT, the HYBRID resolve) one mean cell size,
+   * at least 128 samples (apcDefaultSpacing.h).
    */
   void SetSampleDistance(double distance);
   double GetSampleDistance() const;

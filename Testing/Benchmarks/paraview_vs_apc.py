@@ -6,8 +6,8 @@ Renders the bundled OpenFOAM data (Data/windAroundBuildings/wind.pvtu: 331,699 c
 Scotch pieces, field U_mag) at 1024x1024 with the same camera and transfer function:
 
   apc          the APC Volume representation, sample distance --sample-distance;
-  apc-default  the same at its default sample distance (0: the mean cell size from the
-               cells' volume, at least 128 samples along the bounding-box diagonal);
+  apc-default  the same at its default sample distance (0: 1.25 mean cell sizes from the
+               cells' volume, at least 96 samples along the bounding-box diagonal);
   apc-again    apc-default again, as a later case of the process: the first frame a new APC
                view of the data costs once the process holds memory (its cells are converted
                again, as after a data change); run it after apc-default to tell the process's
@@ -271,10 +271,11 @@ def main(args):
     own = probe("input")
     total_volume = B.sum(r["volume"] for r in own)
     mean_cell = (total_volume / total_cells) ** (1.0 / 3.0)
-    # APC's default sample distance (Rendering/Core/apcDefaultSpacing.h), for the notes: the
-    # mean cell size rounded down to 5 significant bits, at least diagonal / 128.
+    # APC's default sample distance (Rendering/Core/apcDefaultSpacing.h), for the notes: with
+    # Sample End Weights = Boundary (the default) 1.25 times the mean cell size rounded down to
+    # 5 significant bits, at least diagonal / 96.
     m, e = math.frexp(mean_cell)
-    default_spacing = B.min(math.ldexp(math.floor(math.ldexp(m, 5)), e - 5), diagonal / 128)
+    default_spacing = B.min(1.25 * math.ldexp(math.floor(math.ldexp(m, 5)), e - 5), diagonal / 96)
     print("  domain volume %.4g m^3, mean cell size (volume/cells)^(1/3) = %.2f m, "
           "diagonal %.1f m (APC's default sample distance %.2f m)"
           % (total_volume, mean_cell, diagonal, default_spacing), flush=True)
@@ -477,8 +478,8 @@ def main(args):
             row["cells_per_rank_after"] = "/".join(str(s["cells"]) for s in after)
             notes.insert(0, "sample distance %.3g m%s; stage times are medians of the later "
                             "frames (pass total %.3f s; first frame's total %.3f s)"
-                         % (spacing or default_spacing, " (default 0: the mean cell size, at "
-                            "least diagonal / 128)"
+                         % (spacing or default_spacing, " (default 0: 1.25 mean cell sizes, at "
+                            "least diagonal / 96)"
                             if not spacing else "", statistics.median(t["total"] for t in timings[1:]),
                             timings[0]["total"]))
             # Where the first frame's time went, beside the later frames' medians above.

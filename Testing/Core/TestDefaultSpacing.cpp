@@ -22,19 +22,42 @@ TEST(DefaultSpacing, MeanCellSizeOfTheBox)
 TEST(DefaultSpacing, TheCellsOwnVolumeDecides)
 {
   // The wind data: 350 x 280 x 140 m, 331,699 cells filling 98 % of the box (13.46e6 m^3):
-  // one sample per mean cell (3.436 m, rounded down to 3.375) is finer than the floor
-  // (diagonal / 128 = 3.67 m), so the cells decide. The old rule (box volume per cell, at
-  // least 192 samples along the diagonal) gave 2.45 m.
+  // its mean cell (3.436 m, rounded down to 3.375) decides, finer than either floor
+  // (diagonal / 96 = 4.89 m, diagonal / 128 = 3.67 m). With weighted boundary ends (the
+  // default) 1.25 of it, 4.21875 m; on the plain lattice one, 3.375 m. The first rule (box
+  // volume per cell, at least 192 samples along the diagonal) gave 2.45 m.
   const double wind[6] = { -20, 330, -50, 230, 0, 140 };
   const double diagonal = std::sqrt(350.0 * 350 + 280 * 280 + 140 * 140);
   const double volume = 0.981 * 350 * 280 * 140;
   EXPECT_DOUBLE_EQ(apc::MeanCellVolumeSize(volume, 331699), 3.375);
+  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(wind, 331699, volume, true), 4.21875);
   EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(wind, 331699, volume, false), 3.375);
   EXPECT_GT(apc::DefaultSampleDistance(wind, 331699, volume, false), diagonal / 192 * 1.3);
   // 64 times the cells in the same volume: a quarter of the size, and 8 times again half.
-  const double fine = apc::DefaultSampleDistance(wind, 64 * 331699.0, volume, false);
-  EXPECT_NEAR(fine, 3.375 / 4, 1e-12);
-  EXPECT_NEAR(apc::DefaultSampleDistance(wind, 512 * 331699.0, volume, false), 0.5 * fine, 1e-12);
+  for (bool weighted : { true, false })
+  {
+    const double fine = apc::DefaultSampleDistance(wind, 64 * 331699.0, volume, weighted);
+    EXPECT_NEAR(fine, (weighted ? 1.25 : 1.0) * 3.375 / 4, 1e-12);
+    EXPECT_NEAR(
+      apc::DefaultSampleDistance(wind, 512 * 331699.0, volume, weighted), 0.5 * fine, 1e-12);
+  }
+}
+
+TEST(DefaultSpacing, WeightedEndsTakeACoarserLattice)
+{
+  // Sample End Weights (Boundary, the default) remove the staircase that set the plain
+  // lattice's error: 1.25 mean cell sizes, at least 96 samples along the diagonal, against
+  // one mean cell size and 128 samples for the plain lattice (docs/evaluation.md, 4.2).
+  EXPECT_DOUBLE_EQ(apc::kDefaultSpacingPerCell, 1.25);
+  EXPECT_DOUBLE_EQ(apc::kMinDefaultSamples, 96.0);
+  EXPECT_DOUBLE_EQ(apc::kPlainSpacingPerCell, 1.0);
+  EXPECT_DOUBLE_EQ(apc::kPlainMinDefaultSamples, 128.0);
+  // Like the flange: 5,712 cells filling a quarter of their box, the floor decides in both.
+  const double flange[6] = { -0.0488, 0.0488, -0.0488, 0.0488, -0.0318, 0.0794 };
+  const double diagonal = apc::BoundsDiagonal(flange);
+  const double volume = 0.25 * 0.0976 * 0.0976 * 0.1112;
+  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(flange, 5712, volume, true), diagonal / 96);
+  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(flange, 5712, volume, false), diagonal / 128);
 }
 
 TEST(DefaultSpacing, SparseMeshesGetTheFloor)
@@ -46,11 +69,14 @@ TEST(DefaultSpacing, SparseMeshesGetTheFloor)
   const double diagonal = 2 * std::sqrt(3.0);
   EXPECT_DOUBLE_EQ(
     apc::DefaultSampleDistance(box, 8, 2.0, true), diagonal / apc::kMinDefaultSamples);
+  EXPECT_DOUBLE_EQ(
+    apc::DefaultSampleDistance(box, 8, 2.0, false), diagonal / apc::kPlainMinDefaultSamples);
   // 1e6 cells in a quarter of the box: cbrt(2e-6) = 0.0126 (0.0122 after rounding), against
   // cbrt(8e-6) = 0.02 from the box.
   const double d = apc::DefaultSampleDistance(box, 1e6, 2.0, false);
   EXPECT_LT(d, std::cbrt(2e-6));
   EXPECT_GT(d, 0.96 * std::cbrt(2e-6));
+  EXPECT_DOUBLE_EQ(apc::DefaultSampleDistance(box, 1e6, 2.0, true), 1.25 * d);
 }
 
 TEST(DefaultSpacing, RoundedDownToFewBits)

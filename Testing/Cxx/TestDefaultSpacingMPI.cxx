@@ -71,13 +71,12 @@ int main(int argc, char* argv[])
     Check(
       SameBits(agreed.Volume, wholeVolume), rank, "the volume is the whole data's, bit for bit");
     Check(SameBits(distance, wholeDistance), rank, "the distance is one process's, bit for bit");
-    // The rule on the wind (Sample End Weights = Boundary, the default): kDefaultSpacingPerCell
-    // mean cell sizes (its cells fill 98 % of the box), finer than the floor of
-    // kMinDefaultSamples along the diagonal.
+    // The rule on the wind (Sample End Weights = Boundary, the default): 1.25 mean cell sizes
+    // (its cells fill 98 % of the box), finer than the floor of kMinDefaultSamples along the
+    // diagonal.
     const double meanCell = apc::MeanCellVolumeSize(agreed.Volume, agreed.Cells);
     Check(distance == apc::kDefaultSpacingPerCell * meanCell && meanCell > 3.3 && meanCell < 3.44,
-      rank,
-      "the wind's default is kDefaultSpacingPerCell mean cell sizes, " + std::to_string(distance));
+      rank, "the wind's default is 1.25 mean cell sizes, " + std::to_string(distance));
     // Every process the same bits: the largest and smallest over the processes agree.
     double range[2] = { distance, -distance };
     double extreme[2] = { 0, 0 };

@@ -172,19 +172,61 @@ TEST(SettingChecks, SamplesPerRayCapped)
   EXPECT_TRUE(log->Warnings.empty()) << log->All();
 }
 
+// Sample distance 0 depends on the lattice the volume samples (apcDefaultSpacing.h): with
+// weighted ends (Sample End Weights Boundary, the default, or All, in MBOIT) 1.25 mean cell
+// sizes and at least 96 samples along the diagonal; on the plain lattice (Off, EXACT, the
+// HYBRID resolve) one mean cell size and at least 128. The 8^3 cells of [-1,1]^3 are large
+// next to the diagonal (2 sqrt 3), so the floor decides.
+TEST(SettingChecks, DefaultSampleDistanceFollowsTheLattice)
+{
+  auto grid = apctest::HexBlock(8, [](double x, double, double) { return 0.5 + 0.4 * x; });
+  apctest::View view;
+  view.Width = 16;
+  view.Height = 16;
+  const double diagonal = 2 * std::sqrt(3.0);
+  auto distance = [&](int mode, int endWeights, int resolve)
+  {
+    return apctest::Render(
+      grid,
+      [&](vtkAPCVolumeMapper* m)
+      {
+        m->SetMode(mode);
+        m->SetSampleEndWeights(endWeights);
+        m->SetResolveMode(resolve);
+      },
+      {}, view)
+      .SampleDistance;
+  };
+  const int mboit = vtkAPCVolumeMapper::MBOIT;
+  const int renormalised = vtkAPCVolumeMapper::RENORMALISED;
+  EXPECT_DOUBLE_EQ(
+    distance(mboit, vtkAPCVolumeMapper::END_WEIGHTS_BOUNDARY, renormalised), diagonal / 96);
+  EXPECT_DOUBLE_EQ(
+    distance(mboit, vtkAPCVolumeMapper::END_WEIGHTS_ALL, renormalised), diagonal / 96);
+  EXPECT_DOUBLE_EQ(
+    distance(mboit, vtkAPCVolumeMapper::END_WEIGHTS_OFF, renormalised), diagonal / 128);
+  EXPECT_DOUBLE_EQ(
+    distance(vtkAPCVolumeMapper::EXACT, vtkAPCVolumeMapper::END_WEIGHTS_BOUNDARY, renormalised),
+    diagonal / 128);
+  EXPECT_DOUBLE_EQ(
+    distance(mboit, vtkAPCVolumeMapper::END_WEIGHTS_BOUNDARY, vtkAPCVolumeMapper::HYBRID),
+    diagonal / 128);
+}
+
 TEST(SettingChecks, DefaultSampleDistanceCapped)
 {
-  // A slab 6e-6 thick of 48 x 48 x 48 cells (each 1.25e-7 thick, 3e-6 of its width: still a
-  // volume, not a flat cell): the default (one mean cell size, the cube root of the box's
-  // volume per cell, 6.0e-4) would take 4,700 samples along the diagonal. The cap holds for
-  // the default too, and says so, naming the default.
+  // A slab 3e-6 thick of 48 x 48 x 48 cells (each 6.25e-8 thick, 1.5e-6 of its width: still a
+  // volume, not a flat cell): the default (1.25 mean cell sizes with Boundary's weights, the
+  // cube root of the volume per cell, 4.77e-4, rounded down to 4.73e-4) would take 4,800
+  // samples along the diagonal. The cap holds for the default too, and says so, naming the
+  // default.
   auto grid = apctest::HexBlock(48, [](double x, double, double) { return 0.5 + 0.4 * x; });
   vtkPoints* points = grid->GetPoints();
   for (vtkIdType p = 0; p < points->GetNumberOfPoints(); ++p)
   {
     double x[3];
     points->GetPoint(p, x);
-    x[2] *= 3e-6;
+    x[2] *= 1.5e-6;
     points->SetPoint(p, x);
   }
   vtkNew<MessageLog> log;
@@ -195,7 +237,7 @@ TEST(SettingChecks, DefaultSampleDistanceCapped)
   view.ViewUp = { 0, 0, 1 };
   const apctest::Frame frame = apctest::Render(
     grid, [&](vtkAPCVolumeMapper* m) { log->Watch(m); }, {}, view);
-  const double diagonal = std::sqrt(8.0 + 36e-12);
+  const double diagonal = std::sqrt(8.0 + 9e-12);
   EXPECT_NEAR(frame.SampleDistance, diagonal / apc::FrameEngine::kMaxSamplesPerRay, 1e-9);
   EXPECT_EQ(log->Warnings.size(), 1u) << log->All();
   EXPECT_TRUE(MessageLog::Mentions(log->Warnings, "The default Sample Distance")) << log->All();
