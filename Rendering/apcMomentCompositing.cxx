@@ -66,17 +66,16 @@ double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
     T* send = HoldAs<T>(buffers.WireSend, step);
     T* received = HoldAs<T>(buffers.WireReceived, step);
     const bool takesSum = everywhere || group.IsDisplay();
-    const auto each = [components](size_t) { return components; };
     PackedWalk packing(tiles, mask, first, last);
     PackedWalk unpacking(tiles, mask, first, last);
     const auto pack = [&](size_t length)
     {
-      packing.Next(length, each,
-        [&](size_t pixel, size_t, size_t k0, size_t k1, size_t at)
+      packing.NextSpans(length, components,
+        [&](size_t start, size_t values, size_t at)
         {
-          for (size_t k = k0; k < k1; ++k)
+          for (size_t v = 0; v < values; ++v)
           {
-            send[at + k - k0] = static_cast<T>(image[pixel * components + k]);
+            send[at + v] = static_cast<T>(image[start + v]);
           }
         });
     };
@@ -103,12 +102,12 @@ double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
             ++record.MessagesSent;
             if (takesSum)
             {
-              unpacking.Next(static_cast<size_t>(length), each,
-                [&](size_t pixel, size_t, size_t k0, size_t k1, size_t at)
+              unpacking.NextSpans(static_cast<size_t>(length), components,
+                [&](size_t start, size_t values, size_t at)
                 {
-                  for (size_t k = k0; k < k1; ++k)
+                  for (size_t v = 0; v < values; ++v)
                   {
-                    image[pixel * components + k] = static_cast<double>(received[at + k - k0]);
+                    image[start + v] = static_cast<double>(received[at + v]);
                   }
                 });
             }

@@ -87,6 +87,13 @@ public:
   template <class Values, class Visit>
   size_t Next(size_t n, Values values, Visit visit);
 
+  // The same for pixels of components values each, a row's run at a time: visit(start,
+  // count, at) for values [start, start + count) of the full image (pixel * components + k),
+  // which sit at [at, at + count) of the piece. For plain copies, which then run over whole
+  // rows as Pack's do.
+  template <class Visit>
+  size_t NextSpans(size_t n, int components, Visit visit);
+
   bool Done() const { return this->Tile >= this->End; }
 
 private:
@@ -125,6 +132,33 @@ size_t PackedWalk::Next(size_t n, Values values, Visit visit)
       }
     }
     this->NextPixel();
+  }
+  return at;
+}
+
+template <class Visit>
+size_t PackedWalk::NextSpans(size_t n, int components, Visit visit)
+{
+  const size_t c = static_cast<size_t>(components);
+  size_t at = 0;
+  while (at < n && !this->Done())
+  {
+    const size_t row = static_cast<size_t>(this->I1 - this->I) * c - this->Value;
+    const size_t take = std::min(row, n - at);
+    const size_t pixel = static_cast<size_t>(this->J) * this->Grid->Width + this->I;
+    visit(pixel * c + this->Value, take, at);
+    at += take;
+    const size_t walked = this->Value + take;
+    this->I += static_cast<int>(walked / c);
+    this->Index += walked / c;
+    this->Value = walked % c;
+    if (this->I == this->I1)
+    {
+      // The row's last pixel is whole: NextPixel moves on from it.
+      --this->I;
+      --this->Index;
+      this->NextPixel();
+    }
   }
   return at;
 }

@@ -237,6 +237,23 @@ TEST(CoveredTiles, PackedWalkInPiecesIsPackInOrder)
         n);
     }
     EXPECT_EQ(packed, whole) << "piece " << piece;
+    // The same values a row's run at a time (NextSpans).
+    apc::PackedWalk spans(kGrid, mask);
+    std::vector<double> packedSpans;
+    while (!spans.Done())
+    {
+      std::vector<double> message(piece, -2.0);
+      const size_t n = spans.NextSpans(piece, kComponents,
+        [&](size_t start, size_t count, size_t at)
+        {
+          ASSERT_LE(at + count, piece);
+          std::copy_n(full.begin() + static_cast<std::ptrdiff_t>(start), count,
+            message.begin() + static_cast<std::ptrdiff_t>(at));
+        });
+      ASSERT_GT(n, 0u);
+      packedSpans.insert(packedSpans.end(), message.begin(), message.begin() + n);
+    }
+    EXPECT_EQ(packedSpans, whole) << "spans, piece " << piece;
     for (size_t v = 0; v < full.size(); ++v)
     {
       ASSERT_TRUE(restored[v] == -1.0 || restored[v] == full[v]) << v;
