@@ -11,6 +11,7 @@
 // the whole rectangle's would be ~4.8 GB per process.
 #include "apcAloneBands.h"
 #include "apcCompositeFrame.h"
+#include "apcCoveredTiles.h"
 #include "apcFixedPointMoments.h"
 #include "apcFrameEngine.h"
 #include "apcOpaqueBins.h"
@@ -32,6 +33,7 @@ namespace apc
 using wire::Hold;
 using wire::HoldAs;
 using wire::InMessages;
+using wire::MessageValues;
 
 namespace
 {
@@ -58,32 +60,59 @@ double SumTiles(const ProcessGroup& group, const TileGrid& tiles,
     {
       continue;
     }
-    T* send = HoldAs<T>(buffers.WireSend, count);
-    T* received = HoldAs<T>(buffers.WireReceived, count);
-    tiles.Pack(mask, image, components, send, first, last);
+    // One message at a time through the wire's buffers: the same messages as packing the
+    // chunk whole, in buffers of one message's size.
+    const size_t step = std::min(count, MessageValues<T>(maxBytes));
+    T* send = HoldAs<T>(buffers.WireSend, step);
+    T* received = HoldAs<T>(buffers.WireReceived, step);
+    const bool takesSum = everywhere || group.IsDisplay();
+    PackedWalk packing(tiles, mask, first, last);
+    PackedWalk unpacking(tiles, mask, first, last);
+    const auto pack = [&](size_t length)
+    {
+      packing.NextSpans(length, components,
+        [&](size_t start, size_t values, size_t at)
+        {
+          for (size_t v = 0; v < values; ++v)
+          {
+            send[at + v] = static_cast<T>(image[start + v]);
+          }
+        });
+    };
+    pack(step);
     group.Collective(everywhere ? "allreduce" : "reduce",
       [&]
       {
         InMessages<T>(count, maxBytes,
           [&](size_t offset, vtkIdType length)
           {
+            if (offset > 0)
+            {
+              pack(static_cast<size_t>(length));
+            }
             if (everywhere)
             {
-              group.Controller->AllReduce(
-                send + offset, received + offset, length, vtkCommunicator::SUM_OP);
+              group.Controller->AllReduce(send, received, length, vtkCommunicator::SUM_OP);
             }
             else
             {
               group.Controller->Reduce(
-                send + offset, received + offset, length, vtkCommunicator::SUM_OP, group.Display);
+                send, received, length, vtkCommunicator::SUM_OP, group.Display);
             }
             ++record.MessagesSent;
+            if (takesSum)
+            {
+              unpacking.NextSpans(static_cast<size_t>(length), components,
+                [&](size_t start, size_t values, size_t at)
+                {
+                  for (size_t v = 0; v < values; ++v)
+                  {
+                    image[start + v] = static_cast<double>(received[at + v]);
+                  }
+                });
+            }
           });
       });
-    if (everywhere || group.IsDisplay())
-    {
-      tiles.Unpack(mask, received, components, image, first, last);
-    }
     bytes += static_cast<double>(sizeof(T) * count);
   }
   return bytes;
@@ -132,53 +161,57 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
     {
       continue;
     }
-    // Encoded straight from the image and decoded straight into it: no packed copy of the
-    // doubles (at 1024^2 40 MB a process, paged in afresh by a first frame).
+    // Encoded straight from the image and decoded straight into it, one message at a time
+    // through the wire's buffers (one message's size): no packed copy of the doubles, nor of
+    // the whole chunk's codes (at 1024^2 40 MB and 2 x 20 MB a process, paged in afresh by a
+    // first frame). The same messages, so the same sums, as coding the chunk whole.
     const size_t values = count * stride;
-    int32_t* codes = HoldAs<int32_t>(buffers.WireSend, values);
-    int32_t* sums = HoldAs<int32_t>(buffers.WireReceived, values);
-    size_t p = 0;
-    tiles.ForEachPacked(
-      mask,
-      [&](size_t pixel)
-      {
-        const unsigned char e = agreed[offset + p];
-        const double scale = e ? fixedpoint::Scale(e, headroom) : 1.0;
-        const double* in = moments + pixel * stride;
-        int32_t* out = codes + p * stride;
-        for (int k = 0; k < stride; ++k)
+    const size_t step = std::min(values, MessageValues<int32_t>(maxBytes));
+    int32_t* codes = HoldAs<int32_t>(buffers.WireSend, step);
+    int32_t* sums = HoldAs<int32_t>(buffers.WireReceived, step);
+    const auto each = [stride](size_t) { return static_cast<size_t>(stride); };
+    PackedWalk encoding(tiles, mask, first, last);
+    PackedWalk decoding(tiles, mask, first, last);
+    const auto encode = [&](size_t length)
+    {
+      encoding.Next(length, each,
+        [&](size_t pixel, size_t i, size_t k0, size_t k1, size_t at)
         {
-          out[k] = e ? fixedpoint::EncodeWithin(in[k], scale, limit) : 0;
-        }
-        ++p;
-      },
-      first, last);
+          const unsigned char e = agreed[offset + i];
+          const double scale = e ? fixedpoint::Scale(e, headroom) : 1.0;
+          const double* in = moments + pixel * stride;
+          for (size_t k = k0; k < k1; ++k)
+          {
+            codes[at + k - k0] = e ? fixedpoint::EncodeWithin(in[k], scale, limit) : 0;
+          }
+        });
+    };
+    encode(step);
     group.Collective("allreduce",
       [&]
       {
         InMessages<int32_t>(values, maxBytes,
           [&](size_t at, vtkIdType length)
           {
-            group.Controller->AllReduce(codes + at, sums + at, length, vtkCommunicator::SUM_OP);
+            if (at > 0)
+            {
+              encode(static_cast<size_t>(length));
+            }
+            group.Controller->AllReduce(codes, sums, length, vtkCommunicator::SUM_OP);
             ++record.MessagesSent;
+            decoding.Next(static_cast<size_t>(length), each,
+              [&](size_t pixel, size_t i, size_t k0, size_t k1, size_t from)
+              {
+                const unsigned char e = agreed[offset + i];
+                const double scale = e ? fixedpoint::Scale(e, headroom) : 1.0;
+                double* out = moments + pixel * stride;
+                for (size_t k = k0; k < k1; ++k)
+                {
+                  out[k] = fixedpoint::Decode(sums[from + k - k0], scale);
+                }
+              });
           });
       });
-    p = 0;
-    tiles.ForEachPacked(
-      mask,
-      [&](size_t pixel)
-      {
-        const unsigned char e = agreed[offset + p];
-        const double scale = e ? fixedpoint::Scale(e, headroom) : 1.0;
-        const int32_t* in = sums + p * stride;
-        double* out = moments + pixel * stride;
-        for (int k = 0; k < stride; ++k)
-        {
-          out[k] = fixedpoint::Decode(in[k], scale);
-        }
-        ++p;
-      },
-      first, last);
     offset += count;
     bytes += static_cast<double>(sizeof(int32_t) * values);
   }
@@ -335,10 +368,13 @@ bool PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   if (stops && group.Parallel)
   {
     // The profiles are summed in the wire's buffers before the moments are: held at the
-    // moments' size first, a first frame pages them in once instead of growing them (a copy
-    // into fresh memory) from the profiles' smaller size.
-    const size_t bytes = LargestChunkPixels(tiles, covered) * stride *
-      (frame.Settings.CompositeInDouble ? sizeof(double) : sizeof(int32_t));
+    // moments' size first (one message's), a first frame pages them in once instead of
+    // growing them (a copy into fresh memory) from the profiles' smaller size.
+    const size_t values = LargestChunkPixels(tiles, covered) * stride;
+    const size_t maxBytes = static_cast<size_t>(frame.Settings.MaxMessageBytes);
+    const size_t bytes = frame.Settings.CompositeInDouble
+      ? std::min(values, wire::MessageValues<double>(maxBytes)) * sizeof(double)
+      : std::min(values, wire::MessageValues<int32_t>(maxBytes)) * sizeof(int32_t);
     Hold(buffers.WireSend, bytes);
     Hold(buffers.WireReceived, bytes);
   }

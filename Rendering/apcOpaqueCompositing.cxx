@@ -6,6 +6,7 @@
 // unresolved marched again (apcOpaquePrediction.h; docs/sampler.md proves the cut is the one
 // complete data gives).
 #include "apcCompositeFrame.h"
+#include "apcCoveredTiles.h"
 #include "apcFrameEngine.h"
 #include "apcOpaqueBins.h"
 #include "apcOpaquePrediction.h"
@@ -139,28 +140,50 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
     return;
   }
   // The wire's buffers are free until the moments' sum (which held them at its size first).
-  uint16_t* send = wire::HoldAs<uint16_t>(buffers.WireSend, count);
-  uint16_t* received = wire::HoldAs<uint16_t>(buffers.WireReceived, count);
-  i = 0;
-  size_t at = 0;
-  tiles.ForEachPacked(mask,
-    [&](size_t p)
-    {
-      const int keep = OpaqueSummary::Bins(combined[i++]);
-      std::copy_n(mine + p * bins, keep, send + at);
-      at += static_cast<size_t>(keep);
-    });
+  // One message at a time, in buffers of one message's size: the same messages as packing
+  // every pixel's bins first.
+  const size_t step = std::min(
+    count, wire::MessageValues<uint16_t>(static_cast<size_t>(frame.Settings.MaxMessageBytes)));
+  uint16_t* send = wire::HoldAs<uint16_t>(buffers.WireSend, step);
+  uint16_t* received = wire::HoldAs<uint16_t>(buffers.WireReceived, step);
+  const auto kept = [&](size_t i) { return static_cast<size_t>(OpaqueSummary::Bins(combined[i])); };
+  PackedWalk packing(tiles, mask);
+  PackedWalk unpacking(tiles, mask);
+  // Every pixel's bins past those kept are zero in the sum; summed may be mine, whose kept
+  // bins are read before they are written.
+  const auto pack = [&](size_t length)
+  {
+    packing.Next(length, kept,
+      [&](size_t p, size_t, size_t k0, size_t k1, size_t at)
+      { std::copy(mine + p * bins + k0, mine + p * bins + k1, send + at); });
+  };
+  pack(step);
   SaturatingProfileSum sum;
-  AllReduceInMessages(group, frame, stage, send, received, count, &sum, record);
+  group.Collective(stage,
+    [&]
+    {
+      InMessages<uint16_t>(count, static_cast<size_t>(frame.Settings.MaxMessageBytes),
+        [&](size_t offset, vtkIdType length)
+        {
+          if (offset > 0)
+          {
+            pack(static_cast<size_t>(length));
+          }
+          group.Controller->AllReduce(send, received, length, &sum);
+          ++record.MessagesSent;
+          unpacking.Next(static_cast<size_t>(length), kept,
+            [&](size_t p, size_t, size_t k0, size_t k1, size_t at)
+            { std::copy(received + at, received + at + (k1 - k0), summed + p * bins + k0); });
+        });
+    });
+  record.BytesSent += static_cast<double>(sizeof(uint16_t) * count);
+  record.ProfileBytes += static_cast<double>(sizeof(uint16_t) * count);
   i = 0;
-  at = 0;
   tiles.ForEachPacked(mask,
     [&](size_t p)
     {
       const int keep = OpaqueSummary::Bins(combined[i++]);
-      std::copy_n(received + at, keep, summed + p * bins);
       std::fill(summed + p * bins + keep, summed + (p + 1) * bins, uint16_t(0));
-      at += static_cast<size_t>(keep);
     });
 }
 

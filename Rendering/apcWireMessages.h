@@ -41,6 +41,13 @@ T* HoldAs(std::vector<unsigned char>& bytes, size_t n)
   return reinterpret_cast<T*>(Hold(bytes, n * sizeof(T)));
 }
 
+// The most values of T one message holds (see InMessages).
+template <class T>
+size_t MessageValues(size_t maxBytes)
+{
+  return std::max<size_t>(1, maxBytes / sizeof(T));
+}
+
 // Calls message(offset, count) over [0, total) values of T, at most maxBytes at a time
 // (Settings.MaxMessageBytes: Open MPI maps a fresh temporary for an allreduce of 32 MB or
 // more on every call, see vtkAPCCompositePass.h). Every process cuts the same total the same
@@ -48,7 +55,7 @@ T* HoldAs(std::vector<unsigned char>& bytes, size_t n)
 template <class T, class Message>
 void InMessages(size_t total, size_t maxBytes, Message message)
 {
-  const size_t step = std::max<size_t>(1, maxBytes / sizeof(T));
+  const size_t step = MessageValues<T>(maxBytes);
   for (size_t offset = 0; offset < total; offset += step)
   {
     message(offset, static_cast<vtkIdType>(std::min(step, total - offset)));

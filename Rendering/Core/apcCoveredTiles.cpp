@@ -58,4 +58,51 @@ std::vector<size_t> TileGrid::Chunks(const std::vector<unsigned char>& mask, siz
   return bounds;
 }
 
+PackedWalk::PackedWalk(
+  const TileGrid& grid, const std::vector<unsigned char>& mask, size_t first, size_t last)
+  : Grid(&grid)
+  , Mask(&mask)
+  , Tile(first)
+  , End(std::min({ last, mask.size(), grid.Tiles() }))
+{
+  this->EnterTile();
+}
+
+void PackedWalk::EnterTile()
+{
+  while (this->Tile < this->End && !(*this->Mask)[this->Tile])
+  {
+    ++this->Tile;
+  }
+  if (this->Tile >= this->End)
+  {
+    return;
+  }
+  const TileGrid& g = *this->Grid;
+  const int ti = static_cast<int>(this->Tile % g.TilesX);
+  const int tj = static_cast<int>(this->Tile / g.TilesX);
+  this->I0 = g.I0 + ti * g.TileSize;
+  this->I1 = std::min(this->I0 + g.TileSize, g.I1);
+  this->J = g.J0 + tj * g.TileSize;
+  this->J1 = std::min(this->J + g.TileSize, g.J1);
+  this->I = this->I0;
+}
+
+void PackedWalk::NextPixel()
+{
+  ++this->Index;
+  this->Value = 0;
+  if (++this->I < this->I1)
+  {
+    return;
+  }
+  this->I = this->I0;
+  if (++this->J < this->J1)
+  {
+    return;
+  }
+  ++this->Tile;
+  this->EnterTile();
+}
+
 } // namespace apc

@@ -7,6 +7,7 @@
 #ifndef apcCoveredTiles_h
 #define apcCoveredTiles_h
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -56,6 +57,8 @@ public:
   std::vector<size_t> Chunks(const std::vector<unsigned char>& mask, size_t maxPixels) const;
 
 private:
+  friend class PackedWalk;
+
   // Calls visit(row start in the image, pixels in the row) for each row of tile t.
   template <class Visit>
   void ForEachRow(size_t t, Visit visit) const;
@@ -66,7 +69,100 @@ private:
   int TilesX = 0, TilesY = 0;
 };
 
+// The packed values of the marked tiles among tiles [first, last), in the order Pack packs
+// them, walked a piece at a time: so that a packed buffer is made, sent and taken back one
+// message at a time in a buffer of one message's size, not the whole chunk's (at 1024^2 the
+// moments' wire is 20 MB a buffer, memory a first frame pages in afresh). Pieces may end
+// inside a pixel; the next piece goes on from there.
+class PackedWalk
+{
+public:
+  PackedWalk(const TileGrid& grid, const std::vector<unsigned char>& mask, size_t first = 0,
+    size_t last = static_cast<size_t>(-1));
+
+  // Walks the next n values (fewer where the walk ends) and returns how many it walked: the
+  // walk's i-th pixel (its index in the image: pixel) holds values(i) values, and visit(pixel,
+  // i, k0, k1, at) is called for its values [k0, k1) in this piece, which sit at [at, at + k1 -
+  // k0) of the piece. Pixels with no values are passed over.
+  template <class Values, class Visit>
+  size_t Next(size_t n, Values values, Visit visit);
+
+  // The same for pixels of components values each, a row's run at a time: visit(start,
+  // count, at) for values [start, start + count) of the full image (pixel * components + k),
+  // which sit at [at, at + count) of the piece. For plain copies, which then run over whole
+  // rows as Pack's do.
+  template <class Visit>
+  size_t NextSpans(size_t n, int components, Visit visit);
+
+  bool Done() const { return this->Tile >= this->End; }
+
+private:
+  void EnterTile(); // the rows of tile Tile, or the next marked tile after it
+  void NextPixel();
+
+  const TileGrid* Grid;
+  const std::vector<unsigned char>* Mask;
+  size_t Tile;
+  size_t End;
+  int I = 0, J = 0;   // the pixel walked (column, row of the image)
+  int I0 = 0, I1 = 0; // the tile's columns
+  int J1 = 0;         // its rows' end
+  size_t Index = 0;   // the pixel's index in the walk
+  size_t Value = 0;   // its values walked already
+};
+
 //------------------------------------------------------------------------------
+template <class Values, class Visit>
+size_t PackedWalk::Next(size_t n, Values values, Visit visit)
+{
+  size_t at = 0;
+  while (at < n && !this->Done())
+  {
+    const size_t count = static_cast<size_t>(values(this->Index));
+    if (this->Value < count)
+    {
+      const size_t k1 = std::min(count, this->Value + (n - at));
+      visit(static_cast<size_t>(this->J) * this->Grid->Width + this->I, this->Index, this->Value,
+        k1, at);
+      at += k1 - this->Value;
+      this->Value = k1;
+      if (k1 < count)
+      {
+        break; // the piece ends inside this pixel
+      }
+    }
+    this->NextPixel();
+  }
+  return at;
+}
+
+template <class Visit>
+size_t PackedWalk::NextSpans(size_t n, int components, Visit visit)
+{
+  const size_t c = static_cast<size_t>(components);
+  size_t at = 0;
+  while (at < n && !this->Done())
+  {
+    const size_t row = static_cast<size_t>(this->I1 - this->I) * c - this->Value;
+    const size_t take = std::min(row, n - at);
+    const size_t pixel = static_cast<size_t>(this->J) * this->Grid->Width + this->I;
+    visit(pixel * c + this->Value, take, at);
+    at += take;
+    const size_t walked = this->Value + take;
+    this->I += static_cast<int>(walked / c);
+    this->Index += walked / c;
+    this->Value = walked % c;
+    if (this->I == this->I1)
+    {
+      // The row's last pixel is whole: NextPixel moves on from it.
+      --this->I;
+      --this->Index;
+      this->NextPixel();
+    }
+  }
+  return at;
+}
+
 template <class Visit>
 void TileGrid::ForEachRow(size_t t, Visit visit) const
 {

@@ -172,3 +172,124 @@ TEST(CoveredTiles, ChunksPartitionTheMarkedTilesInOrder)
   const std::vector<unsigned char> none(kGrid.Tiles(), 0);
   EXPECT_EQ(kGrid.Chunks(none, 64), (std::vector<size_t>{ 0, kGrid.Tiles() }));
 }
+
+// The wire's messages are packed and taken back one at a time (apcMomentCompositing.cxx):
+// walked in pieces of any size, ending inside a pixel or not, the packed values are Pack's,
+// in Pack's order, and pixels holding different numbers of values (none for some) walk as one
+// buffer of all their values one after the other.
+TEST(CoveredTiles, PackedWalkInPiecesIsPackInOrder)
+{
+  std::vector<unsigned char> mask(kGrid.Tiles(), 0);
+  mask[0] = mask[2] = mask[3] = mask[7] = mask[11] = 1;
+  constexpr int kComponents = 5;
+  std::vector<double> full(static_cast<size_t>(kWidth) * kHeight * kComponents);
+  for (size_t v = 0; v < full.size(); ++v)
+  {
+    full[v] = static_cast<double>(v);
+  }
+  const size_t pixels = kGrid.PixelsIn(mask);
+  std::vector<double> whole(pixels * kComponents);
+  kGrid.Pack(mask, full.data(), kComponents, whole.data());
+  // Variable counts: 0..6 values a pixel, by its index in the walk.
+  const auto varying = [](size_t i) { return (i * 7 + 3) % 7; };
+  std::vector<double> wholeVarying;
+  size_t i = 0;
+  kGrid.ForEachPacked(mask,
+    [&](size_t p)
+    {
+      for (size_t k = 0; k < varying(i); ++k)
+      {
+        wholeVarying.push_back(static_cast<double>(p * 16 + k));
+      }
+      ++i;
+    });
+  for (size_t piece :
+    { size_t(1), size_t(2), size_t(3), size_t(5), size_t(7), size_t(64), size_t(100000) })
+  {
+    apc::PackedWalk walk(kGrid, mask);
+    apc::PackedWalk back(kGrid, mask);
+    std::vector<double> packed;
+    std::vector<double> restored(full.size(), -1.0);
+    while (!walk.Done())
+    {
+      std::vector<double> message(piece, -2.0);
+      const size_t n = walk.Next(
+        piece, [](size_t) { return size_t(kComponents); },
+        [&](size_t p, size_t, size_t k0, size_t k1, size_t at)
+        {
+          ASSERT_LE(at + k1 - k0, piece);
+          for (size_t k = k0; k < k1; ++k)
+          {
+            message[at + k - k0] = full[p * kComponents + k];
+          }
+        });
+      ASSERT_GT(n, 0u);
+      packed.insert(packed.end(), message.begin(), message.begin() + n);
+      EXPECT_EQ(back.Next(
+                  n, [](size_t) { return size_t(kComponents); },
+                  [&](size_t p, size_t, size_t k0, size_t k1, size_t at)
+                  {
+                    for (size_t k = k0; k < k1; ++k)
+                    {
+                      restored[p * kComponents + k] = message[at + k - k0];
+                    }
+                  }),
+        n);
+    }
+    EXPECT_EQ(packed, whole) << "piece " << piece;
+    // The same values a row's run at a time (NextSpans).
+    apc::PackedWalk spans(kGrid, mask);
+    std::vector<double> packedSpans;
+    while (!spans.Done())
+    {
+      std::vector<double> message(piece, -2.0);
+      const size_t n = spans.NextSpans(piece, kComponents,
+        [&](size_t start, size_t count, size_t at)
+        {
+          ASSERT_LE(at + count, piece);
+          std::copy_n(full.begin() + static_cast<std::ptrdiff_t>(start), count,
+            message.begin() + static_cast<std::ptrdiff_t>(at));
+        });
+      ASSERT_GT(n, 0u);
+      packedSpans.insert(packedSpans.end(), message.begin(), message.begin() + n);
+    }
+    EXPECT_EQ(packedSpans, whole) << "spans, piece " << piece;
+    for (size_t v = 0; v < full.size(); ++v)
+    {
+      ASSERT_TRUE(restored[v] == -1.0 || restored[v] == full[v]) << v;
+    }
+    EXPECT_EQ(std::count(restored.begin(), restored.end(), -1.0),
+      static_cast<std::ptrdiff_t>(full.size() - whole.size()));
+
+    apc::PackedWalk varyingWalk(kGrid, mask);
+    std::vector<double> packedVarying;
+    size_t expectedIndex = 0;
+    while (!varyingWalk.Done())
+    {
+      std::vector<double> message(piece, -2.0);
+      const size_t n = varyingWalk.Next(piece, varying,
+        [&](size_t p, size_t index, size_t k0, size_t k1, size_t at)
+        {
+          ASSERT_LT(k0, k1) << "a pixel without values is passed over";
+          ASSERT_GE(index, expectedIndex);
+          expectedIndex = index;
+          for (size_t k = k0; k < k1; ++k)
+          {
+            message[at + k - k0] = static_cast<double>(p * 16 + k);
+          }
+        });
+      packedVarying.insert(packedVarying.end(), message.begin(), message.begin() + n);
+    }
+    EXPECT_EQ(packedVarying, wholeVarying) << "piece " << piece;
+  }
+  // A range of tiles walks that chunk's pixels only.
+  apc::PackedWalk part(kGrid, mask, 2, 4);
+  std::vector<double> chunk(kGrid.PixelsIn(mask, 2, 4));
+  kGrid.Pack(mask, full.data(), 1, chunk.data(), 2, 4);
+  std::vector<double> walked;
+  part.Next(
+    1000, [](size_t) { return size_t(1); },
+    [&](size_t p, size_t, size_t, size_t, size_t) { walked.push_back(full[p]); });
+  EXPECT_EQ(walked, chunk);
+  EXPECT_TRUE(part.Done());
+}

@@ -44,12 +44,14 @@ using Frame = apctest::PassFrame;
 // The first frame of a fresh pass over each rank's piece, with the stop on or off, and the
 // probe's step (0: no probe).
 Frame RenderFirst(vtkMPIController* controller, const apctest::Scene& scene,
-  vtkUnstructuredGrid* piece, const double bounds[6], bool stop, int probeStep = 8)
+  vtkUnstructuredGrid* piece, const double bounds[6], bool stop, int probeStep = 8,
+  vtkIdType maxMessageBytes = 0)
 {
   apctest::PassFrameOptions options;
   options.Size = 128; // 64 tiles, for one thread (kTilesPerThreadWithoutStop)
   options.Stop = stop;
   options.ProbeStep = probeStep;
+  options.MaxMessageBytes = maxMessageBytes;
   return apctest::RenderPassFrames(controller, scene, piece, bounds, { scene.Camera }, options)[0];
 }
 }
@@ -105,6 +107,25 @@ int main(int argc, char* argv[])
     }
     std::printf("rank %d: opaque first frame, tiles without the stop %g, pass-1 samples %g of %g\n",
       rank, on.Timings.OpaqueUnstoppedTiles, all[0], all[1]);
+
+    // The profiles' bins, the moments' codes and the colour sums in messages of 70 bytes (35
+    // bins: pixels' bins and codes cut between messages), each packed and taken back in a
+    // message-sized buffer: the same cut as one message each (the profiles and moments are
+    // exact integer sums), so the same samples in pass 2; the float colour sums may be added
+    // in another order for another message size, which moves the image by rounding alone.
+    const Frame split = RenderFirst(controller, scene, piece, bounds, true, 8, 70);
+    Check(split.Timings.Pass2Samples == on.Timings.Pass2Samples &&
+        split.Timings.Pass1Samples == on.Timings.Pass1Samples,
+      rank, "opaque first frame in small messages: the same cut");
+    if (rank == 0)
+    {
+      const double diff = apctest::MaxAbsDifference(split.RGBA, on.RGBA);
+      std::printf(
+        "opaque first frame in 70-byte messages: max |difference| %g, pass-2 samples %g\n", diff,
+        split.Timings.Pass2Samples);
+      Check(!split.RGBA.empty() && diff <= 1e-6, rank,
+        "opaque first frame in small messages: the image of one message each");
+    }
   }
   if (ranks > 1)
   {

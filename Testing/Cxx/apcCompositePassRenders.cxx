@@ -53,6 +53,10 @@ std::vector<PassFrame> RenderPassFrames(vtkMPIController* controller, const Scen
   {
     pass->SetOpaqueProbeStep(options.ProbeStep);
   }
+  if (options.MaxMessageBytes > 0)
+  {
+    pass->SetMaxMessageBytes(options.MaxMessageBytes);
+  }
   vtkNew<vtkRenderWindow> window;
   vtkNew<vtkRenderer> renderer;
   SetUpCompositeWindow(window, renderer, options.Size, pass, controller);

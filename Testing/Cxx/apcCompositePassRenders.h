@@ -41,9 +41,10 @@ struct PassFrame
 // How RenderPassFrames sets up its fresh pass and mapper (one thread per rank).
 struct PassFrameOptions
 {
-  int Size = 96;      // the window's width and height
-  bool Stop = true;   // the mapper's Stop Where Opaque
-  int ProbeStep = -1; // the pass's OpaqueProbeStep; -1 leaves the pass's default
+  int Size = 96;                 // the window's width and height
+  bool Stop = true;              // the mapper's Stop Where Opaque
+  int ProbeStep = -1;            // the pass's OpaqueProbeStep; -1 leaves the pass's default
+  vtkIdType MaxMessageBytes = 0; // the pass's MaxMessageBytes; 0 leaves the pass's default
 };
 
 // Renders each of views in turn through one fresh pass over each rank's piece (the first frame
