@@ -1,10 +1,9 @@
 #include "apcLaneMoments.h"
 
+#include "apcLaneGather.h"
 #include "apcOpaqueBins.h"
 
 #include <immintrin.h>
-
-#include <limits>
 
 namespace apc
 {
@@ -26,13 +25,6 @@ __attribute__((target("avx2"), always_inline)) inline void Transpose(
   c[1] = _mm256_permute2f128_pd(t1, t3, 0x20);
   c[2] = _mm256_permute2f128_pd(t0, t2, 0x31);
   c[3] = _mm256_permute2f128_pd(t1, t3, 0x31);
-}
-
-// Lanes i0 .. i3 of v.
-__attribute__((target("avx2"), always_inline)) inline __m256d Four(
-  const double* v, int i0, int i1, int i2, int i3)
-{
-  return _mm256_setr_pd(v[i0], v[i1], v[i2], v[i3]);
 }
 
 // Only AVX2, no FMA: each product and sum must round as Moments::RunAdd's do. Weighted: each
@@ -168,27 +160,17 @@ __attribute__((target("avx2"))) void GatherWeightedLaneRays(const TileRays& pack
   const ClippedRays& clipped, const ClippedWeights& ends, const uint16_t* list, int n,
   LaneRays& rays, LaneWeights& weights)
 {
-  // Lanes n .. 3 read ray list[0] (their values are not used), as in GatherLaneRays.
-  const int i0 = list[0];
-  const int i1 = n > 1 ? list[1] : i0;
-  const int i2 = n > 2 ? list[2] : i0;
-  const int i3 = n > 3 ? list[3] : i0;
-  _mm256_store_pd(rays.D[0], Four(packed.Dx, i0, i1, i2, i3));
-  _mm256_store_pd(rays.D[1], Four(packed.Dy, i0, i1, i2, i3));
-  _mm256_store_pd(rays.D[2], Four(packed.Dz, i0, i1, i2, i3));
-  _mm256_store_pd(rays.Offset, Four(ends.LaneOffset, i0, i1, i2, i3));
-  const __m256d first = Four(ends.First, i0, i1, i2, i3);
+  const gather::LaneIndices lanes = gather::Indices(list, n);
+  gather::Directions(packed, lanes, rays);
+  _mm256_store_pd(rays.Offset, gather::Four(ends.LaneOffset, lanes));
+  const __m256d first = gather::Four(ends.First, lanes);
   _mm256_store_pd(rays.K, first);
-  const __m256d used =
-    _mm256_castsi256_pd(_mm256_cmpgt_epi64(_mm256_set1_epi64x(n), _mm256_setr_epi64x(0, 1, 2, 3)));
-  _mm256_store_pd(rays.Tout,
-    _mm256_blendv_pd(_mm256_set1_pd(-std::numeric_limits<double>::infinity()),
-      Four(clipped.Tout, i0, i1, i2, i3), used));
+  gather::Ends(clipped, lanes, n, rays);
   _mm256_store_pd(weights.First, first);
-  _mm256_store_pd(weights.Last, Four(ends.Last, i0, i1, i2, i3));
+  _mm256_store_pd(weights.Last, gather::Four(ends.Last, lanes));
   // static_cast<float> of each double: the same rounding (to nearest) as _mm256_cvtpd_ps.
-  _mm_store_ps(weights.FirstWeight, _mm256_cvtpd_ps(Four(ends.FirstWeight, i0, i1, i2, i3)));
-  _mm_store_ps(weights.LastWeight, _mm256_cvtpd_ps(Four(ends.LastWeight, i0, i1, i2, i3)));
+  _mm_store_ps(weights.FirstWeight, _mm256_cvtpd_ps(gather::Four(ends.FirstWeight, lanes)));
+  _mm_store_ps(weights.LastWeight, _mm256_cvtpd_ps(gather::Four(ends.LastWeight, lanes)));
 }
 
 __attribute__((target("avx2"))) void LaneMomentsAvx2(const LaneSteps& steps, int taken,

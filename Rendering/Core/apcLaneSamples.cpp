@@ -1,6 +1,7 @@
 #include "apcLaneSamples.h"
 
 #include "apcCellInterpolation.h"
+#include "apcLaneGather.h"
 
 #include <immintrin.h>
 
@@ -219,33 +220,16 @@ __attribute__((target("avx2"), always_inline)) inline void Broadcast(double valu
   _mm256_store_pd(four, _mm256_set1_pd(value));
 }
 
-__attribute__((target("avx2"), always_inline)) inline __m256d Four(
-  const double* v, int i0, int i1, int i2, int i3)
-{
-  return _mm256_setr_pd(v[i0], v[i1], v[i2], v[i3]);
-}
-
 } // namespace
 
 __attribute__((target("avx2"))) void GatherLaneRays(
   const TileRays& packed, const ClippedRays& clipped, const uint16_t* list, int n, LaneRays& rays)
 {
-  // Lanes n .. 3 read ray list[0] (their values are not used). Four loads per field put
-  // together in registers: AVX2's gathers took longer.
-  const int i0 = list[0];
-  const int i1 = n > 1 ? list[1] : i0;
-  const int i2 = n > 2 ? list[2] : i0;
-  const int i3 = n > 3 ? list[3] : i0;
-  _mm256_store_pd(rays.D[0], Four(packed.Dx, i0, i1, i2, i3));
-  _mm256_store_pd(rays.D[1], Four(packed.Dy, i0, i1, i2, i3));
-  _mm256_store_pd(rays.D[2], Four(packed.Dz, i0, i1, i2, i3));
-  _mm256_store_pd(rays.Offset, Four(packed.Offset, i0, i1, i2, i3));
-  _mm256_store_pd(rays.K, Four(clipped.Lattice, i0, i1, i2, i3));
-  const __m256d used =
-    _mm256_castsi256_pd(_mm256_cmpgt_epi64(_mm256_set1_epi64x(n), _mm256_setr_epi64x(0, 1, 2, 3)));
-  _mm256_store_pd(rays.Tout,
-    _mm256_blendv_pd(_mm256_set1_pd(-std::numeric_limits<double>::infinity()),
-      Four(clipped.Tout, i0, i1, i2, i3), used));
+  const gather::LaneIndices lanes = gather::Indices(list, n);
+  gather::Directions(packed, lanes, rays);
+  _mm256_store_pd(rays.Offset, gather::Four(packed.Offset, lanes));
+  _mm256_store_pd(rays.K, gather::Four(clipped.Lattice, lanes));
+  gather::Ends(clipped, lanes, n, rays);
 }
 
 __attribute__((target("avx2"))) int LaneSamplesAvx2(
