@@ -572,6 +572,22 @@ TEST(BoundaryWeights, RaysEndingAtAnInnerFaceAreContinuousInTheirEnd)
   EXPECT_GT(inner, 500); // ends in cells with no boundary face
 }
 
+// One pair's samples: each weight times f at its point.
+template <class F>
+double PairIntegral(const EndWeights& w, const Lattice& lattice, double offset, F f)
+{
+  if (w.Mid)
+  {
+    return w.MidWeight * f(w.MidT);
+  }
+  double sum = w.End ? w.EndWeight * f(w.EndT) : 0.0;
+  for (int64_t k = w.First; k <= w.Last; ++k)
+  {
+    sum += w.Of(k) * f(lattice.At(k, offset));
+  }
+  return sum;
+}
+
 // The weighted integral of f along a run of pairs [t0, t1), ..., entered and left through the
 // boundary, plain between: each sample's weight times f at its point.
 template <class F>
@@ -585,17 +601,8 @@ double RunIntegral(const Lattice& lattice, double offset, const std::vector<doub
     {
       continue;
     }
-    const EndWeights w = EndWeightsAt(lattice, t[c], t[c + 1], offset, c == 0, c == cells - 1);
-    if (w.Mid)
-    {
-      sum += w.MidWeight * f(w.MidT);
-      continue;
-    }
-    for (int64_t k = w.First; k <= w.Last; ++k)
-    {
-      sum += w.Of(k) * f(lattice.At(k, offset));
-    }
-    sum += w.End ? w.EndWeight * f(w.EndT) : 0.0;
+    sum += PairIntegral(
+      EndWeightsAt(lattice, t[c], t[c + 1], offset, c == 0, c == cells - 1), lattice, offset, f);
   }
   return sum;
 }
@@ -675,16 +682,7 @@ RunValue RayRun(const Lattice& lattice, double offset, const std::vector<double>
     const EndWeights w = apc::walk::RayPairWeights(lattice, t[c], end, offset, c == 0,
       exitFace && end == t[c + 1], lattice.First(t[c], offset), rayEnd, cellExit, plain);
     run.Weights += Sum(w);
-    if (w.Mid)
-    {
-      run.Integral += w.MidWeight * f(w.MidT);
-      continue;
-    }
-    for (int64_t k = w.First; k <= w.Last; ++k)
-    {
-      run.Integral += w.Of(k) * f(lattice.At(k, offset));
-    }
-    run.Integral += w.End ? w.EndWeight * f(w.EndT) : 0.0;
+    run.Integral += PairIntegral(w, lattice, offset, f);
   }
   return run;
 }
