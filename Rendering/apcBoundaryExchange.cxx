@@ -4,6 +4,7 @@
 #include "apcBoundaryFaces.h"
 #include "apcFrameEngine.h"
 #include "apcStageAgreement.h"
+#include "apcTestFailures.h"
 
 #include "vtkCommunicator.h"
 #include "vtkMPI.h"
@@ -14,8 +15,6 @@
 #include <climits>
 #include <ctime>
 #include <exception>
-#include <new>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -24,8 +23,6 @@ namespace apc
 namespace
 {
 BoundaryExchangeRecord LastExchange;
-int ExchangeFailuresForTesting = 0;
-int SetUpFailuresForTesting = 0;
 
 // Why an exchange stops, agreed by the largest code over the processes.
 enum Status : int
@@ -96,11 +93,7 @@ int ExchangeVolume(const ProcessGroup& group, CellMesh* mesh)
     {
       counts->assign(static_cast<size_t>(processes), 0);
     }
-    if (ExchangeFailuresForTesting > 0)
-    {
-      --ExchangeFailuresForTesting;
-      throw std::runtime_error("a failure injected for testing");
-    }
+    ThrowIfFailingForTesting(FailurePoint::BoundaryExchange);
     const auto start = std::chrono::steady_clock::now();
     const double cpu = ProcessCPUSeconds();
     if (mesh)
@@ -243,11 +236,7 @@ bool ShareBoundaryFaces(
     CatchFailure(
       [&]
       {
-        if (SetUpFailuresForTesting > 0)
-        {
-          --SetUpFailuresForTesting;
-          throw std::bad_alloc();
-        }
+        ThrowIfFailingForTesting(FailurePoint::BoundarySetUp);
         need.assign(static_cast<size_t>(frame.Volumes), 0);
         for (size_t v = 0; v < frame.Engines.size() && v < need.size(); ++v)
         {
@@ -308,16 +297,6 @@ bool ShareBoundaryFaces(
 const BoundaryExchangeRecord& GetLastBoundaryExchange()
 {
   return LastExchange;
-}
-
-void FailBoundaryExchangesForTesting(int count)
-{
-  ExchangeFailuresForTesting = count;
-}
-
-void FailBoundarySetUpsForTesting(int count)
-{
-  SetUpFailuresForTesting = count;
 }
 
 } // namespace apc

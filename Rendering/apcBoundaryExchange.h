@@ -43,12 +43,6 @@ APCRENDERING_EXPORT bool ShareBoundaryFaces(
 
 APCRENDERING_EXPORT const BoundaryExchangeRecord& GetLastBoundaryExchange();
 
-// Testing: the next count exchanges on this process fail before they send anything.
-APCRENDERING_EXPORT void FailBoundaryExchangesForTesting(int count);
-// Testing: the next count calls of ShareBoundaryFaces on this process fail (std::bad_alloc)
-// while they set up, before their first collective.
-APCRENDERING_EXPORT void FailBoundarySetUpsForTesting(int count);
-
 } // namespace apc
 
 #endif

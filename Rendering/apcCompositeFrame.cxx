@@ -2,6 +2,7 @@
 #include "apcCompositeFrame.h"
 
 #include "apcFrameEngine.h"
+#include "apcHugePages.h"
 #include "apcStageAgreement.h"
 
 #include "vtkAPCCompositePass.h"
@@ -145,7 +146,8 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
 }
 
 bool PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
-  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth, FrameRecord& record)
+  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth, FrameRecord& record,
+  FrameResult& result)
 {
   ImageSetup image;
   image.Width = frame.Width;
@@ -165,6 +167,13 @@ bool PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
   return RunAgreedStage(untimed, "setup", "the volumes' set-up", record,
     [&]
     {
+      const size_t pixels = frame.RectPixels();
+      ReserveInHugePages(result.RGBA, 4 * pixels);
+      if (frame.KeepFloatImages && group.IsDisplay())
+      {
+        result.Moments.reserve(pixels * (frame.Moments.Moments + 1));
+        result.ColourSums.reserve(pixels * 4);
+      }
       for (size_t v = 0; v < volumes.size(); ++v)
       {
         frame.Engines[v]->Prepare(frame.Renderer, volumes[v]->GetProperty(), frame.Bounds,

@@ -223,9 +223,12 @@ std::vector<float> ShareDepth(const ProcessGroup& group, const CompositeFrame& f
 // Step 3: every engine of the frame (this process's volumes, in order) prepares its rays over
 // the agreed image, stopping at depth (ShareDepth's). A sample distance capped to the limit of
 // samples per ray is the same on every process: the display process says it, on the mapper.
+// The same agreed stage reserves result's images for the rectangle (the float images only on
+// the display process, if kept), so that no mode allocates them between two collectives.
 // False if some process's set-up failed (agreed: record.Failed and record.Problem set).
 bool PrepareEngines(const ProcessGroup& group, const CompositeFrame& frame,
-  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth, FrameRecord& record);
+  const std::vector<vtkVolume*>& volumes, const std::vector<float>& depth, FrameRecord& record,
+  FrameResult& result);
 
 // The modes: each runs the frame's stages and collectives on every process and fills
 // result on the display process.
@@ -258,8 +261,10 @@ ProbeResult ProbeOpaqueCuts(const ProcessGroup& group, const CompositeFrame& fra
 // tiles of every process, then each volume's own moments (own[e], or moments with one volume)
 // cut where the sum is opaque and summed into moments. bounded: pass 1 took buffers.Bound,
 // whose unresolved pixels are marched again first (their tiles join covered). The agreed cut
-// goes to buffers.Cuts. Every process makes the same calls.
-void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+// goes to buffers.Cuts. Every process makes the same calls. False if some process's own work
+// in it (the tiles marched again, the cut applied) failed: agreed, record.Failed set, and every
+// process leaves the band before its next collective.
+bool CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
   const TileGrid& tiles, std::vector<unsigned char>& covered, std::vector<std::vector<double>>& own,
   double* moments, size_t pixels, bool bounded, MomentBuffers& buffers, FrameRecord& record);
 void RunSegmentCompositing(

@@ -2,6 +2,7 @@
 #include "apcFrameEngine.h"
 
 #include "apcDefaultSpacing.h"
+#include "apcTestFailures.h"
 
 #include "vtkAbstractMapper.h"
 #include "vtkCamera.h"
@@ -27,7 +28,6 @@
 #include <cstring>
 #include <limits>
 #include <memory>
-#include <new>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -418,28 +418,6 @@ std::string FrameEngine::TakeSpacingNote()
   return std::exchange(this->SpacingNote, std::string());
 }
 
-namespace
-{
-// FrameEngine::FailPassesForTesting: calls of pass 1 and pass 2 left to fail.
-int PassOneFailuresForTesting = 0;
-int PassTwoFailuresForTesting = 0;
-
-void FailIfAsked(int& failures)
-{
-  if (failures > 0)
-  {
-    --failures;
-    throw std::bad_alloc();
-  }
-}
-}
-
-void FrameEngine::FailPassesForTesting(int passOne, int passTwo)
-{
-  PassOneFailuresForTesting = passOne;
-  PassTwoFailuresForTesting = passTwo;
-}
-
 //------------------------------------------------------------------------------
 void FrameEngine::RenderMoments(
   const MomentParameters& parameters, double* moments, const RowBand& band, const uint8_t* bound)
@@ -448,7 +426,7 @@ void FrameEngine::RenderMoments(
   {
     return;
   }
-  FailIfAsked(PassOneFailuresForTesting);
+  ThrowIfFailingForTesting(FailurePoint::PassOne);
   // Hybrid's pass 2 needs this volume's own moments next to the global ones.
   const bool hybrid = parameters.Resolve == ResolveMode::Hybrid;
   this->Marcher.SetOpaqueBound(bound);
@@ -517,11 +495,6 @@ void FrameEngine::RedoOpaqueTiles(const MomentParameters& parameters, const uint
   this->Clock.Lap("moments");
 }
 
-namespace
-{
-int ProbeFailuresForTesting = 0; // FrameEngine::FailProbesForTesting
-}
-
 int64_t FrameEngine::ProbeOpaqueProfile(
   const MomentParameters& parameters, int step, int offset, uint16_t* profile)
 {
@@ -544,11 +517,7 @@ int64_t FrameEngine::ProbeOpaqueProfile(
         fine < ends.size() ? ends[fine] : std::numeric_limits<float>::infinity();
     }
   }
-  if (ProbeFailuresForTesting > 0)
-  {
-    --ProbeFailuresForTesting;
-    throw std::bad_alloc();
-  }
+  ThrowIfFailingForTesting(FailurePoint::Probe);
   // A marcher of its own (the frame's keeps its view and cache for the frame's passes), freed
   // on return, also when the probe throws.
   const std::unique_ptr<VolumeRayMarcher> marcher(new VolumeRayMarcher);
@@ -575,11 +544,6 @@ int64_t FrameEngine::ProbeOpaqueProfile(
   return samples;
 }
 
-void FrameEngine::FailProbesForTesting(int count)
-{
-  ProbeFailuresForTesting = count;
-}
-
 //------------------------------------------------------------------------------
 void FrameEngine::RenderColour(const MomentParameters& parameters, const double* moments,
   double* colourSums, const RowBand& band)
@@ -588,7 +552,7 @@ void FrameEngine::RenderColour(const MomentParameters& parameters, const double*
   {
     return;
   }
-  FailIfAsked(PassTwoFailuresForTesting);
+  ThrowIfFailingForTesting(FailurePoint::PassTwo);
   DispatchMoments(parameters.Moments,
     [&](auto n)
     {

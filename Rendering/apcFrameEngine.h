@@ -212,13 +212,6 @@ public:
   /// taken (0 if the volume does not stop where opaque or is not prepared).
   int64_t ProbeOpaqueProfile(
     const MomentParameters& parameters, int step, int offset, uint16_t* profile);
-  /// Tests only: the next count calls of ProbeOpaqueProfile in this process throw
-  /// std::bad_alloc (as a probe whose memory runs out), before they march anything.
-  static void FailProbesForTesting(int count);
-  /// Tests only: the next passOne calls of RenderMoments and the next passTwo calls of
-  /// RenderColour in this process throw std::bad_alloc (their memory ran out) before they
-  /// march anything.
-  static void FailPassesForTesting(int passOne, int passTwo);
   /// Samples marched again by the cuts since Prepare (tiles the sample cache did not hold).
   int64_t GetCutSampleCount() const { return this->CutSamples; }
   /// Marcher tiles pass 1 kept as marched without the stop since Prepare (alone only).

@@ -17,6 +17,7 @@
 #include "apcOpaqueBins.h"
 #include "apcResolve.h"
 #include "apcStageAgreement.h"
+#include "apcTestFailures.h"
 #include "apcWireMessages.h"
 
 #include "vtkCommunicator.h"
@@ -218,18 +219,6 @@ double SumMomentsInFixedPoint(const ProcessGroup& group, const TileGrid& tiles,
   return bytes;
 }
 
-// The most pixels of the marked tiles one chunk of SumTiles or SumMomentsInFixedPoint holds.
-size_t LargestChunkPixels(const TileGrid& tiles, const std::vector<unsigned char>& mask)
-{
-  const std::vector<size_t> chunks = tiles.Chunks(mask, kChunkPixels);
-  size_t largest = 0;
-  for (size_t c = 0; c + 1 < chunks.size(); ++c)
-  {
-    largest = std::max(largest, tiles.PixelsIn(mask, chunks[c], chunks[c + 1]));
-  }
-  return largest;
-}
-
 // The union of every process's covered tiles, on every process.
 std::vector<unsigned char> AgreeOnTiles(const ProcessGroup& group, const TileGrid& tiles,
   const double* moments, int stride, FrameRecord& record)
@@ -324,29 +313,80 @@ void SumImage(const ProcessGroup& group, const CompositeFrame& frame, const Tile
         group, tiles, covered, image, components, everywhere, maxBytes, buffers, record);
 }
 
+// Grows every buffer of buffers that a band of pixels may use after its pass 1 (its sums over
+// the processes, the opaque cut) to the most that band can ask of it, so that all of them are
+// allocated inside pass 1's failure agreement and none between two later collectives (the
+// later Holds then find them large enough). stopping: the band may stop where opaque.
+void HoldBandBuffers(const ProcessGroup& group, const CompositeFrame& frame, size_t pixels,
+  bool stopping, MomentBuffers& buffers)
+{
+  constexpr size_t bins = OpaqueBins::kBins;
+  const size_t stride = static_cast<size_t>(frame.Moments.Moments + 1);
+  Hold(buffers.Moments, pixels * stride);
+  if (stopping && frame.Engines.size() > 1)
+  {
+    Hold(buffers.ProfileLocal, pixels * bins);
+  }
+  if (!group.Parallel)
+  {
+    return;
+  }
+  // The wire's buffers: one message of the largest sum (SumTiles, SumMomentsInFixedPoint,
+  // SumProfiles), each at most a message of MaxMessageBytes (or one value).
+  const bool inDouble = frame.Settings.CompositeInDouble;
+  size_t perPixel = std::max(stride, size_t(4)) * (inDouble ? sizeof(double) : sizeof(float));
+  if (stopping)
+  {
+    perPixel = std::max(perPixel, bins * sizeof(uint16_t));
+  }
+  const size_t message =
+    std::max(static_cast<size_t>(frame.Settings.MaxMessageBytes), sizeof(double));
+  Hold(buffers.WireSend, std::min(pixels * perPixel, message));
+  Hold(buffers.WireReceived, std::min(pixels * perPixel, message));
+  if (!inDouble)
+  {
+    Hold(buffers.Exponents, pixels);
+    Hold(buffers.Agreed, pixels);
+  }
+  if (stopping)
+  {
+    Hold(buffers.SummarySend, pixels);
+    Hold(buffers.SummarySum, pixels);
+    Hold(buffers.Unresolved, pixels);
+    if (frame.Engines.size() > 1)
+    {
+      Hold(buffers.Profile, pixels * bins);
+    }
+  }
+}
+
 // A band's pass 1 into moments (pixels * stride values, zeroed here), the tiles' agreement
 // (covered), the opaque cut if stops, and the moments' allreduce; ownCovered: the pixels this
 // process's volumes cover. False if some process's pass 1 failed (agreed, record.Failed set):
-// every process leaves the band before its next collective.
+// every process leaves the band before its next collective. earlier: this process's failure
+// in the band's work before it (its buffers), agreed here; pass 1 is then not marched.
 bool PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
   const TileGrid& tiles, bool stops, size_t pixels, double* moments,
   std::vector<unsigned char>& covered, vtkIdType& ownCovered, MomentBuffers& buffers,
-  FrameRecord& record)
+  FrameRecord& record, const std::string& earlier)
 {
   const int stride = frame.Moments.Moments + 1;
   bool bounded = false;
   std::vector<std::vector<double>> own;
   // This process's work up to the tiles' allreduce (the prediction, pass 1 and its memory)
   // runs inside the frame's failure agreement.
-  const std::string failure = CatchFailure(
-    [&]
-    {
-      bounded = stops && PredictOpaqueBand(frame, band, pixels, buffers);
-      std::fill_n(moments, pixels * stride, 0.0);
-      // The cut needs each volume's own moments: several volumes keep them apart until then.
-      own.resize(stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
-      RenderPassOne(frame, band, pixels, moments, own, bounded ? buffers.Bound.data() : nullptr);
-    });
+  const std::string failure = !earlier.empty()
+    ? earlier
+    : CatchFailure(
+        [&]
+        {
+          bounded = stops && PredictOpaqueBand(frame, band, pixels, buffers);
+          std::fill_n(moments, pixels * stride, 0.0);
+          // The cut needs each volume's own moments: several volumes keep them apart until then.
+          own.resize(stops && frame.Engines.size() > 1 ? frame.Engines.size() : 0);
+          RenderPassOne(
+            frame, band, pixels, moments, own, bounded ? buffers.Bound.data() : nullptr);
+        });
   record.Clock.Lap("pass1");
   // The agreement is where a process now waits for the slowest one's pass 1: in the tiles'
   // stage, as the mask's allreduce after it was.
@@ -365,23 +405,12 @@ bool PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
   // the moments' allreduce after it is nearly all transfer.
   covered = AgreeOnTiles(group, tiles, moments, stride, record);
   record.Clock.Lap("tiles");
-  if (stops && group.Parallel)
+  if (stops &&
+    !CutWhereOpaque(
+      group, frame, band, tiles, covered, own, moments, pixels, bounded, buffers, record))
   {
-    // The profiles are summed in the wire's buffers before the moments are: held at the
-    // moments' size first (one message's), a first frame pages them in once instead of
-    // growing them (a copy into fresh memory) from the profiles' smaller size.
-    const size_t values = LargestChunkPixels(tiles, covered) * stride;
-    const size_t maxBytes = static_cast<size_t>(frame.Settings.MaxMessageBytes);
-    const size_t bytes = frame.Settings.CompositeInDouble
-      ? std::min(values, wire::MessageValues<double>(maxBytes)) * sizeof(double)
-      : std::min(values, wire::MessageValues<int32_t>(maxBytes)) * sizeof(int32_t);
-    Hold(buffers.WireSend, bytes);
-    Hold(buffers.WireReceived, bytes);
-  }
-  if (stops)
-  {
-    CutWhereOpaque(
-      group, frame, band, tiles, covered, own, moments, pixels, bounded, buffers, record);
+    record.Clock.Lap("cut");
+    return false;
   }
   if (group.Parallel && tiles.Tiles() > 0 && !frame.Settings.CompositeInDouble)
   {
@@ -401,15 +430,17 @@ bool PassOne(const ProcessGroup& group, const CompositeFrame& frame, const RowBa
 class ProfileInColourSums
 {
 public:
-  ProfileInColourSums(FrameEngine* engine, std::vector<unsigned char>& colourSums, size_t bytes)
-    : Engine(engine)
+  ProfileInColourSums() = default;
+  ~ProfileInColourSums() { this->Withdraw(); }
+  // Lends engine (if any) the first bytes of colourSums (held, so it may throw).
+  void Lend(FrameEngine* engine, std::vector<unsigned char>& colourSums, size_t bytes)
   {
     if (engine)
     {
       engine->LendOpaqueProfileMemory(Hold(colourSums, bytes), bytes);
+      this->Engine = engine;
     }
   }
-  ~ProfileInColourSums() { this->Withdraw(); }
   ProfileInColourSums(const ProfileInColourSums&) = delete;
   ProfileInColourSums& operator=(const ProfileInColourSums&) = delete;
   void Withdraw()
@@ -422,7 +453,7 @@ public:
   }
 
 private:
-  FrameEngine* Engine;
+  FrameEngine* Engine = nullptr;
 };
 
 // One band of rows of the frame (all of it unless the frame is large): pass 1, the tiles'
@@ -444,7 +475,6 @@ bool CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   // where others have it on) still joins the profile's allreduce.
   const bool stopping = frame.StopsWhereOpaque && parameters.Resolve != ResolveMode::Hybrid;
   bool stops = stopping && !tryWithoutStop;
-  double* moments = Hold(buffers.Moments, pixels * stride);
   std::vector<unsigned char> covered;
   vtkIdType ownCovered = 0;
   // Without the stop, a pixel whose global absorbance reaches the threshold (less a margin
@@ -455,8 +485,18 @@ bool CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   // 1024^2, the profile's 16 bins of 2 bytes as the colour sums' 4 doubles).
   const size_t sharedBytes =
     pixels * std::max(4 * sizeof(double), OpaqueBins::kBins * sizeof(uint16_t));
-  ProfileInColourSums lent(stopping && frame.Engines.size() == 1 ? frame.Engines.front() : nullptr,
-    buffers.ColourSums, sharedBytes);
+  ProfileInColourSums lent;
+  double* moments = nullptr;
+  // The band's buffers, agreed on with its first pass 1.
+  std::string failure = CatchFailure(
+    [&]
+    {
+      ThrowIfFailingForTesting(FailurePoint::BandBuffers);
+      HoldBandBuffers(group, frame, pixels, stopping, buffers);
+      moments = buffers.Moments.data();
+      lent.Lend(stopping && frame.Engines.size() == 1 ? frame.Engines.front() : nullptr,
+        buffers.ColourSums, sharedBytes);
+    });
   for (;;)
   {
     for (FrameEngine* engine : frame.Engines)
@@ -465,8 +505,8 @@ bool CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
       // One process with one volume: its own absorbance is the global one.
       engine->SetOpaqueStopAlone(!group.Parallel && frame.Engines.size() == 1);
     }
-    if (!PassOne(
-          group, frame, band, tiles, stops, pixels, moments, covered, ownCovered, buffers, record))
+    if (!PassOne(group, frame, band, tiles, stops, pixels, moments, covered, ownCovered, buffers,
+          record, failure))
     {
       return false;
     }
@@ -490,7 +530,7 @@ bool CompositeBand(const ProcessGroup& group, const CompositeFrame& frame, const
   }
 
   double* colourSums = nullptr;
-  const std::string failure = CatchFailure(
+  failure = CatchFailure(
     [&]
     {
       colourSums = HoldAs<double>(buffers.ColourSums, pixels * 4);
@@ -547,6 +587,7 @@ void RunMomentCompositing(const ProcessGroup& group, const CompositeFrame& frame
   record.Pixels = 0;
   if (group.IsDisplay())
   {
+    // Reserved in the set-up's agreement (PrepareEngines): no allocation here.
     const size_t pixels = frame.RectPixels();
     result.RGBA.assign(4 * pixels, 0.0f);
     if (frame.KeepFloatImages)

@@ -12,6 +12,7 @@
 #include "apcOpaquePrediction.h"
 #include "apcOpaqueSummary.h"
 #include "apcStageAgreement.h"
+#include "apcTestFailures.h"
 #include "apcWireMessages.h"
 
 #include "vtkCommunicator.h"
@@ -191,49 +192,65 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
 // have an unknown cut. Every process finds the same ones (the profile is summed), marches
 // their marcher tiles again without the bound and sums those tiles' profiles again, so the
 // cut is the one without a prediction. The tiles join covered (they may hold samples now).
-void ResolvePredictedCut(const ProcessGroup& group, const CompositeFrame& frame,
+// False if some process's march failed (agreed, record.Failed set): every process leaves the
+// band before the profiles' second sum.
+bool ResolvePredictedCut(const ProcessGroup& group, const CompositeFrame& frame,
   const RowBand& band, const TileGrid& tiles, std::vector<unsigned char>& covered,
   std::vector<std::vector<double>>& own, double* moments, size_t pixels, uint16_t* summed,
   MomentBuffers& buffers, FrameRecord& record)
 {
-  uint8_t* unresolved = Hold(buffers.Unresolved, pixels);
+  uint8_t* unresolved = Hold(buffers.Unresolved, pixels); // held before pass 1: no allocation
   const size_t open = MarkUnresolved(buffers.Bound.data(), summed, pixels, unresolved);
   record.OpaquePredictedUnresolved += static_cast<vtkIdType>(open);
   if (open == 0)
   {
-    return;
+    return true; // the same on every process: the profile is summed
   }
-  for (size_t e = 0; e < frame.Engines.size(); ++e)
-  {
-    if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+  // The tiles marched again (memory for their samples) and the local sum of their profiles run
+  // inside the frame's failure agreement, before the profiles' second sum.
+  std::vector<unsigned char> mask;
+  const uint16_t* local = nullptr;
+  const std::string failure = CatchFailure(
+    [&]
     {
-      frame.Engines[e]->RedoOpaqueTiles(
-        frame.Moments, unresolved, own.empty() ? moments : own[e].data(), band);
-    }
-  }
-  // The marcher's tiles marched again, then the wire's tiles inside them (they divide them).
-  constexpr int size = VolumeRayMarcher::kTileSize;
-  const int width = frame.RectWidth();
-  const size_t across = static_cast<size_t>((width + size - 1) / size);
-  std::vector<uint8_t> redone(across * ((pixels / width + size - 1) / size), 0);
-  for (size_t p = 0; p < pixels; ++p)
+      ThrowIfFailingForTesting(FailurePoint::OpaqueRedo);
+      for (size_t e = 0; e < frame.Engines.size(); ++e)
+      {
+        if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+        {
+          frame.Engines[e]->RedoOpaqueTiles(
+            frame.Moments, unresolved, own.empty() ? moments : own[e].data(), band);
+        }
+      }
+      // The marcher's tiles marched again, then the wire's tiles inside them (they divide them).
+      constexpr int size = VolumeRayMarcher::kTileSize;
+      const int width = frame.RectWidth();
+      const size_t across = static_cast<size_t>((width + size - 1) / size);
+      std::vector<uint8_t> redone(across * ((pixels / width + size - 1) / size), 0);
+      for (size_t p = 0; p < pixels; ++p)
+      {
+        if (unresolved[p])
+        {
+          redone[(p / width / size) * across + (p % width) / size] = 1;
+        }
+      }
+      record.OpaquePredictedRedone +=
+        static_cast<vtkIdType>(std::count(redone.begin(), redone.end(), uint8_t(1)));
+      mask = tiles.Mark([&](size_t pixel)
+        { return redone[(pixel / width / size) * across + (pixel % width) / size]; });
+      local = LocalProfile(frame, pixels * OpaqueBins::kBins, buffers);
+    });
+  if (!AgreeOnStage(group, "profile", "marching the unresolved tiles again", failure, record))
   {
-    if (unresolved[p])
-    {
-      redone[(p / width / size) * across + (p % width) / size] = 1;
-    }
+    return false;
   }
-  record.OpaquePredictedRedone +=
-    static_cast<vtkIdType>(std::count(redone.begin(), redone.end(), uint8_t(1)));
-  const std::vector<unsigned char> mask = tiles.Mark(
-    [&](size_t pixel) { return redone[(pixel / width / size) * across + (pixel % width) / size]; });
   // Marched again without the bound: every bin.
-  SumProfiles(group, frame, tiles, mask, LocalProfile(frame, pixels * OpaqueBins::kBins, buffers),
-    nullptr, summed, buffers, record);
+  SumProfiles(group, frame, tiles, mask, local, nullptr, summed, buffers, record);
   for (size_t t = 0; t < covered.size() && t < mask.size(); ++t)
   {
     covered[t] = covered[t] || mask[t];
   }
+  return true;
 }
 
 } // namespace
@@ -243,7 +260,7 @@ void ResolvePredictedCut(const ProcessGroup& group, const CompositeFrame& frame,
 // where the sum is opaque and summed into moments (pixels * stride values). With a predicted
 // bound (buffers.Bound, several processes), unresolved pixels are resolved first. The agreed
 // cut is remembered for the next frame's prediction.
-void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
+bool CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, const RowBand& band,
   const TileGrid& tiles, std::vector<unsigned char>& covered, std::vector<std::vector<double>>& own,
   double* moments, size_t pixels, bool bounded, MomentBuffers& buffers, FrameRecord& record)
 {
@@ -279,19 +296,31 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
     mine = summed;
   }
   record.Clock.Lap("profile");
-  if (bounded && summed)
+  if (bounded && summed &&
+    !ResolvePredictedCut(
+      group, frame, band, tiles, covered, own, moments, pixels, summed, buffers, record))
   {
-    ResolvePredictedCut(
-      group, frame, band, tiles, covered, own, moments, pixels, summed, buffers, record);
+    return false;
   }
-  for (size_t e = 0; e < frame.Engines.size(); ++e)
-  {
-    if (!frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+  // Applying the cut may sum a volume's moments again from its cached samples (memory): inside
+  // the frame's failure agreement, before the moments' sum.
+  const std::string failure = CatchFailure(
+    [&]
     {
-      continue;
-    }
-    frame.Engines[e]->ApplyOpaqueCut(
-      frame.Moments, mine, own.empty() ? moments : own[e].data(), band);
+      ThrowIfFailingForTesting(FailurePoint::OpaqueCut);
+      for (size_t e = 0; e < frame.Engines.size(); ++e)
+      {
+        if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+        {
+          frame.Engines[e]->ApplyOpaqueCut(
+            frame.Moments, mine, own.empty() ? moments : own[e].data(), band);
+        }
+      }
+    });
+  record.Clock.Lap("cut");
+  if (!AgreeOnStage(group, "allreduce", "the opaque cut", failure, record))
+  {
+    return false;
   }
   if (summed && buffers.Cuts.Valid)
   {
@@ -312,7 +341,7 @@ void CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
         [](double a, double b) { return a + b; });
     }
   }
-  record.Clock.Lap("cut");
+  return true;
 }
 
 bool PredictOpaqueBand(

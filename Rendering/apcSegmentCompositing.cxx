@@ -5,11 +5,14 @@
 // brings the strips to the display process.
 #include "apcCompositeFrame.h"
 #include "apcFrameEngine.h"
+#include "apcStageAgreement.h"
+#include "apcTestFailures.h"
 
 #include "vtkMultiProcessController.h"
 
 #include <algorithm>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace apc
@@ -99,18 +102,37 @@ Outgoing PackForOwners(const std::vector<SegmentImage>& images, const CompositeF
   return outgoing;
 }
 
-// Direct send, one message per pair with segments. Pairs meet in rounds (partner = rank XOR
-// round), the lower rank sending first: blocking sends then never wait in a cycle.
-Outgoing DirectSend(const ProcessGroup& group, Outgoing& outgoing,
-  const std::vector<long long>& counts, FrameRecord& record)
+// Room for every process's segments to this one (counts: ExchangeCounts'), and its own moved
+// in: all the exchange receives, allocated before it starts.
+Outgoing SizeIncoming(
+  const ProcessGroup& group, Outgoing& outgoing, const std::vector<long long>& counts)
 {
   const int processes = group.Processes;
   const int rank = group.Rank;
   Outgoing incoming(processes);
+  for (int partner = 0; partner < processes; ++partner)
+  {
+    if (partner != rank)
+    {
+      incoming[partner].resize(
+        static_cast<size_t>(counts[static_cast<size_t>(partner) * (processes + 1) + rank]));
+    }
+  }
   incoming[rank].swap(outgoing[rank]);
+  return incoming;
+}
+
+// Direct send into incoming (sized by SizeIncoming), one message per pair with segments. Pairs
+// meet in rounds (partner = rank XOR round), the lower rank sending first: blocking sends then
+// never wait in a cycle.
+void DirectSend(
+  const ProcessGroup& group, const Outgoing& outgoing, Outgoing& incoming, FrameRecord& record)
+{
+  const int processes = group.Processes;
+  const int rank = group.Rank;
   if (!group.Parallel)
   {
-    return incoming;
+    return;
   }
   int rounds = 1;
   while (rounds < processes)
@@ -126,8 +148,6 @@ Outgoing DirectSend(const ProcessGroup& group, Outgoing& outgoing,
     }
     const std::vector<WireSegment>& send = outgoing[partner];
     std::vector<WireSegment>& receive = incoming[partner];
-    receive.resize(
-      static_cast<size_t>(counts[static_cast<size_t>(partner) * (processes + 1) + rank]));
     auto sendPart = [&]
     {
       if (!send.empty())
@@ -157,18 +177,24 @@ Outgoing DirectSend(const ProcessGroup& group, Outgoing& outgoing,
       sendPart();
     }
   }
-  return incoming;
 }
 
-// The strips, in row order: the rectangle's packed image on the display process.
-std::vector<float> GatherStrips(const ProcessGroup& group, const SegmentStrips& strips,
-  int rectWidth, std::vector<float>& stripImage, FrameRecord& record)
+// Room for the gathered strips on the display process (its own strip alone).
+std::vector<float> SizePacked(const ProcessGroup& group, const SegmentStrips& strips, int rectWidth)
 {
-  std::vector<float> packed;
+  return std::vector<float>(
+    group.Parallel && group.IsDisplay() ? 4 * static_cast<size_t>(rectWidth) * strips.Rows : 0);
+}
+
+// The strips, in row order, into packed (SizePacked): the rectangle's image on the display
+// process.
+void GatherStrips(const ProcessGroup& group, const SegmentStrips& strips, int rectWidth,
+  std::vector<float>& stripImage, std::vector<float>& packed, FrameRecord& record)
+{
   if (!group.Parallel)
   {
     packed.swap(stripImage);
-    return packed;
+    return;
   }
   const int processes = group.Processes;
   std::vector<vtkIdType> lengths(processes);
@@ -178,19 +204,19 @@ std::vector<float> GatherStrips(const ProcessGroup& group, const SegmentStrips& 
     lengths[o] = 4 * static_cast<vtkIdType>(rectWidth) * strips.RowsOf(o);
     offsets[o] = 4 * static_cast<vtkIdType>(rectWidth) * (strips.Begin(o) - strips.RowBegin);
   }
-  packed.resize(group.IsDisplay() ? 4 * static_cast<size_t>(rectWidth) * strips.Rows : 1);
+  float unused = 0; // GatherV's receive buffer off the display process
+  float* into = group.IsDisplay() ? packed.data() : &unused;
   group.Collective("gather",
     [&]
     {
-      group.Controller->GatherV(stripImage.data(), packed.data(),
-        static_cast<vtkIdType>(stripImage.size()), lengths.data(), offsets.data(), group.Display);
+      group.Controller->GatherV(stripImage.data(), into, static_cast<vtkIdType>(stripImage.size()),
+        lengths.data(), offsets.data(), group.Display);
     });
   if (!group.IsDisplay() && !stripImage.empty())
   {
     record.BytesSent += sizeof(float) * static_cast<double>(stripImage.size());
     ++record.MessagesSent;
   }
-  return packed;
 }
 
 // The statistics of all strips, the same on every process.
@@ -217,6 +243,10 @@ SegmentStatistics AllStatistics(const ProcessGroup& group, const SegmentStatisti
 }
 }
 
+// Each step of a process's own work (its segments, their packing, its strip's blend) runs
+// inside the frame's failure agreement, with every buffer the next collective needs: a process
+// whose memory runs out makes every process leave the frame there (record.Failed) instead of
+// leaving them waiting in the exchange or the gather.
 void RunSegmentCompositing(
   const ProcessGroup& group, const CompositeFrame& frame, FrameRecord& record, FrameResult& result)
 {
@@ -225,15 +255,25 @@ void RunSegmentCompositing(
 
   // 1. This process's segments, per volume.
   std::vector<SegmentImage> images(frame.Engines.size());
-  for (size_t v = 0; v < images.size(); ++v)
-  {
-    frame.Engines[v]->RenderSegments(images[v]);
-    if (images[v].Width != rectWidth || images[v].Height != frame.RectHeight())
+  std::string failure = CatchFailure(
+    [&]
     {
-      images[v].Reset(rectWidth, frame.RectHeight()); // a process that could not prepare
-    }
-  }
+      ThrowIfFailingForTesting(FailurePoint::Segments);
+      for (size_t v = 0; v < images.size(); ++v)
+      {
+        frame.Engines[v]->RenderSegments(images[v]);
+        if (images[v].Width != rectWidth || images[v].Height != frame.RectHeight())
+        {
+          images[v].Reset(rectWidth, frame.RectHeight()); // a process that could not prepare
+        }
+      }
+    });
   record.Clock.Lap("segments");
+  if (!AgreeOnStage(group, "exchange", "the exact segments", failure, record))
+  {
+    record.Clock.Lap("exchange");
+    return;
+  }
   for (size_t p = 0; p < frame.RectPixels(); ++p)
   {
     bool any = false;
@@ -247,25 +287,51 @@ void RunSegmentCompositing(
   // 2. Counts per owner, then the segments, to their owners.
   std::vector<long long> counts;
   const long long kBase = ExchangeCounts(group, images, frame, strips, record, counts);
-  Outgoing outgoing = PackForOwners(images, frame, strips, counts, group.Rank, kBase);
-  images.clear();
-  // The pairs' rounds are one collective: they start together, after the packing.
+  Outgoing outgoing;
   Outgoing incoming;
-  group.Collective("exchange", [&] { incoming = DirectSend(group, outgoing, counts, record); });
-  outgoing.clear();
+  failure = CatchFailure(
+    [&]
+    {
+      ThrowIfFailingForTesting(FailurePoint::SegmentPacking);
+      outgoing = PackForOwners(images, frame, strips, counts, group.Rank, kBase);
+      images = std::vector<SegmentImage>();
+      incoming = SizeIncoming(group, outgoing, counts);
+    });
+  if (!AgreeOnStage(group, "exchange", "packing the exact segments", failure, record))
+  {
+    record.Clock.Lap("exchange");
+    return;
+  }
+  // The pairs' rounds are one collective: they start together, after the packing.
+  group.Collective("exchange", [&] { DirectSend(group, outgoing, incoming, record); });
+  outgoing = Outgoing();
   record.Clock.Lap("exchange");
 
   // 3. The own strip: segments grouped by pixel, then sorted and blended.
-  SegmentImage strip;
-  GroupByPixel(incoming, rectWidth, strips.RowsOf(group.Rank), strip);
-  incoming.clear();
-  std::vector<float> stripImage(4 * static_cast<size_t>(rectWidth) * strip.Height, 0.0f);
-  CompositeSegmentImage(strip, stripImage.data());
-  const SegmentStatistics own = GetSegmentStatistics(strip);
+  std::vector<float> stripImage;
+  std::vector<float> packed;
+  SegmentStatistics own;
+  failure = CatchFailure(
+    [&]
+    {
+      ThrowIfFailingForTesting(FailurePoint::SegmentBlend);
+      SegmentImage strip;
+      GroupByPixel(incoming, rectWidth, strips.RowsOf(group.Rank), strip);
+      incoming = Outgoing();
+      stripImage.assign(4 * static_cast<size_t>(rectWidth) * strip.Height, 0.0f);
+      CompositeSegmentImage(strip, stripImage.data());
+      own = GetSegmentStatistics(strip);
+      packed = SizePacked(group, strips, rectWidth);
+    });
   record.Clock.Lap("blend_segments");
+  if (!AgreeOnStage(group, "gather", "blending the exact segments", failure, record))
+  {
+    record.Clock.Lap("gather");
+    return;
+  }
 
   // 4. The strips to the display process.
-  std::vector<float> packed = GatherStrips(group, strips, rectWidth, stripImage, record);
+  GatherStrips(group, strips, rectWidth, stripImage, packed, record);
   record.Clock.Lap("gather");
   record.Segments = AllStatistics(group, own);
   record.Clock.Lap("statistics");

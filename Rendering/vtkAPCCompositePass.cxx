@@ -20,10 +20,11 @@
 #include "apcFrameSettings.h"
 #include "apcFrameStart.h"
 #include "apcFrameTimings.h"
-#include "apcHugePages.h"
 #include "apcImageOutput.h"
 #include "apcNodeThreads.h"
 #include "apcSettingChecks.h"
+#include "apcStageAgreement.h"
+#include "apcTestFailures.h"
 #include "apcVolumeSettings.h"
 
 #include <algorithm>
@@ -308,9 +309,12 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
   {
     internal.Record.Clock.Lap("boundary");
   }
-  const bool prepared = apc::PrepareEngines(group, frame, volumes, depth, internal.Record);
-  depth = std::vector<float>(); // the engines hold their rays' ends
   apc::FrameResult& result = internal.Result;
+  result.RGBA.clear();
+  result.Moments.clear();
+  result.ColourSums.clear();
+  const bool prepared = apc::PrepareEngines(group, frame, volumes, depth, internal.Record, result);
+  depth = std::vector<float>(); // the engines hold their rays' ends
   if (!prepared)
   {
     // Agreed: every process skips the frame before its first compositing collective.
@@ -325,19 +329,22 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
 
   const int mode = this->ChooseMode(group, frame);
   internal.LastMode = mode;
-  result.RGBA.clear();
-  result.Moments.clear();
-  result.ColourSums.clear();
-  apc::ReserveInHugePages(result.RGBA, 4 * frame.RectPixels());
   const double before = internal.Record.Clock.Get(nullptr);
   switch (mode)
   {
     case LOCAL_EXACT:
-      result.RGBA.assign(4 * frame.RectPixels(), 0.0f);
-      for (apc::FrameEngine* engine : frame.Engines)
-      {
-        engine->RenderExact(result.RGBA.data());
-      }
+      // Each process's own image (reserved in the set-up); a process whose march throws makes
+      // every one give the frame up before the frame's timings are gathered.
+      apc::RunAgreedStage(group, "exact", "the local exact image", internal.Record,
+        [&]
+        {
+          apc::ThrowIfFailingForTesting(apc::FailurePoint::LocalExact);
+          result.RGBA.assign(4 * frame.RectPixels(), 0.0f);
+          for (apc::FrameEngine* engine : frame.Engines)
+          {
+            engine->RenderExact(result.RGBA.data());
+          }
+        });
       internal.Record.Clock.Lap("exact");
       break;
     case SEGMENTS:
@@ -345,13 +352,18 @@ void vtkAPCCompositePass::Render(const vtkRenderState* s)
       break;
     default:
       apc::RunMomentCompositing(group, frame, internal.Record, result, internal.Buffers);
-      if (internal.Record.Failed)
+      if (!internal.Record.Failed)
       {
-        // Agreed: every process left the frame at the same point, with nothing to blend.
-        vtkErrorMacro("APC frame skipped: " << internal.Record.Problem);
-        break;
+        internal.Opaque = internal.Record.OpaquePixels > 0;
       }
-      internal.Opaque = internal.Record.OpaquePixels > 0;
+  }
+  if (internal.Record.Failed)
+  {
+    // Agreed: every process left the frame at the same point, with nothing to blend.
+    vtkErrorMacro("APC frame skipped: " << internal.Record.Problem);
+    result.RGBA.clear();
+    result.Moments.clear();
+    result.ColourSums.clear();
   }
   if (frame.Settings.CompositeMode == AUTO && !internal.Record.Failed)
   {

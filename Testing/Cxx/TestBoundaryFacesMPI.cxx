@@ -7,6 +7,7 @@
 #include "apcBoundaryExchange.h"
 #include "apcCompositePassRenders.h"
 #include "apcMPITest.h"
+#include "apcTestFailures.h"
 #include "apcTestScenes.h"
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCVolumeMapper.h"
@@ -120,11 +121,11 @@ int main(int argc, char* argv[])
   if (ranks > 1)
   {
     // The last rank alone fails once (hook: the failure to inject), then renders with target.
-    auto renderFailingOnLastRank = [&](void (*hook)(int), vtkAPCCompositePass* target)
+    auto renderFailingOnLastRank = [&](apc::FailurePoint point, vtkAPCCompositePass* target)
     {
       if (rank == ranks - 1)
       {
-        hook(1);
+        apc::FailForTesting(point, 1);
       }
       return apctest::RenderDistributed(controller, wind, piece, bounds, size, false, target);
     };
@@ -132,7 +133,7 @@ int main(int argc, char* argv[])
     // waits in an Alltoallv), render the frame with its own piece's boundary and say why.
     vtkNew<vtkAPCCompositePass> pass;
     const std::vector<float> fallback =
-      renderFailingOnLastRank(apc::FailBoundaryExchangesForTesting, pass);
+      renderFailingOnLastRank(apc::FailurePoint::BoundaryExchange, pass);
     Check(!pass->GetLastFrameFailed(), rank, "a failed exchange: the frame still renders");
     if (rank == 0)
     {
@@ -158,7 +159,7 @@ int main(int argc, char* argv[])
     // of the same pass matches the faces.
     vtkNew<vtkAPCCompositePass> setUp;
     const std::vector<float> unmatched =
-      renderFailingOnLastRank(apc::FailBoundarySetUpsForTesting, setUp);
+      renderFailingOnLastRank(apc::FailurePoint::BoundarySetUp, setUp);
     Check(!setUp->GetLastFrameFailed(), rank, "a failed set-up: the frame still renders");
     const std::vector<float> rematched =
       apctest::RenderDistributed(controller, wind, piece, bounds, size, false, setUp);

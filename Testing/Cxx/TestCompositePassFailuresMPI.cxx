@@ -3,12 +3,14 @@
 // APC volume, viewports of different sizes, different compositing modes or wire precisions)
 // is skipped on every process instead of leaving one waiting in a collective; settings one
 // process alone changes that can be agreed (Stop Where Opaque) still render, and so does a
-// 1x1 window. A process whose Stop Where Opaque probe, pass 1 or pass 2 throws makes every
-// process skip the frame, and the next frame renders.
+// 1x1 window. A process whose own work between two collectives throws (Stop Where Opaque's
+// probe, a band's buffers, pass 1, pass 2, the exact segments, their packing or blend, the
+// local exact image) makes every process skip the frame, and the next frame renders.
 
 #include "apcCompositePassRenders.h"
 #include "apcFrameEngine.h"
 #include "apcMPITest.h"
+#include "apcTestFailures.h"
 #include "vtkAPCCompositePass.h"
 #include "vtkAPCVolumeMapper.h"
 
@@ -59,7 +61,7 @@ int main(int argc, char* argv[])
   {
     if (rank == ranks - 1)
     {
-      apc::FrameEngine::FailProbesForTesting(1);
+      apc::FailForTesting(apc::FailurePoint::Probe, 1);
     }
     vtkNew<vtkAPCCompositePass> pass;
     pass->KeepLastImageOn();
@@ -88,7 +90,7 @@ int main(int argc, char* argv[])
     {
       if (rank == ranks - 1)
       {
-        apc::FrameEngine::FailPassesForTesting(1 - pass2, pass2);
+        apc::FailForTesting(pass2 ? apc::FailurePoint::PassTwo : apc::FailurePoint::PassOne, 1);
       }
       vtkNew<vtkAPCCompositePass> pass;
       pass->KeepLastImageOn();
@@ -108,6 +110,55 @@ int main(int argc, char* argv[])
       {
         Check(!next.empty() && apctest::MaxAbsDifference(next, reference) == 0, rank,
           "after a failed pass: the next frame is the undisturbed image");
+      }
+    }
+  }
+
+  // The rest of a process's own work between two collectives throwing on one process (its
+  // memory ran out): a band's buffers (held before pass 1, for every later sum of the band),
+  // the exact segments mode's segments, their packing for the exchange and an owner's blend of
+  // its strip, and the local exact image. Every process gives the frame up with the same error
+  // instead of waiting in the next collective (or aborting on the exception), and the next
+  // frame of the same pass is the undisturbed image.
+  if (ranks > 1)
+  {
+    struct Failing
+    {
+      int Mode;
+      apc::FailurePoint Point;
+      const char* What;
+    };
+    const Failing failings[] = {
+      { vtkAPCCompositePass::APC, apc::FailurePoint::BandBuffers, "a band's buffers" },
+      { vtkAPCCompositePass::SEGMENTS, apc::FailurePoint::Segments, "the exact segments" },
+      { vtkAPCCompositePass::SEGMENTS, apc::FailurePoint::SegmentPacking, "the segments' packing" },
+      { vtkAPCCompositePass::SEGMENTS, apc::FailurePoint::SegmentBlend, "a strip's blend" },
+      { vtkAPCCompositePass::LOCAL_EXACT, apc::FailurePoint::LocalExact, "the local exact image" },
+    };
+    for (const Failing& failing : failings)
+    {
+      vtkNew<vtkAPCCompositePass> undisturbed;
+      undisturbed->SetCompositeMode(failing.Mode);
+      const std::vector<float> reference =
+        RenderDistributed(controller, puzzle, piece, bounds, 32, false, undisturbed);
+      Check(!undisturbed->GetLastFrameFailed(), rank, failing.What);
+      if (rank == ranks - 1)
+      {
+        apc::FailForTesting(failing.Point, 1);
+      }
+      vtkNew<vtkAPCCompositePass> pass;
+      pass->SetCompositeMode(failing.Mode);
+      const std::vector<float> failed =
+        RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+      Check(pass->GetLastFrameFailed(), rank, failing.What);
+      Check(failed.empty(), rank, "a failed frame leaves no image");
+      const std::vector<float> next =
+        RenderDistributed(controller, puzzle, piece, bounds, 32, false, pass);
+      Check(!pass->GetLastFrameFailed(), rank, "after a failed stage: the next frame renders");
+      if (rank == 0)
+      {
+        Check(!next.empty() && apctest::MaxAbsDifference(next, reference) == 0, rank,
+          "after a failed stage: the next frame is the undisturbed image");
       }
     }
   }

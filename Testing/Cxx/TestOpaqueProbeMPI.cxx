@@ -8,6 +8,7 @@
 #include "apcCompositePassRenders.h"
 #include "apcMPITest.h"
 #include "apcTestCompositePass.h"
+#include "apcTestFailures.h"
 #include "apcTestPuzzles.h"
 #include "apcTestScenes.h"
 #include "vtkAPCCompositePass.h"
@@ -104,6 +105,30 @@ int main(int argc, char* argv[])
     const double difference = apctest::MaxAbsDifference(probed.RGBA, plain.RGBA);
     Check(difference <= 1e-5, rank, "the probe's frame gives the frame without it");
     std::printf("largest difference from the frame without the probe: %g\n", difference);
+  }
+  // The predicted cut's replay (the unresolved pixels' tiles marched again) or the cut applied
+  // to the moments, throwing on the last process (its memory ran out): every process gives the
+  // frame up (no image on the display process, which only learns of it by the agreement)
+  // instead of waiting in the profiles' or the moments' sum, and the next first frame is the
+  // undisturbed one.
+  if (ranks > 1)
+  {
+    Check(p.OpaquePredictedUnresolved > 0, rank, "the probe leaves pixels to march again");
+    for (apc::FailurePoint point : { apc::FailurePoint::OpaqueRedo, apc::FailurePoint::OpaqueCut })
+    {
+      if (rank == ranks - 1)
+      {
+        apc::FailForTesting(point, 1);
+      }
+      const Frame failed = RenderFirst(controller, scene, piece, bounds, true);
+      const Frame next = RenderFirst(controller, scene, piece, bounds, true);
+      if (rank == 0)
+      {
+        Check(failed.RGBA.empty(), rank, "a replay or cut that throws: no image");
+        Check(apctest::MaxAbsDifference(next.RGBA, probed.RGBA) == 0, rank,
+          "after a failed replay or cut: the next first frame is the undisturbed one");
+      }
+    }
   }
   std::printf("rank %d: pass-1 samples %g with the probe (its own %g), %g without; all ranks "
               "%g and %g, the most spared rank %g; unresolved %g, tiles marched again %g\n",
