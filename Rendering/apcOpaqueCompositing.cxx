@@ -188,6 +188,21 @@ void SumProfiles(const ProcessGroup& group, const CompositeFrame& frame, const T
     });
 }
 
+// Calls work(engine, its moments) for each volume of the frame that stops where opaque: its own
+// moments (own[e]) where the volumes keep them apart, else the band's (one volume).
+template <class F>
+void ForEachStoppingVolume(
+  const CompositeFrame& frame, std::vector<std::vector<double>>& own, double* moments, F&& work)
+{
+  for (size_t e = 0; e < frame.Engines.size(); ++e)
+  {
+    if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
+    {
+      work(frame.Engines[e], own.empty() ? moments : own[e].data());
+    }
+  }
+}
+
 // With a predicted bound: the pixels whose summed profile does not reach the threshold by it
 // have an unknown cut. Every process finds the same ones (the profile is summed), marches
 // their marcher tiles again without the bound and sums those tiles' profiles again, so the
@@ -214,14 +229,9 @@ bool ResolvePredictedCut(const ProcessGroup& group, const CompositeFrame& frame,
     [&]
     {
       ThrowIfFailingForTesting(FailurePoint::OpaqueRedo);
-      for (size_t e = 0; e < frame.Engines.size(); ++e)
-      {
-        if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
-        {
-          frame.Engines[e]->RedoOpaqueTiles(
-            frame.Moments, unresolved, own.empty() ? moments : own[e].data(), band);
-        }
-      }
+      ForEachStoppingVolume(frame, own, moments,
+        [&](FrameEngine* engine, double* volume)
+        { engine->RedoOpaqueTiles(frame.Moments, unresolved, volume, band); });
       // The marcher's tiles marched again, then the wire's tiles inside them (they divide them).
       constexpr int size = VolumeRayMarcher::kTileSize;
       const int width = frame.RectWidth();
@@ -308,14 +318,9 @@ bool CutWhereOpaque(const ProcessGroup& group, const CompositeFrame& frame, cons
     [&]
     {
       ThrowIfFailingForTesting(FailurePoint::OpaqueCut);
-      for (size_t e = 0; e < frame.Engines.size(); ++e)
-      {
-        if (frame.Engines[e]->StopsWhereOpaque(frame.Moments))
-        {
-          frame.Engines[e]->ApplyOpaqueCut(
-            frame.Moments, mine, own.empty() ? moments : own[e].data(), band);
-        }
-      }
+      ForEachStoppingVolume(frame, own, moments,
+        [&](FrameEngine* engine, double* volume)
+        { engine->ApplyOpaqueCut(frame.Moments, mine, volume, band); });
     });
   record.Clock.Lap("cut");
   if (!AgreeOnStage(group, "allreduce", "the opaque cut", failure, record))
