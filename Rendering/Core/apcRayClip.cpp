@@ -216,7 +216,18 @@ __attribute__((target("avx2"))) inline void ClipFour(const CellPlanes& planes, c
     const __m256d s = _mm256_maskload_pd(stop + l, valid);
     hi = _mm256_min_pd(s, hi);
     out = _mm256_cmp_pd(_mm256_set1_pd(near), s, _CMP_GE_OQ);
+    // A lane out here (the cell lies behind where its ray is opaque) ends empty whatever the
+    // planes give: a packet whose valid lanes are all out needs no plane (such packets come
+    // in runs, where a tile's rays turned opaque in front of the cell), and the test after
+    // the third plane below counts only the others as open.
+    if (_mm256_movemask_pd(_mm256_andnot_pd(out, _mm256_castsi256_pd(valid))) == 0)
+    {
+      hi = minusInf;
+      return;
+    }
   }
+  // The valid lanes not out: the only ones that can keep a ray.
+  const __m256d open = _mm256_andnot_pd(out, _mm256_castsi256_pd(valid));
   for (int p = 0; p < planes.Count; ++p)
   {
     __m256d denom;
@@ -233,9 +244,9 @@ __attribute__((target("avx2"))) inline void ClipFour(const CellPlanes& planes, c
     // packets keep none at 1024²). Once per packet: a test after every plane cost more in
     // unpredictable branches than the planes it saved.
     if (p == 2 && planes.Count > 4 &&
-      _mm256_movemask_pd(
-        _mm256_and_pd(_mm256_cmp_pd(lo, hi, _CMP_LT_OQ), _mm256_castsi256_pd(valid))) == 0)
+      _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(lo, hi, _CMP_LT_OQ), open)) == 0)
     {
+      hi = minusInf; // an out lane may still be open here
       return;
     }
   }

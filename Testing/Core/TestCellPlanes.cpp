@@ -197,6 +197,18 @@ void CheckClipRays(ClipRaysForm form)
       // Some stops at the cell's near bound exactly: that cell lies behind them.
       s = withStop && rng() % 2 ? (rng() % 4 == 0 ? near : 2.0 * (u(rng) + 1.0)) : s;
     }
+    // Whole rows behind the cell (at or in front of near, the rays opaque before it) beside
+    // rows partly so: packets of four rays all out, the runs an opaque region gives, and
+    // packets out but for one lane.
+    const bool stoppedRows = withStop && trial % 4 == 3;
+    for (int j = 0; stoppedRows && j < kWidth; ++j)
+    {
+      for (int i = 0; i < kWidth && j % 3 != 2; ++i)
+      {
+        const bool open = j % 3 == 1 && i % 5 == 2;
+        stop[j * kWidth + i] = open ? stop[j * kWidth + i] : (i % 2 ? near : 0.5 * near);
+      }
+    }
     // Spacings from a tenth of the cells to several times them, some with a periodic binary
     // expansion (a quotient that rounds).
     const Lattice grid(trial % 5 == 0 ? 0.1 : 0.013 * (1 + trial % 300));
