@@ -413,49 +413,13 @@ TransmittanceQuery MomentTransmittance<N>::GeneralQuery(
 template <int N>
 double MomentTransmittance<N>::HiddenDepth(double maxWeight) const
 {
-  constexpr double kNone = std::numeric_limits<double>::infinity();
-  // Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
-  // pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
-  if (this->State != PixelState::Valid || !(maxWeight > 0.0) ||
-    !(std::exp(-this->B0) * this->B0 <= maxWeight))
-  {
-    return kNone;
-  }
-  const double limit = maxWeight / this->B0;
-  auto hidden = [&](double z)
-  {
-    const TransmittanceQuery q = this->Query(z);
-    return !q.Fallback && q.Transmittance <= limit;
-  };
-  if (!hidden(1.0))
-  {
-    return kNone;
-  }
-  if (hidden(-1.0))
-  {
-    return -1.0;
-  }
-  // T(hi) <= limit throughout; T non-increasing carries it to every z >= hi. 2^-9 of the
-  // warped range: a sample or two of a ray's front lie between the true crossing and hi.
-  // Two steps a round: the middle and both points the next step may query, three queries
-  // independent of each other, which the CPU overlaps (a query is a chain of dependent
-  // divisions, a square root and an exponential); the same points, hence the same answer,
-  // as one step at a time, in about half the time.
-  double lo = -1.0;
-  double hi = 1.0;
-  for (int step = 0; step < 10; step += 2)
-  {
-    const double mid = 0.5 * (lo + hi);
-    const double left = 0.5 * (lo + mid);
-    const double right = 0.5 * (mid + hi);
-    const bool atMid = hidden(mid);
-    const bool atLeft = hidden(left);
-    const bool atRight = hidden(right);
-    (atMid ? hi : lo) = mid;
-    const double next = atMid ? left : right;
-    ((atMid ? atLeft : atRight) ? hi : lo) = next;
-  }
-  return hi;
+  // No samples known: every step is taken.
+  return this->HiddenDepth(maxWeight,
+    []
+    {
+      constexpr double kAll = std::numeric_limits<double>::infinity();
+      return std::make_pair(-kAll, kAll);
+    });
 }
 
 template class MomentTransmittance<4>;

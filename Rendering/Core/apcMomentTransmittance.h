@@ -39,6 +39,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace apc
 {
@@ -147,6 +148,13 @@ public:
   // process holds them. Found by bisection on a fixed grid of [-1,1] from the moments alone,
   // hence the same on every process. +inf where no depth qualifies.
   double HiddenDepth(double maxWeight) const;
+  // The same for a pixel whose samples all lie in [range().first, range().second] (range is
+  // called once, and only if the bisection is reached): the depth it returns skips exactly
+  // the samples HiddenDepth(w) skips, but the bisection stops as soon as no sample lies
+  // between its bounds, where further steps could not move any sample across the depth
+  // returned. Pass 2 calls it with each pixel's cached samples' nearest and farthest depth.
+  template <class Range>
+  double HiddenDepth(double maxWeight, const Range& range) const;
 
   // For 4 moments and a valid pixel, its constants for kernels that weight many samples at
   // once (pass 2's replay); false otherwise (then query sample by sample).
@@ -256,6 +264,62 @@ inline double MomentTransmittance<N>::ChristoffelKernel(double x) const
     kernel += yi * yi * this->InvD[i];
   }
   return kernel;
+}
+
+template <int N>
+template <class Range>
+inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range& range) const
+{
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  // Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
+  // pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
+  if (this->State != PixelState::Valid || !(maxWeight > 0.0) ||
+    !(std::exp(-this->B0) * this->B0 <= maxWeight))
+  {
+    return kNone;
+  }
+  const double limit = maxWeight / this->B0;
+  auto hidden = [&](double z)
+  {
+    const TransmittanceQuery q = this->Query(z);
+    return !q.Fallback && q.Transmittance <= limit;
+  };
+  if (!hidden(1.0))
+  {
+    return kNone;
+  }
+  if (hidden(-1.0))
+  {
+    return -1.0;
+  }
+  // T(hi) <= limit throughout; T non-increasing carries it to every z >= hi. 2^-9 of the
+  // warped range: a sample or two of a ray's front lie between the true crossing and hi.
+  // Two steps a round: the middle and both points the next step may query, three queries
+  // independent of each other, which the CPU overlaps (a query is a chain of dependent
+  // divisions, a square root and an exponential); the same points, hence the same answer,
+  // as one step at a time, in about half the time.
+  const std::pair<double, double> samples = range();
+  double lo = -1.0;
+  double hi = 1.0;
+  for (int step = 0; step < 10; step += 2)
+  {
+    // The depth found lies in (lo, hi]: a sample at or before lo stays in front of it, one at
+    // or behind hi behind it, whatever the steps left decide.
+    if (samples.second <= lo || samples.first >= hi)
+    {
+      break;
+    }
+    const double mid = 0.5 * (lo + hi);
+    const double left = 0.5 * (lo + mid);
+    const double right = 0.5 * (mid + hi);
+    const bool atMid = hidden(mid);
+    const bool atLeft = hidden(left);
+    const bool atRight = hidden(right);
+    (atMid ? hi : lo) = mid;
+    const double next = atMid ? left : right;
+    ((atMid ? atLeft : atRight) ? hi : lo) = next;
+  }
+  return hi;
 }
 
 extern template class MomentTransmittance<4>;

@@ -16,6 +16,7 @@
 #include <random>
 #include <sstream>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace
@@ -135,6 +136,69 @@ TYPED_TEST(MomentQueryTest, HiddenDepthIsTheOneStepBisection)
     ASSERT_EQ(t.HiddenDepth(weight), expected) << "set " << set;
   }
   EXPECT_GT(found, 500);
+}
+
+// Given the range of a pixel's samples, HiddenDepth stops its bisection once no sample lies
+// between its bounds: the depth may differ from HiddenDepth(w), but every sample, and every
+// depth in the range, falls on the same side of both. Rays as above, their samples as the
+// range (some pixels' samples only the front part of the ray, as a stopped ray's cache holds
+// them).
+TYPED_TEST(MomentQueryTest, HiddenDepthWithinTheSamplesSkipsTheSameSamples)
+{
+  constexpr int N = TypeParam::value;
+  std::mt19937_64 rng(313 + N);
+  std::vector<double> depths;
+  int found = 0;
+  int stoppedEarly = 0;
+  for (int set = 0; set < 4000; ++set)
+  {
+    std::vector<double> sums = RayMoments(rng, N, depths);
+    for (double& s : sums)
+    {
+      s *= 1.0 + (set % 8) * 4.0;
+    }
+    const apc::MomentTransmittance<N> t(sums.data());
+    const double weight = set % 3 == 0 ? 1e-2 : 1e-4;
+    // The samples as pass 2 holds them (floats), all of the ray's or its front half.
+    std::vector<float> samples(depths.begin(), depths.end());
+    std::sort(samples.begin(), samples.end());
+    if (set % 2 == 1)
+    {
+      samples.resize((samples.size() + 1) / 2);
+    }
+    const float nearest = samples.front();
+    const float farthest = samples.back();
+    int calls = 0;
+    const double plain = t.HiddenDepth(weight);
+    const double within = t.HiddenDepth(weight,
+      [&]
+      {
+        ++calls;
+        return std::make_pair(static_cast<double>(nearest), static_cast<double>(farthest));
+      });
+    ASSERT_LE(calls, 1);
+    if (!std::isfinite(plain))
+    {
+      ASSERT_EQ(within, plain) << "set " << set;
+      continue;
+    }
+    ++found;
+    stoppedEarly += within != plain;
+    for (const float z : samples)
+    {
+      ASSERT_EQ(z >= plain, z >= within) << "set " << set << " z " << z;
+    }
+    // Every depth of the range too (the samples' own at the ends), on a fine grid.
+    for (int i = 0; i <= 400; ++i)
+    {
+      const double z = nearest + (static_cast<double>(farthest) - nearest) * i / 400;
+      ASSERT_EQ(z >= plain, z >= within) << "set " << set << " z " << z;
+    }
+  }
+  std::cout << "N=" << N << ": " << found << " pixels with a hidden depth, " << stoppedEarly
+            << " of them found in fewer steps\n";
+  EXPECT_GT(found, 500);
+  EXPECT_GT(stoppedEarly, found / 10); // the steps are saved, not only the samples the same
 }
 
 // The batched weights (vector arithmetic and a polynomial exponential for 4 moments) against
