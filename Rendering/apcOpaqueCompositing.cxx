@@ -225,32 +225,31 @@ bool ResolvePredictedCut(const ProcessGroup& group, const CompositeFrame& frame,
   // inside the frame's failure agreement, before the profiles' second sum.
   std::vector<unsigned char> mask;
   const uint16_t* local = nullptr;
-  const std::string failure = CatchFailure(
-    [&]
+  auto redo = [&]
+  {
+    ThrowIfFailingForTesting(FailurePoint::OpaqueRedo);
+    ForEachStoppingVolume(frame, own, moments,
+      [&](FrameEngine* engine, double* volume)
+      { engine->RedoOpaqueTiles(frame.Moments, unresolved, volume, band); });
+    // The marcher's tiles marched again, then the wire's tiles inside them (they divide them).
+    constexpr int size = VolumeRayMarcher::kTileSize;
+    const int width = frame.RectWidth();
+    const size_t across = static_cast<size_t>((width + size - 1) / size);
+    std::vector<uint8_t> redone(across * ((pixels / width + size - 1) / size), 0);
+    for (size_t p = 0; p < pixels; ++p)
     {
-      ThrowIfFailingForTesting(FailurePoint::OpaqueRedo);
-      ForEachStoppingVolume(frame, own, moments,
-        [&](FrameEngine* engine, double* volume)
-        { engine->RedoOpaqueTiles(frame.Moments, unresolved, volume, band); });
-      // The marcher's tiles marched again, then the wire's tiles inside them (they divide them).
-      constexpr int size = VolumeRayMarcher::kTileSize;
-      const int width = frame.RectWidth();
-      const size_t across = static_cast<size_t>((width + size - 1) / size);
-      std::vector<uint8_t> redone(across * ((pixels / width + size - 1) / size), 0);
-      for (size_t p = 0; p < pixels; ++p)
+      if (unresolved[p])
       {
-        if (unresolved[p])
-        {
-          redone[(p / width / size) * across + (p % width) / size] = 1;
-        }
+        redone[(p / width / size) * across + (p % width) / size] = 1;
       }
-      record.OpaquePredictedRedone +=
-        static_cast<vtkIdType>(std::count(redone.begin(), redone.end(), uint8_t(1)));
-      mask = tiles.Mark([&](size_t pixel)
-        { return redone[(pixel / width / size) * across + (pixel % width) / size]; });
-      local = LocalProfile(frame, pixels * OpaqueBins::kBins, buffers);
-    });
-  if (!AgreeOnStage(group, "profile", "marching the unresolved tiles again", failure, record))
+    }
+    record.OpaquePredictedRedone +=
+      static_cast<vtkIdType>(std::count(redone.begin(), redone.end(), uint8_t(1)));
+    mask = tiles.Mark([&](size_t pixel)
+      { return redone[(pixel / width / size) * across + (pixel % width) / size]; });
+    local = LocalProfile(frame, pixels * OpaqueBins::kBins, buffers);
+  };
+  if (!RunAgreedStage(group, "profile", "marching the unresolved tiles again", record, redo))
   {
     return false;
   }

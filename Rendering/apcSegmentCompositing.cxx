@@ -289,15 +289,14 @@ void RunSegmentCompositing(
   const long long kBase = ExchangeCounts(group, images, frame, strips, record, counts);
   Outgoing outgoing;
   Outgoing incoming;
-  failure = CatchFailure(
-    [&]
-    {
-      ThrowIfFailingForTesting(FailurePoint::SegmentPacking);
-      outgoing = PackForOwners(images, frame, strips, counts, group.Rank, kBase);
-      images = std::vector<SegmentImage>();
-      incoming = SizeIncoming(group, outgoing, counts);
-    });
-  if (!AgreeOnStage(group, "exchange", "packing the exact segments", failure, record))
+  if (!RunAgreedStage(group, "exchange", "packing the exact segments", record,
+        [&]
+        {
+          ThrowIfFailingForTesting(FailurePoint::SegmentPacking);
+          outgoing = PackForOwners(images, frame, strips, counts, group.Rank, kBase);
+          images = std::vector<SegmentImage>();
+          incoming = SizeIncoming(group, outgoing, counts);
+        }))
   {
     record.Clock.Lap("exchange");
     return;

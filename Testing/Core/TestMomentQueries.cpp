@@ -90,6 +90,27 @@ TYPED_TEST(MomentQueryTest, HiddenDepthBoundsTheSkippedWeight)
     std::numeric_limits<double>::infinity());
 }
 
+namespace
+{
+// The hidden-depth tests' rays: RayMoments' scaled 1 to 29 times as set cycles (faint to far
+// past opaque), and the weight bound they hide below (two of them).
+std::vector<double> DenserRayMoments(
+  std::mt19937_64& rng, int n, int set, std::vector<double>& depths)
+{
+  std::vector<double> sums = RayMoments(rng, n, depths);
+  for (double& s : sums)
+  {
+    s *= 1.0 + (set % 8) * 4.0;
+  }
+  return sums;
+}
+
+double HiddenWeightOf(int set)
+{
+  return set % 3 == 0 ? 1e-2 : 1e-4;
+}
+}
+
 // HiddenDepth takes two bisection steps a round (three independent queries): its depth is the
 // one-step-at-a-time bisection's, to the bit, written here with the public query.
 TYPED_TEST(MomentQueryTest, HiddenDepthIsTheOneStepBisection)
@@ -100,13 +121,9 @@ TYPED_TEST(MomentQueryTest, HiddenDepthIsTheOneStepBisection)
   int found = 0;
   for (int set = 0; set < 2000; ++set)
   {
-    std::vector<double> sums = RayMoments(rng, N, depths);
-    for (double& s : sums)
-    {
-      s *= 1.0 + (set % 8) * 4.0;
-    }
+    const std::vector<double> sums = DenserRayMoments(rng, N, set, depths);
     const apc::MomentTransmittance<N> t(sums.data());
-    const double weight = set % 3 == 0 ? 1e-2 : 1e-4;
+    const double weight = HiddenWeightOf(set);
     const double limit = weight / sums[0];
     auto hidden = [&](double z)
     {
@@ -152,13 +169,9 @@ TYPED_TEST(MomentQueryTest, HiddenDepthWithinTheSamplesSkipsTheSameSamples)
   int stoppedEarly = 0;
   for (int set = 0; set < 4000; ++set)
   {
-    std::vector<double> sums = RayMoments(rng, N, depths);
-    for (double& s : sums)
-    {
-      s *= 1.0 + (set % 8) * 4.0;
-    }
+    const std::vector<double> sums = DenserRayMoments(rng, N, set, depths);
     const apc::MomentTransmittance<N> t(sums.data());
-    const double weight = set % 3 == 0 ? 1e-2 : 1e-4;
+    const double weight = HiddenWeightOf(set);
     // The samples as pass 2 holds them (floats), all of the ray's or its front half.
     std::vector<float> samples(depths.begin(), depths.end());
     std::sort(samples.begin(), samples.end());
