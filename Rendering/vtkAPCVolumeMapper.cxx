@@ -15,6 +15,7 @@
 #include "apcVolumeSettings.h"
 
 #include <algorithm>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -254,6 +255,24 @@ double vtkAPCVolumeMapper::GetLastStageSeconds(const char* stage) const
 //------------------------------------------------------------------------------
 void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
 {
+  // One process alone has no collective to agree a failure in, but its memory can still run
+  // out (the conversion, the sample cache, the images): the frame is skipped with an error
+  // naming the step, as the composite pass skips it on every rank, never a crash.
+  const char* step = "reading the input";
+  try
+  {
+    this->RenderAlone(ren, vol, step);
+  }
+  catch (const std::exception& e)
+  {
+    this->Internal->Image->Initialize();
+    vtkErrorMacro(<< "APC frame skipped: " << step << " failed: " << e.what());
+  }
+}
+
+//------------------------------------------------------------------------------
+void vtkAPCVolumeMapper::RenderAlone(vtkRenderer* ren, vtkVolume* vol, const char*& step)
+{
   apc::FrameEngine& engine = this->Internal->Engine;
   const apc::VolumeSettings settings = this->GetVolumeSettings();
   engine.BeginFrame(settings);
@@ -270,6 +289,7 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   {
     image.Crop = apc::ScreenRectOf(ren, bounds, image.Width, image.Height);
   }
+  step = "the volume's set-up";
   if (!usable || !engine.Prepare(ren, vol->GetProperty(), nullptr, 0, 0, nullptr, image) ||
     engine.GetNumberOfCells() == 0)
   {
@@ -286,6 +306,7 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   std::vector<double>& moments = this->Internal->Moments;
   std::vector<double>& colourSums = this->Internal->ColourSums;
   std::vector<int>& segments = this->Internal->Segments;
+  step = "the images";
   rgba.assign(4 * pixels, 0.0f);
   moments.clear();
   colourSums.clear();
@@ -293,20 +314,24 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   const apc::MomentParameters& parameters = settings.Moments;
   if (settings.Exact)
   {
+    step = "the exact image";
     engine.RenderExact(rgba.data());
   }
   else
   {
     moments.assign(pixels * (parameters.Moments + 1), 0.0);
     colourSums.assign(pixels * 4, 0.0);
+    step = "pass 1";
     // One process, one volume: tiles no ray of which nears the threshold skip the stop.
     engine.SetOpaqueStopAlone(true);
     engine.RenderMoments(parameters, moments.data());
     if (engine.StopsWhereOpaque(parameters))
     {
       // One process: its own profile is the whole ray's (the same cut the pass makes).
+      step = "the opaque cut";
       engine.ApplyOpaqueCut(parameters, engine.GetOpaqueProfile().data(), moments.data(), {});
     }
+    step = "pass 2";
     engine.RenderColour(parameters, moments.data(), colourSums.data());
     apc::ResolveImage(parameters.Resolve, pixels, moments.data(), parameters.Moments + 1,
       colourSums.data(), rgba.data());
@@ -314,9 +339,11 @@ void vtkAPCVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol)
   }
   if (settings.ComputeSegmentCount)
   {
+    step = "the segment count";
     segments.assign(pixels, 0);
     engine.CountSegments(segments.data());
   }
+  step = "the output images";
   apc::FloatImages images;
   images.RGBA = rgba.data();
   images.Moments = moments.empty() ? nullptr : moments.data();

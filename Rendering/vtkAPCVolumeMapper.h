@@ -300,6 +300,10 @@ private:
   vtkAPCVolumeMapper(const vtkAPCVolumeMapper&) = delete;
   void operator=(const vtkAPCVolumeMapper&) = delete;
 
+  // One process's frame (no composite pass). step names what runs, so that Render can say
+  // what failed if it throws (its memory ran out).
+  void RenderAlone(vtkRenderer* ren, vtkVolume* vol, const char*& step);
+
   struct Internals;
   std::unique_ptr<Internals> Internal;
 };

@@ -5,6 +5,7 @@
 // is not an unstructured grid, fully opaque transfer functions, NaN point coordinates.
 
 #include "apcMomentTransmittance.h"
+#include "apcTestFailures.h"
 #include "apcTestGrids.h"
 #include "apcTestImages.h"
 #include "apcTestMessages.h"
@@ -520,6 +521,41 @@ TEST(VolumeMapperErrors, OpaqueTransferFunction)
       EXPECT_NEAR(red, centre, 1e-3) << ModeName(mode);
       EXPECT_TRUE(log->Errors.empty()) << log->All();
     }
+  }
+}
+
+// Memory running out in one process's pass 1 or pass 2 (no composite pass: no collective to
+// agree in) skips the frame with an error naming the pass, instead of an exception leaving
+// Render and aborting the program; the next frame is the undisturbed one, bit for bit.
+TEST(VolumeMapperErrors, MemoryRunningOutSkipsTheFrame)
+{
+  auto grid = apctest::HexBlock(4, [](double x, double, double) { return 0.5 + 0.4 * x; });
+  apctest::LiveWindow live;
+  live.Mapper->SetInputData(grid);
+  live.Mapper->SetSampleDistance(0.01);
+  vtkNew<MessageLog> log;
+  log->Watch(live.Mapper);
+  const Frame undisturbed = live.Render();
+  ASSERT_TRUE(log->Errors.empty()) << log->All();
+  ASSERT_GT(apctest::MaxChannel(undisturbed.RGBA, 4, 3), 0.1) << "the positive control renders";
+  const std::pair<apc::FailurePoint, const char*> points[] = {
+    { apc::FailurePoint::PassOne, "pass 1" },
+    { apc::FailurePoint::PassTwo, "pass 2" },
+  };
+  for (const auto& [point, name] : points)
+  {
+    log->Errors.clear();
+    apc::FailForTesting(point, 1);
+    const Frame failed = live.Render();
+    std::cout << name << " failing: " << log->All() << "\n";
+    EXPECT_TRUE(MessageLog::Mentions(log->Errors, std::string("APC frame skipped: ") + name))
+      << log->All();
+    ExpectBlank(failed, name);
+    log->Errors.clear();
+    const Frame again = live.Render();
+    EXPECT_TRUE(log->Errors.empty()) << log->All();
+    EXPECT_EQ(again.RGBA, undisturbed.RGBA) << name << ": the next frame is the undisturbed one";
+    EXPECT_EQ(again.Window, undisturbed.Window) << name;
   }
 }
 
