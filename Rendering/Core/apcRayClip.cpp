@@ -8,7 +8,6 @@
 #include "apcRayClip.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -35,9 +34,9 @@ bool HasAvx512()
 {
 #ifdef APC_HAVE_AVX2_CLIP
   // Both the instructions and the operating system's saving of their registers (libgcc's
-  // test of XCR0); APC_NO_AVX512 in the environment turns the eight-wide clip off (A/B).
-  static const bool avx512 = __builtin_cpu_supports("avx512f") &&
-    __builtin_cpu_supports("avx512vl") && std::getenv("APC_NO_AVX512") == nullptr;
+  // test of XCR0).
+  static const bool avx512 =
+    __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
   return avx512;
 #else
   return false;
