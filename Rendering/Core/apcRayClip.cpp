@@ -30,6 +30,19 @@ bool HasAvx2()
 #endif
 }
 
+bool HasAvx512()
+{
+#ifdef APC_HAVE_AVX2_CLIP
+  // Both the instructions and the operating system's saving of their registers (libgcc's
+  // test of XCR0).
+  static const bool avx512 =
+    __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  return avx512;
+#else
+  return false;
+#endif
+}
+
 int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out)
 {
@@ -429,6 +442,217 @@ __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const
   }
   return n;
 }
+
+namespace
+{
+
+// The eight lanes of two packets of four rays (l0 and l1 on, each as ClipFour reads it) as
+// one vector: the low half packet l0's, the high half l1's.
+__attribute__((target("avx512f,avx512vl"), always_inline)) inline __m512d Halves(
+  const double* v, int l0, int l1)
+{
+  return _mm512_insertf64x4(
+    _mm512_castpd256_pd512(_mm256_loadu_pd(v + l0)), _mm256_loadu_pd(v + l1), 1);
+}
+
+// ClipFour of two packets at once (valid: bits 0-3 packet l0's lanes, 4-7 packet l1's): the
+// same operations lane by lane, so the same intervals where they are not empty; one division
+// per plane for eight rays instead of two. The packets leave early together: where all
+// their valid lanes are out, or none is open after three planes.
+__attribute__((target("avx512f,avx512vl"))) inline void ClipEight(const CellPlanes& planes,
+  const TileRays& rays, int l0, int l1, __mmask8 valid, const double* stop, double near,
+  __m512d& lo, __m512d& hi)
+{
+  const __m512d zero = _mm512_setzero_pd();
+  const __m512d inf = _mm512_set1_pd(std::numeric_limits<double>::infinity());
+  const __m512d minusInf = _mm512_set1_pd(-std::numeric_limits<double>::infinity());
+  const __m512d dx = Halves(rays.Dx, l0, l1);
+  const __m512d dy = Halves(rays.Dy, l0, l1);
+  const __m512d dz = Halves(rays.Dz, l0, l1);
+  lo = zero;
+  hi = Halves(rays.End, l0, l1);
+  __mmask8 out = 0;
+  if (stop)
+  {
+    // min(tout, stop) as std::min keeps tout on a tie. stop holds no padding.
+    const __m512d s = _mm512_insertf64x4(
+      _mm512_castpd256_pd512(_mm256_maskz_loadu_pd(static_cast<__mmask8>(valid & 0xF), stop + l0)),
+      _mm256_maskz_loadu_pd(static_cast<__mmask8>(valid >> 4), stop + l1), 1);
+    hi = _mm512_min_pd(s, hi);
+    out = _mm512_cmp_pd_mask(_mm512_set1_pd(near), s, _CMP_GE_OQ);
+    if ((valid & ~out & 0xFF) == 0)
+    {
+      hi = minusInf;
+      return;
+    }
+  }
+  const __mmask8 open = valid & ~out;
+  __mmask8 parallel = 0;
+  __m512d ox = zero;
+  __m512d oy = zero;
+  __m512d oz = zero;
+  if (!planes.SharedOrigin)
+  {
+    ox = Halves(rays.Ox, l0, l1);
+    oy = Halves(rays.Oy, l0, l1);
+    oz = Halves(rays.Oz, l0, l1);
+  }
+  for (int p = 0; p < planes.Count; ++p)
+  {
+    // PlaneTerms' products and sums, no FMA.
+    const __m512d nx = _mm512_set1_pd(planes.Nx[p]);
+    const __m512d ny = _mm512_set1_pd(planes.Ny[p]);
+    const __m512d nz = _mm512_set1_pd(planes.Nz[p]);
+    const __m512d denom = _mm512_add_pd(
+      _mm512_add_pd(_mm512_mul_pd(nx, dx), _mm512_mul_pd(ny, dy)), _mm512_mul_pd(nz, dz));
+    __m512d num;
+    if (planes.SharedOrigin)
+    {
+      num = _mm512_set1_pd(planes.Num[p]);
+    }
+    else
+    {
+      const __m512d dot = _mm512_add_pd(
+        _mm512_add_pd(_mm512_mul_pd(nx, ox), _mm512_mul_pd(ny, oy)), _mm512_mul_pd(nz, oz));
+      num = _mm512_sub_pd(_mm512_set1_pd(planes.Offset[p]), dot);
+    }
+    const __m512d q = _mm512_div_pd(num, denom);
+    const __mmask8 entering = _mm512_cmp_pd_mask(denom, zero, _CMP_LT_OQ);
+    const __mmask8 leaving = _mm512_cmp_pd_mask(denom, zero, _CMP_GT_OQ);
+    lo = _mm512_max_pd(_mm512_mask_blend_pd(entering, minusInf, q), lo);
+    hi = _mm512_min_pd(_mm512_mask_blend_pd(leaving, inf, q), hi);
+    parallel |= _mm512_cmp_pd_mask(denom, zero, _CMP_EQ_OQ);
+    if (p == 2 && planes.Count > 4 && (_mm512_cmp_pd_mask(lo, hi, _CMP_LT_OQ) & open) == 0)
+    {
+      hi = minusInf; // an out lane may still be open here
+      return;
+    }
+  }
+  if (parallel != 0)
+  {
+    // Rare: each half as ClipFour finds its lanes.
+    if (parallel & 0xF)
+    {
+      out |= static_cast<__mmask8>(_mm256_movemask_pd(ParallelOut(planes, rays, l0)));
+    }
+    if (parallel >> 4)
+    {
+      out |= static_cast<__mmask8>(_mm256_movemask_pd(ParallelOut(planes, rays, l1)) << 4);
+    }
+  }
+  hi = _mm512_mask_blend_pd(out, hi, minusInf);
+}
+
+// FirstFour of eight rays: the same operations lane by lane.
+__attribute__((target("avx512f,avx512vl"))) inline __m512d FirstEight(
+  const Lattice& lattice, __m512d lo, __m512d offset, __m512d& tk, int& unsettled)
+{
+  const __m512d one = _mm512_set1_pd(1.0);
+  const __m512d two = _mm512_set1_pd(2.0);
+  const __m512d spacing = _mm512_set1_pd(lattice.Spacing);
+  const __m512d x =
+    _mm512_sub_pd(_mm512_mul_pd(lo, _mm512_set1_pd(lattice.InverseSpacing)), offset);
+  const __m512d k0 = _mm512_roundscale_pd(x, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+  const __m512d k1 = _mm512_add_pd(k0, one);
+  const __m512d tm2 = _mm512_mul_pd(_mm512_add_pd(_mm512_sub_pd(k0, two), offset), spacing);
+  const __m512d tm1 = _mm512_mul_pd(_mm512_add_pd(_mm512_sub_pd(k0, one), offset), spacing);
+  const __m512d t0 = _mm512_mul_pd(_mm512_add_pd(k0, offset), spacing);
+  const __m512d t1 = _mm512_mul_pd(_mm512_add_pd(k1, offset), spacing);
+  const __mmask8 cm2 = _mm512_cmp_pd_mask(tm2, lo, _CMP_GE_OQ);
+  const __mmask8 cm1 = _mm512_cmp_pd_mask(tm1, lo, _CMP_GE_OQ);
+  const __mmask8 c0 = _mm512_cmp_pd_mask(t0, lo, _CMP_GE_OQ);
+  const __mmask8 c1 = _mm512_cmp_pd_mask(t1, lo, _CMP_GE_OQ);
+  unsettled = (~cm2 & c1) ^ 0xFF;
+  tk = _mm512_mask_blend_pd(cm1, _mm512_mask_blend_pd(c0, t1, t0), tm1);
+  // k1 - [c_-1] - [c_0], as FirstFour's subtractions of 1 or 0.
+  const __m512d m1 = _mm512_maskz_mov_pd(cm1, one);
+  const __m512d m0 = _mm512_maskz_mov_pd(c0, one);
+  return _mm512_sub_pd(_mm512_sub_pd(k1, m1), m0);
+}
+
+} // namespace
+
+// ClipRaysAvx2 two packets at a time: the rectangle's packets of four rays (a row's from its
+// first ray on, as ClipRaysAvx2 forms them) taken in pairs, across rows too, so that a
+// rectangle a packet wide (most of them at 1024²) fills the eight lanes as well.
+__attribute__((target("avx512f,avx512vl"))) int ClipRaysAvx512(const CellPlanes& planes,
+  const TileRays& rays, const RayRect& rect, const double* stop, double near,
+  const Lattice* lattice, ClippedRays& out)
+{
+  int n = 0;
+  // The next packet: its first ray, and how many rays of the row it holds (up to 4).
+  int row = 0;
+  int next = rect.First;
+  int rowEnd = rect.First + rect.Width;
+  auto take = [&](int& l, int& count)
+  {
+    l = next;
+    count = std::min(rowEnd - next, 4);
+    next += 4;
+    if (next >= rowEnd)
+    {
+      ++row;
+      next = rect.First + row * rect.Stride;
+      rowEnd = next + rect.Width;
+    }
+  };
+  while (row < rect.Rows)
+  {
+    int l0;
+    int c0;
+    take(l0, c0);
+    int l1 = l0;
+    int c1 = 0;
+    if (row < rect.Rows)
+    {
+      take(l1, c1);
+    }
+    const __mmask8 valid = static_cast<__mmask8>(((1u << c0) - 1u) | ((1u << c1) - 1u) << 4);
+    __m512d lo;
+    __m512d hi;
+    ClipEight(planes, rays, l0, l1, valid, stop, near, lo, hi);
+    // Packet l1's valid lanes only: nothing where there is no second packet (l1 = l0), and
+    // no lane past its row over one of packet l0's.
+    const __mmask8 valid1 = static_cast<__mmask8>(valid >> 4);
+    _mm256_storeu_pd(out.Tin + l0, _mm512_castpd512_pd256(lo));
+    _mm256_storeu_pd(out.Tout + l0, _mm512_castpd512_pd256(hi));
+    _mm256_mask_storeu_pd(out.Tin + l1, valid1, _mm512_extractf64x4_pd(lo, 1));
+    _mm256_mask_storeu_pd(out.Tout + l1, valid1, _mm512_extractf64x4_pd(hi, 1));
+    int keep = _mm512_cmp_pd_mask(lo, hi, _CMP_LT_OQ) & valid;
+    if (lattice)
+    {
+      const __m512d offset = Halves(rays.Offset, l0, l1);
+      int unsettled = 0;
+      __m512d first;
+      const __m512d k = FirstEight(*lattice, lo, offset, first, unsettled);
+      _mm256_storeu_pd(out.Lattice + l0, _mm512_castpd512_pd256(k));
+      _mm256_mask_storeu_pd(out.Lattice + l1, valid1, _mm512_extractf64x4_pd(k, 1));
+      const int inside = _mm512_cmp_pd_mask(first, hi, _CMP_LT_OQ);
+      keep = (keep & inside) | (keep & unsettled);
+      for (int m = keep & unsettled; m; m &= m - 1)
+      {
+        const int lane = __builtin_ctz(m);
+        const int r = (lane < 4 ? l0 : l1) + (lane & 3);
+        const int64_t kr = lattice->First(out.Tin[r], rays.Offset[r]);
+        out.Lattice[r] = static_cast<double>(kr);
+        keep &= lattice->At(kr, rays.Offset[r]) < out.Tout[r] ? ~0 : ~(1 << lane);
+      }
+    }
+    // Each packet's four 16-bit ray numbers, of which the first popcount are kept.
+    const int keep0 = keep & 0xF;
+    const int keep1 = keep >> 4;
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n),
+      _mm_add_epi16(_mm_set1_epi16(static_cast<short>(l0)),
+        _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[keep0]))));
+    n += __builtin_popcount(keep0);
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n),
+      _mm_add_epi16(_mm_set1_epi16(static_cast<short>(l1)),
+        _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[keep1]))));
+    n += __builtin_popcount(keep1);
+  }
+  return n;
+}
+
 // ClipRaysAvx2 without a lattice, and the end weights of the kept rays' pairs: EndWeightsOf's
 // operations, four rays at a time. Where some lane's interval ends at its stop, the packet is
 // clipped again without the stop for the pair's own end (ClipFour's arithmetic is Clip's);
@@ -536,6 +760,11 @@ int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& 
 {
   return ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
 }
+int ClipRaysAvx512(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice* lattice, ClippedRays& out)
+{
+  return ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
+}
 int ClipRaysWeightedAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice& lattice, ClippedRays& out,
   ClippedWeights& weights)
@@ -547,6 +776,10 @@ int ClipRaysWeightedAvx2(const CellPlanes& planes, const TileRays& rays, const R
 int ClipRays(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out)
 {
+  if (HasAvx512())
+  {
+    return ClipRaysAvx512(planes, rays, rect, stop, near, lattice, out);
+  }
   return HasAvx2() ? ClipRaysAvx2(planes, rays, rect, stop, near, lattice, out)
                    : ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
 }

@@ -74,8 +74,9 @@ struct ClippedRays
 // empty values), and nothing where near >= stop (the cell
 // lies behind where the ray is opaque); stop (by ray) may be null. Without a lattice the rays
 // kept are those with Tin < Tout; with one, those whose interval holds a lattice point, whose
-// first index goes to Lattice. Returns how many rays were kept. Four rays per AVX2
-// instruction where the processor has it, else ray by ray (CellPlanes::Clip, Lattice::First).
+// first index goes to Lattice. Returns how many rays were kept. Eight rays per AVX-512
+// instruction or four per AVX2 instruction where the processor has them, else ray by ray
+// (CellPlanes::Clip, Lattice::First).
 int ClipRays(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out);
 // The two forms ClipRays chooses from (tests); ClipRaysAvx2 only where HasAvx2().
@@ -83,7 +84,12 @@ int ClipRaysScalar(const CellPlanes& planes, const TileRays& rays, const RayRect
   const double* stop, double near, const Lattice* lattice, ClippedRays& out);
 int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out);
+// ClipRaysAvx2 with eight rays per instruction (two packets of four at once), the same
+// output; only where HasAvx512().
+int ClipRaysAvx512(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
+  const double* stop, double near, const Lattice* lattice, ClippedRays& out);
 bool HasAvx2();
+bool HasAvx512();
 
 // Sample End Weights = Boundary: CellPlanes::BoundaryEnds of the rays hits[0, count) of out
 // (each over [Tin, Tout), as ClipRays left it), bit for bit, four rays at a time: ends[h]

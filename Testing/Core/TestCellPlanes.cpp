@@ -301,6 +301,15 @@ TEST(CellPlanes, ClipRaysAvx2MatchesPerPlaneDivision)
   CheckClipRays(apc::walk::ClipRaysAvx2);
 }
 
+TEST(CellPlanes, ClipRaysAvx512MatchesPerPlaneDivision)
+{
+  if (!apc::walk::HasAvx512())
+  {
+    GTEST_SKIP() << "no AVX-512 on this processor";
+  }
+  CheckClipRays(apc::walk::ClipRaysAvx512);
+}
+
 // Sample End Weights = Boundary's ends four rays at a time (walk::BoundaryEnds, both forms):
 // for random cells, boundary masks and rays (shared origin or not, rays along the axes too,
 // so that quotients tie between planes and denominators are +-0), the flags of
@@ -381,6 +390,10 @@ TEST(CellPlanes, ClipRaysFindTheFirstLatticeIndexOnALatticePoint)
   if (apc::walk::HasAvx2())
   {
     forms.push_back(apc::walk::ClipRaysAvx2);
+  }
+  if (apc::walk::HasAvx512())
+  {
+    forms.push_back(apc::walk::ClipRaysAvx512);
   }
   std::mt19937 rng(41);
   std::uniform_real_distribution<double> u(0.0, 1.0);
