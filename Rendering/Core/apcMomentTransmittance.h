@@ -38,6 +38,8 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <utility>
 
@@ -266,6 +268,26 @@ inline double MomentTransmittance<N>::ChristoffelKernel(double x) const
   return kernel;
 }
 
+// True where exp(-b0) b0 > w is certain without an exponential: exp(-b0) >= 2^-k for an integer
+// k >= b0 log2(e), and b0 2^-k (exact) above w by a margin far beyond the roundings of
+// exp(-b0) b0 as HiddenDepth forms it, so that HiddenDepth's own test would find the same
+// (no hidden depth). Most pixels of a frame have b0 below ln(1/w) or so and answer here
+// instead of calling libm's exp; the few near the crossing, and b0 <= w, are not answered.
+inline bool SurelyNoHiddenDepth(double b0, double w)
+{
+  if (!(b0 > 0.0 && b0 < 512.0))
+  {
+    return false;
+  }
+  // b0 log2(e) as rounded is within 1e-13 of the exact product: 1e-9 more and the floor's
+  // next integer is above the exact one.
+  const int k = static_cast<int>(b0 * 1.4426950408889634 + 1e-9) + 1;
+  const uint64_t bits = static_cast<uint64_t>(1023 - k) << 52;
+  double power;
+  std::memcpy(&power, &bits, sizeof(power));
+  return b0 * power > w * (1.0 + 1e-12);
+}
+
 template <int N>
 template <class Range>
 inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range& range) const
@@ -274,7 +296,7 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
   // Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
   // pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
   if (this->State != PixelState::Valid || !(maxWeight > 0.0) ||
-    !(std::exp(-this->B0) * this->B0 <= maxWeight))
+    SurelyNoHiddenDepth(this->B0, maxWeight) || !(std::exp(-this->B0) * this->B0 <= maxWeight))
   {
     return kNone;
   }

@@ -1,4 +1,5 @@
 #include "apcPixelReplay.h"
+#include "apcPixelReplayAvx512.h"
 
 #include <cmath>
 #include <cstring>
@@ -354,17 +355,62 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
 } // namespace
 #endif
 
-bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
-  const TransferTable::Layout& table, const CachedSample* samples, int n, double sums[4],
-  int64_t& hidden, const float* weights)
+namespace
+{
+bool HasAvx2Replay()
 {
 #ifdef APC_HAVE_AVX2_REPLAY
-  static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  FourMomentPixel px;
-  if (avx2 && t.GetFourMomentPixel(px))
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return has;
+#else
+  return false;
+#endif
+}
+} // namespace
+
+bool HasReplayKernel(ReplayKernel kernel)
+{
+  switch (kernel)
   {
-    hidden += weights ? ReplayAvx2<true>(t, px, hiddenFrom, table, samples, n, sums, weights)
-                      : ReplayAvx2<false>(t, px, hiddenFrom, table, samples, n, sums, nullptr);
+    case ReplayKernel::Avx512:
+      return HasAvx512Replay();
+    case ReplayKernel::Avx2:
+      return HasAvx2Replay();
+    case ReplayKernel::Best:
+      break;
+  }
+  return HasAvx512Replay() || HasAvx2Replay();
+}
+
+bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
+  const TransferTable::Layout& table, const CachedSample* samples, int n, double sums[4],
+  int64_t& hidden, const float* weights, ReplayKernel kernel)
+{
+#ifdef APC_HAVE_AVX2_REPLAY
+  // Chosen once: the widest kernel the CPU runs.
+  static const ReplayKernel best = HasAvx512Replay()
+    ? ReplayKernel::Avx512
+    : (HasAvx2Replay() ? ReplayKernel::Avx2 : ReplayKernel::Best);
+  if (kernel == ReplayKernel::Best)
+  {
+    kernel = best;
+  }
+  else if (!HasReplayKernel(kernel))
+  {
+    return false;
+  }
+  FourMomentPixel px;
+  if (kernel != ReplayKernel::Best && t.GetFourMomentPixel(px))
+  {
+    if (kernel == ReplayKernel::Avx512)
+    {
+      hidden += ReplayFourMomentAvx512(t, px, hiddenFrom, table, samples, n, sums, weights);
+    }
+    else
+    {
+      hidden += weights ? ReplayAvx2<true>(t, px, hiddenFrom, table, samples, n, sums, weights)
+                        : ReplayAvx2<false>(t, px, hiddenFrom, table, samples, n, sums, nullptr);
+    }
     return true;
   }
 #endif
@@ -376,6 +422,7 @@ bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
   (void)sums;
   (void)hidden;
   (void)weights;
+  (void)kernel;
   return false;
 }
 

@@ -17,16 +17,29 @@
 namespace apc
 {
 
+// Which vector replay serves a pixel: the widest the CPU runs (Best: AVX-512, else AVX2), or
+// one named, so that tests can hold the kernels against each other. Every kernel gives the
+// same sums to the bit.
+enum class ReplayKernel
+{
+  Best,
+  Avx2,
+  Avx512
+};
+
+// True if this build has the kernel and the CPU runs it (Best: any vector kernel).
+bool HasReplayKernel(ReplayKernel kernel);
+
 // Adds the weighted colour of samples[0, n) (one pixel's run) to sums (r, g, b, weight), as
 // ColourSums::Add would, skipping the samples at depths >= hiddenFrom (added to hidden). t:
 // the pixel's reconstruction; a sample its vector arithmetic cannot answer is weighted by t's
 // query. weights, if not null: each sample's end weight (apcEndWeights.h), by which its
 // looked-up absorbance is multiplied (a float product, as pass 1 took it). False, and nothing
-// done, if the CPU lacks AVX2 with FMA or t is not a valid pixel: the generic replay then
-// does it.
+// done, if the CPU lacks AVX2 with FMA (or the kernel asked for) or t is not a valid pixel:
+// the generic replay then does it.
 bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
   const TransferTable::Layout& table, const CachedSample* samples, int n, double sums[4],
-  int64_t& hidden, const float* weights = nullptr);
+  int64_t& hidden, const float* weights = nullptr, ReplayKernel kernel = ReplayKernel::Best);
 
 } // namespace apc
 

@@ -155,6 +155,60 @@ TYPED_TEST(MomentQueryTest, HiddenDepthIsTheOneStepBisection)
   EXPECT_GT(found, 500);
 }
 
+// HiddenDepth's test without an exponential answers only where exp(-b0) b0 > w (no hidden
+// depth): b0 on a dense grid over every weight's crossings, the crossings themselves to the
+// last bits, and it answers most pixels below the far crossing (b0 ~ ln(1/w)).
+TEST(HiddenDepthBound, AnswersOnlyWhereTheExponentialWould)
+{
+  int answered = 0;
+  int below = 0;
+  for (const double w : { 1e-2, 1e-4, 1e-6, 0.3 })
+  {
+    std::vector<double> b0s;
+    for (double b = 1e-8; b < 600.0; b *= 1.0001)
+    {
+      b0s.push_back(b);
+    }
+    // Near the crossings exp(-b) b = w, found by bisection, both sides by a few ulps.
+    for (double lo0 : { 1e-9, 1.0 })
+    {
+      double lo = lo0;
+      double hi = lo0 == 1.0 ? 700.0 : 1.0;
+      for (int i = 0; i < 200; ++i)
+      {
+        const double mid = 0.5 * (lo + hi);
+        const bool above = std::exp(-mid) * mid > w;
+        ((above == (lo0 == 1.0)) ? lo : hi) = mid;
+      }
+      double b = lo;
+      for (int i = 0; i < 64; ++i)
+      {
+        b = std::nextafter(b, 0.0);
+      }
+      for (int i = 0; i < 128; ++i, b = std::nextafter(b, 1e300))
+      {
+        b0s.push_back(b);
+      }
+    }
+    const double far = -std::log(w) + std::log(-std::log(w));
+    for (const double b0 : b0s)
+    {
+      const bool expAnswer = !(std::exp(-b0) * b0 <= w);
+      if (apc::SurelyNoHiddenDepth(b0, w))
+      {
+        ++answered;
+        ASSERT_TRUE(expAnswer) << "b0 " << b0 << " w " << w;
+      }
+      else if (expAnswer && b0 > 10.0 * w && b0 < 0.8 * far)
+      {
+        ++below; // left to the exponential although far from both crossings
+      }
+    }
+  }
+  EXPECT_GT(answered, 100000);
+  EXPECT_EQ(below, 0);
+}
+
 // Given the range of a pixel's samples, HiddenDepth stops its bisection once no sample lies
 // between its bounds: the depth may differ from HiddenDepth(w), but every sample, and every
 // depth in the range, falls on the same side of both. Rays as above, their samples as the
