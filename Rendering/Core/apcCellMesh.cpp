@@ -253,40 +253,44 @@ uint64_t PointHash(const std::array<double, 3>& p)
 // corners have the same coordinates: pieces appended without merging their points match as
 // merged ones do. The points are bucketed by a hash of their coordinates (a counting sort,
 // ids ascending within a bucket), a point's representative the first of its bucket it equals.
-UninitializedVector<int64_t> PointRepresentatives(const std::vector<std::array<double, 3>>& points)
+// Index: the matching's (32 bits where the points fit: the counting sort's arrays are memory a
+// first frame touches fresh, in 4 KiB pages at their size).
+template <class Index>
+UninitializedVector<Index> PointRepresentatives(const std::vector<std::array<double, 3>>& points)
 {
   const int64_t count = static_cast<int64_t>(points.size());
-  UninitializedVector<int64_t> representatives(static_cast<size_t>(count));
+  UninitializedVector<Index> representatives(static_cast<size_t>(count));
   uint64_t buckets = 1;
   while (buckets < static_cast<uint64_t>(count))
   {
     buckets <<= 1;
   }
-  UninitializedVector<uint64_t> bucketOf(static_cast<size_t>(count));
+  // Buckets are fewer than twice the points, so a bucket's number is an Index too.
+  UninitializedVector<Index> bucketOf(static_cast<size_t>(count));
   ParallelFor(0, count, 16384,
     [&](int64_t begin, int64_t end)
     {
       for (int64_t i = begin; i < end; ++i)
       {
-        bucketOf[i] = PointHash(points[i]) & (buckets - 1);
+        bucketOf[i] = static_cast<Index>(PointHash(points[i]) & (buckets - 1));
       }
     });
-  UninitializedVector<int64_t> starts(static_cast<size_t>(buckets) + 1);
-  std::fill(starts.begin(), starts.end(), 0);
+  UninitializedVector<Index> starts(static_cast<size_t>(buckets) + 1);
+  std::fill(starts.begin(), starts.end(), Index(0));
   for (int64_t i = 0; i < count; ++i)
   {
-    ++starts[bucketOf[i] + 1];
+    ++starts[static_cast<size_t>(bucketOf[i]) + 1];
   }
   for (uint64_t b = 0; b < buckets; ++b)
   {
     starts[b + 1] += starts[b];
   }
-  UninitializedVector<int64_t> order(static_cast<size_t>(count));
+  UninitializedVector<Index> order(static_cast<size_t>(count));
   {
-    UninitializedVector<int64_t> next(starts.begin(), starts.end() - 1);
+    UninitializedVector<Index> next(starts.begin(), starts.end() - 1);
     for (int64_t i = 0; i < count; ++i)
     {
-      order[next[bucketOf[i]]++] = i;
+      order[next[bucketOf[i]]++] = static_cast<Index>(i);
     }
   }
   ParallelFor(0, static_cast<int64_t>(buckets), 16384,
@@ -294,10 +298,10 @@ UninitializedVector<int64_t> PointRepresentatives(const std::vector<std::array<d
     {
       for (int64_t b = begin; b < end; ++b)
       {
-        for (int64_t i = starts[b]; i < starts[b + 1]; ++i)
+        for (Index i = starts[b]; i < starts[b + 1]; ++i)
         {
           const std::array<double, 3>& p = points[order[i]];
-          int64_t j = starts[b];
+          Index j = starts[b];
           while (!SameCoordinates(points[order[j]], p))
           {
             ++j;
@@ -519,7 +523,7 @@ void CellMesh::MatchFaces(uint8_t* shared) const
   // comparisons a face pairwise.
   const int64_t numCells = this->GetNumberOfCells();
   const int64_t numPoints = static_cast<int64_t>(this->Points.size());
-  const UninitializedVector<int64_t> representatives = PointRepresentatives(this->Points);
+  const UninitializedVector<Index> representatives = PointRepresentatives<Index>(this->Points);
   constexpr Index kNone = std::numeric_limits<Index>::max();
   // The faces go straight into their buckets, found in two passes over the cells (the
   // buckets' sizes, then the faces): each face's ids are formed twice, but no array of every
@@ -542,7 +546,7 @@ void CellMesh::MatchFaces(uint8_t* shared) const
         continue;
       }
       ++n;
-      int64_t smallest = representatives[ids[shapeFaces.Corner[f][0]]];
+      Index smallest = representatives[ids[shapeFaces.Corner[f][0]]];
       for (int i = 1; i < shapeFaces.Size[f]; ++i)
       {
         smallest = std::min(smallest, representatives[ids[shapeFaces.Corner[f][i]]]);
@@ -574,7 +578,7 @@ void CellMesh::MatchFaces(uint8_t* shared) const
         int count = 0;
         for (int i = 0; i < shapeFaces.Size[f]; ++i)
         {
-          const Index id = static_cast<Index>(representatives[ids[shapeFaces.Corner[f][i]]]);
+          const Index id = representatives[ids[shapeFaces.Corner[f][i]]];
           int at = count;
           while (at > 0 && face[at - 1] > id)
           {
