@@ -528,7 +528,7 @@ void CellMesh::MatchFaces(uint8_t* shared) const
   // The faces go straight into their buckets, found in two passes over the cells (the
   // buckets' sizes, then the faces): each face's ids are formed twice, but no array of every
   // face's ids is written first (16 bytes a face slot: 32 MB on the wind, memory a first
-  // frame touches fresh, at ~2 ms a MB in this virtual machine, more than forming them again).
+  // frame touches fresh, which costs more than forming the faces again; docs/performance.md).
   // Pass one needs only a face's smallest representative.
   UninitializedVector<Index> starts(static_cast<size_t>(numPoints) + 1);
   std::fill(starts.begin(), starts.end(), Index(0));
