@@ -253,40 +253,44 @@ uint64_t PointHash(const std::array<double, 3>& p)
 // corners have the same coordinates: pieces appended without merging their points match as
 // merged ones do. The points are bucketed by a hash of their coordinates (a counting sort,
 // ids ascending within a bucket), a point's representative the first of its bucket it equals.
-UninitializedVector<int64_t> PointRepresentatives(const std::vector<std::array<double, 3>>& points)
+// Index: the matching's (32 bits where the points fit: the counting sort's arrays are memory a
+// first frame touches fresh, in 4 KiB pages at their size).
+template <class Index>
+UninitializedVector<Index> PointRepresentatives(const std::vector<std::array<double, 3>>& points)
 {
   const int64_t count = static_cast<int64_t>(points.size());
-  UninitializedVector<int64_t> representatives(static_cast<size_t>(count));
+  UninitializedVector<Index> representatives(static_cast<size_t>(count));
   uint64_t buckets = 1;
   while (buckets < static_cast<uint64_t>(count))
   {
     buckets <<= 1;
   }
-  UninitializedVector<uint64_t> bucketOf(static_cast<size_t>(count));
+  // Buckets are fewer than twice the points, so a bucket's number is an Index too.
+  UninitializedVector<Index> bucketOf(static_cast<size_t>(count));
   ParallelFor(0, count, 16384,
     [&](int64_t begin, int64_t end)
     {
       for (int64_t i = begin; i < end; ++i)
       {
-        bucketOf[i] = PointHash(points[i]) & (buckets - 1);
+        bucketOf[i] = static_cast<Index>(PointHash(points[i]) & (buckets - 1));
       }
     });
-  UninitializedVector<int64_t> starts(static_cast<size_t>(buckets) + 1);
-  std::fill(starts.begin(), starts.end(), 0);
+  UninitializedVector<Index> starts(static_cast<size_t>(buckets) + 1);
+  std::fill(starts.begin(), starts.end(), Index(0));
   for (int64_t i = 0; i < count; ++i)
   {
-    ++starts[bucketOf[i] + 1];
+    ++starts[static_cast<size_t>(bucketOf[i]) + 1];
   }
   for (uint64_t b = 0; b < buckets; ++b)
   {
     starts[b + 1] += starts[b];
   }
-  UninitializedVector<int64_t> order(static_cast<size_t>(count));
+  UninitializedVector<Index> order(static_cast<size_t>(count));
   {
-    UninitializedVector<int64_t> next(starts.begin(), starts.end() - 1);
+    UninitializedVector<Index> next(starts.begin(), starts.end() - 1);
     for (int64_t i = 0; i < count; ++i)
     {
-      order[next[bucketOf[i]]++] = i;
+      order[next[bucketOf[i]]++] = static_cast<Index>(i);
     }
   }
   ParallelFor(0, static_cast<int64_t>(buckets), 16384,
@@ -294,10 +298,10 @@ UninitializedVector<int64_t> PointRepresentatives(const std::vector<std::array<d
     {
       for (int64_t b = begin; b < end; ++b)
       {
-        for (int64_t i = starts[b]; i < starts[b + 1]; ++i)
+        for (Index i = starts[b]; i < starts[b + 1]; ++i)
         {
           const std::array<double, 3>& p = points[order[i]];
-          int64_t j = starts[b];
+          Index j = starts[b];
           while (!SameCoordinates(points[order[j]], p))
           {
             ++j;
@@ -308,15 +312,6 @@ UninitializedVector<int64_t> PointRepresentatives(const std::vector<std::array<d
     });
   return representatives;
 }
-
-// A face as its corners' distinct representatives, ascending, padded with the largest Index
-// (a triangle, or a quad with two corners on one point). Index: 32 bits where the points and
-// face slots fit, which halves the memory the matching writes and reads.
-template <class Index>
-struct FaceIds
-{
-  Index Ids[4];
-};
 
 // A face in its bucket (its smallest id, Ids[0], is the bucket's): the other ids and its slot,
 // side by side, so that a bucket is sorted and compared in place.
@@ -528,62 +523,35 @@ void CellMesh::MatchFaces(uint8_t* shared) const
   // comparisons a face pairwise.
   const int64_t numCells = this->GetNumberOfCells();
   const int64_t numPoints = static_cast<int64_t>(this->Points.size());
-  const UninitializedVector<int64_t> representatives = PointRepresentatives(this->Points);
+  const UninitializedVector<Index> representatives = PointRepresentatives<Index>(this->Points);
   constexpr Index kNone = std::numeric_limits<Index>::max();
-  UninitializedVector<FaceIds<Index>> faces(this->Planes.size());
-  ParallelFor(0, numCells, 4096,
-    [&](int64_t begin, int64_t end)
-    {
-      for (int64_t cell = begin; cell < end; ++cell)
-      {
-        const int64_t* ids = this->GetCellPoints(cell);
-        const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
-        FaceIds<Index>* out = faces.data() + this->PlaneOffsets[cell];
-        int n = 0;
-        for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
-        {
-          if (!(this->PlaneFaces[cell] & (1u << f)))
-          {
-            continue;
-          }
-          FaceIds<Index>& face = out[n++];
-          int count = 0;
-          for (int i = 0; i < shapeFaces.Size[f]; ++i)
-          {
-            // Insertion into the sorted distinct ids so far.
-            const Index id = static_cast<Index>(representatives[ids[shapeFaces.Corner[f][i]]]);
-            int at = count;
-            while (at > 0 && face.Ids[at - 1] > id)
-            {
-              --at;
-            }
-            if (at > 0 && face.Ids[at - 1] == id)
-            {
-              continue;
-            }
-            for (int k = count; k > at; --k)
-            {
-              face.Ids[k] = face.Ids[k - 1];
-            }
-            face.Ids[at] = id;
-            ++count;
-          }
-          for (int k = count; k < 4; ++k)
-          {
-            face.Ids[k] = kNone;
-          }
-        }
-      }
-    });
-  // Buckets by the smallest representative (a counting sort of the faces' slots).
+  // The faces go straight into their buckets, found in two passes over the cells (the
+  // buckets' sizes, then the faces): each face's ids are formed twice, but no array of every
+  // face's ids is written first (16 bytes a face slot: 32 MB on the wind, memory a first
+  // frame touches fresh, which costs more than forming the faces again; docs/performance.md).
+  // Pass one needs only a face's smallest representative.
   UninitializedVector<Index> starts(static_cast<size_t>(numPoints) + 1);
   std::fill(starts.begin(), starts.end(), Index(0));
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
-    const FaceIds<Index>* cellFaces = faces.data() + this->PlaneOffsets[cell];
-    for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+    const int64_t* ids = this->GetCellPoints(cell);
+    const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+    // The same faces as pass two's: a cell left out after some planes (fewer than four) keeps
+    // their bits in PlaneFaces but has no planes.
+    int n = 0;
+    for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
     {
-      ++starts[cellFaces[n].Ids[0] + 1];
+      if (!(this->PlaneFaces[cell] & (1u << f)))
+      {
+        continue;
+      }
+      ++n;
+      Index smallest = representatives[ids[shapeFaces.Corner[f][0]]];
+      for (int i = 1; i < shapeFaces.Size[f]; ++i)
+      {
+        smallest = std::min(smallest, representatives[ids[shapeFaces.Corner[f][i]]]);
+      }
+      ++starts[smallest + 1];
     }
   }
   for (int64_t p = 0; p < numPoints; ++p)
@@ -595,12 +563,44 @@ void CellMesh::MatchFaces(uint8_t* shared) const
     UninitializedVector<Index> next(starts.begin(), starts.end() - 1);
     for (int64_t cell = 0; cell < numCells; ++cell)
     {
-      for (int n = 0; n < this->PlaneCounts[cell]; ++n)
+      const int64_t* ids = this->GetCellPoints(cell);
+      const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+      int n = 0;
+      for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
       {
-        const int64_t slot = this->PlaneOffsets[cell] + n;
-        const FaceIds<Index>& face = faces[slot];
-        byBucket[next[face.Ids[0]]++] = { { face.Ids[1], face.Ids[2], face.Ids[3] },
-          static_cast<Index>(slot) };
+        if (!(this->PlaneFaces[cell] & (1u << f)))
+        {
+          continue;
+        }
+        // The face's distinct representatives, ascending, padded with kNone: insertion into
+        // the sorted distinct ids so far.
+        Index face[4];
+        int count = 0;
+        for (int i = 0; i < shapeFaces.Size[f]; ++i)
+        {
+          const Index id = representatives[ids[shapeFaces.Corner[f][i]]];
+          int at = count;
+          while (at > 0 && face[at - 1] > id)
+          {
+            --at;
+          }
+          if (at > 0 && face[at - 1] == id)
+          {
+            continue;
+          }
+          for (int k = count; k > at; --k)
+          {
+            face[k] = face[k - 1];
+          }
+          face[at] = id;
+          ++count;
+        }
+        for (int k = count; k < 4; ++k)
+        {
+          face[k] = kNone;
+        }
+        const int64_t slot = this->PlaneOffsets[cell] + n++;
+        byBucket[next[face[0]]++] = { { face[1], face[2], face[3] }, static_cast<Index>(slot) };
       }
     }
   }
