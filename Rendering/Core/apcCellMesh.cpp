@@ -530,29 +530,36 @@ void CellMesh::MatchFaces(uint8_t* shared) const
   // face's ids is written first (16 bytes a face slot: 32 MB on the wind, memory a first
   // frame touches fresh, which costs more than forming the faces again; docs/performance.md).
   // Pass one needs only a face's smallest representative.
+  // Both passes visit the same faces: each kept one (its bit in PlaneFaces, at most
+  // PlaneCounts of them: a cell left out after some planes, fewer than four, keeps their bits
+  // but has no planes), with its plane's index n in the cell.
+  const auto forEachKeptFace = [this](int64_t cell, auto visit)
+  {
+    const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
+    int n = 0;
+    for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
+    {
+      if (this->PlaneFaces[cell] & (1u << f))
+      {
+        visit(shapeFaces, f, n++);
+      }
+    }
+  };
   UninitializedVector<Index> starts(static_cast<size_t>(numPoints) + 1);
   std::fill(starts.begin(), starts.end(), Index(0));
   for (int64_t cell = 0; cell < numCells; ++cell)
   {
     const int64_t* ids = this->GetCellPoints(cell);
-    const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
-    // The same faces as pass two's: a cell left out after some planes (fewer than four) keeps
-    // their bits in PlaneFaces but has no planes.
-    int n = 0;
-    for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
-    {
-      if (!(this->PlaneFaces[cell] & (1u << f)))
+    forEachKeptFace(cell,
+      [&](const CellFaces& shapeFaces, int f, int)
       {
-        continue;
-      }
-      ++n;
-      Index smallest = representatives[ids[shapeFaces.Corner[f][0]]];
-      for (int i = 1; i < shapeFaces.Size[f]; ++i)
-      {
-        smallest = std::min(smallest, representatives[ids[shapeFaces.Corner[f][i]]]);
-      }
-      ++starts[smallest + 1];
-    }
+        Index smallest = representatives[ids[shapeFaces.Corner[f][0]]];
+        for (int i = 1; i < shapeFaces.Size[f]; ++i)
+        {
+          smallest = std::min(smallest, representatives[ids[shapeFaces.Corner[f][i]]]);
+        }
+        ++starts[smallest + 1];
+      });
   }
   for (int64_t p = 0; p < numPoints; ++p)
   {
@@ -564,44 +571,39 @@ void CellMesh::MatchFaces(uint8_t* shared) const
     for (int64_t cell = 0; cell < numCells; ++cell)
     {
       const int64_t* ids = this->GetCellPoints(cell);
-      const CellFaces& shapeFaces = FacesOf(this->Shapes[cell]);
-      int n = 0;
-      for (int f = 0; f < shapeFaces.Count && n < this->PlaneCounts[cell]; ++f)
-      {
-        if (!(this->PlaneFaces[cell] & (1u << f)))
+      forEachKeptFace(cell,
+        [&](const CellFaces& shapeFaces, int f, int n)
         {
-          continue;
-        }
-        // The face's distinct representatives, ascending, padded with kNone: insertion into
-        // the sorted distinct ids so far.
-        Index face[4];
-        int count = 0;
-        for (int i = 0; i < shapeFaces.Size[f]; ++i)
-        {
-          const Index id = representatives[ids[shapeFaces.Corner[f][i]]];
-          int at = count;
-          while (at > 0 && face[at - 1] > id)
+          // The face's distinct representatives, ascending, padded with kNone: insertion into
+          // the sorted distinct ids so far.
+          Index face[4];
+          int count = 0;
+          for (int i = 0; i < shapeFaces.Size[f]; ++i)
           {
-            --at;
+            const Index id = representatives[ids[shapeFaces.Corner[f][i]]];
+            int at = count;
+            while (at > 0 && face[at - 1] > id)
+            {
+              --at;
+            }
+            if (at > 0 && face[at - 1] == id)
+            {
+              continue;
+            }
+            for (int k = count; k > at; --k)
+            {
+              face[k] = face[k - 1];
+            }
+            face[at] = id;
+            ++count;
           }
-          if (at > 0 && face[at - 1] == id)
+          for (int k = count; k < 4; ++k)
           {
-            continue;
+            face[k] = kNone;
           }
-          for (int k = count; k > at; --k)
-          {
-            face[k] = face[k - 1];
-          }
-          face[at] = id;
-          ++count;
-        }
-        for (int k = count; k < 4; ++k)
-        {
-          face[k] = kNone;
-        }
-        const int64_t slot = this->PlaneOffsets[cell] + n++;
-        byBucket[next[face[0]]++] = { { face[1], face[2], face[3] }, static_cast<Index>(slot) };
-      }
+          const int64_t slot = this->PlaneOffsets[cell] + n;
+          byBucket[next[face[0]]++] = { { face[1], face[2], face[3] }, static_cast<Index>(slot) };
+        });
     }
   }
   ParallelFor(0, numPoints, 16384,
