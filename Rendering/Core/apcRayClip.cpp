@@ -197,7 +197,7 @@ __attribute__((target("avx2"))) __m256d ParallelOut(
     __m256d num;
     PlaneTerms(planes, rays, l, p, dx, dy, dz, denom, num);
     __m256d parallelOut = _mm256_cmp_pd(num, zero, _CMP_LT_OQ);
-    if (!planes.KeepsParallelRays(p))
+    if (planes.KeepsParallelRays[p] == 0)
     {
       parallelOut = _mm256_or_pd(parallelOut, _mm256_cmp_pd(num, zero, _CMP_EQ_OQ));
     }

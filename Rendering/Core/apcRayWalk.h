@@ -34,14 +34,9 @@ struct RaySetup
 };
 
 // True for exactly one of n and -n (n non-zero): the first non-zero component is positive.
-template <class T>
-inline bool InPositiveHalf(T x, T y, T z)
-{
-  return x != 0 ? x > 0 : (y != 0 ? y > 0 : z > 0);
-}
 inline bool InPositiveHalf(const std::array<float, 3>& n)
 {
-  return InPositiveHalf(n[0], n[1], n[2]);
+  return n[0] != 0 ? n[0] > 0 : (n[1] != 0 ? n[1] > 0 : n[2] > 0);
 }
 
 // A cell's face planes, set up once per cell and tile. Every ray of a perspective camera
@@ -59,6 +54,8 @@ struct CellPlanes
   double Nz[kMaxPlanes];
   double Offset[kMaxPlanes];
   double Num[kMaxPlanes];
+  // 1 where a ray running inside the plane is kept (see Clip), else 0.
+  double KeepsParallelRays[kMaxPlanes];
   // Bit p: plane p lies on the mesh's boundary (CellMesh::GetBoundaryPlanes); set by the
   // caller after Set where the end weights ask for it (ClipEnds), else 0.
   unsigned BoundaryMask = 0;
@@ -75,25 +72,17 @@ struct CellPlanes
         this->Ny[p] = planes[p].Normal[1];
         this->Nz[p] = planes[p].Normal[2];
         this->Offset[p] = planes[p].Offset;
+        this->KeepsParallelRays[p] = InPositiveHalf(planes[p].Normal) ? 1 : 0;
       }
       else
       {
-        // Parallel to every ray with every ray strictly inside (its numerator is 1): no
-        // effect, and never asked KeepsParallelRays.
+        // Parallel to every ray with every ray strictly inside: no effect.
         this->Nx[p] = this->Ny[p] = this->Nz[p] = 0;
         this->Offset[p] = 1;
+        this->KeepsParallelRays[p] = 1;
       }
       this->Num[p] = sharedOrigin ? this->Numerator(p, anyRay) : 0;
     }
-  }
-  // Whether a ray running inside plane p (on it: numerator 0) is kept (see Clip). Asked only
-  // for rays parallel to a plane, which are rare, so it is found here from the normal (the
-  // float normal's components widened exactly, so the same signs) rather than stored by Set
-  // for every plane of every (cell, tile) set-up: there, the branch on the normal's sign was
-  // a coin toss per plane.
-  bool KeepsParallelRays(int p) const
-  {
-    return InPositiveHalf(this->Nx[p], this->Ny[p], this->Nz[p]);
   }
   double Numerator(int p, const RaySetup& ray) const
   {
@@ -131,16 +120,17 @@ struct CellPlanes
       lo = _mm_max_pd(
         _mm_or_pd(_mm_and_pd(entering, q), _mm_andnot_pd(entering, _mm_sub_pd(zero, inf))), lo);
       hi = _mm_min_pd(_mm_or_pd(_mm_and_pd(leaving, q), _mm_andnot_pd(leaving, inf)), hi);
-      // A ray parallel to a plane and not strictly inside it may be out (see the scalar form
-      // below); which, ParallelOut decides for the rare rays that get here.
-      out = _mm_or_pd(out, _mm_and_pd(_mm_cmpeq_pd(denom, zero), _mm_cmple_pd(num, zero)));
+      // See the scalar form below for the rays parallel to a plane.
+      const __m128d parallelOut = _mm_and_pd(_mm_cmpeq_pd(denom, zero),
+        _mm_or_pd(_mm_cmplt_pd(num, zero),
+          _mm_and_pd(_mm_cmpeq_pd(num, zero),
+            _mm_cmpeq_pd(_mm_loadu_pd(this->KeepsParallelRays + p), zero))));
+      out = _mm_or_pd(out, parallelOut);
     }
     const double lo2 = std::max(_mm_cvtsd_f64(lo), _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo)));
     const double hi2 = std::min(_mm_cvtsd_f64(hi), _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi)));
     tin = lo2;
-    tout = _mm_movemask_pd(out) != 0 && this->ParallelOut(ray)
-      ? -std::numeric_limits<double>::infinity()
-      : hi2;
+    tout = _mm_movemask_pd(out) != 0 ? -std::numeric_limits<double>::infinity() : hi2;
 #else
     double lo = tin;
     double hi = tout;
@@ -155,44 +145,11 @@ struct CellPlanes
       // The ray is outside this plane, or runs inside it. A plane shared by two cells appears
       // in both with exactly opposite normals, so letting only the copy whose normal points
       // into the "positive" half-space keep such a ray gives it to exactly one cell.
-      out = out || (denom == 0 && (num < 0 || (num == 0 && !this->KeepsParallelRays(p))));
+      out = out || (denom == 0 && (num < 0 || (num == 0 && this->KeepsParallelRays[p] == 0)));
     }
     tin = lo;
     tout = out ? -std::numeric_limits<double>::infinity() : hi;
 #endif
-  }
-
-  // Whether the ray runs inside a plane and is outside it (Clip's scalar rule, with its
-  // operations; the padding planes' numerator 1 leaves them out of it).
-  bool ParallelOut(const RaySetup& ray) const
-  {
-    for (int p = 0; p < this->Count; ++p)
-    {
-#ifdef __SSE2__
-      const __m128d denomV =
-        _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set_sd(this->Nx[p]), _mm_set_sd(ray.D[0])),
-                     _mm_mul_pd(_mm_set_sd(this->Ny[p]), _mm_set_sd(ray.D[1]))),
-          _mm_mul_pd(_mm_set_sd(this->Nz[p]), _mm_set_sd(ray.D[2])));
-      const double denom = _mm_cvtsd_f64(denomV);
-      double num = this->Num[p];
-      if (!this->SharedOrigin)
-      {
-        const __m128d dot =
-          _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set_sd(this->Nx[p]), _mm_set_sd(ray.O[0])),
-                       _mm_mul_pd(_mm_set_sd(this->Ny[p]), _mm_set_sd(ray.O[1]))),
-            _mm_mul_pd(_mm_set_sd(this->Nz[p]), _mm_set_sd(ray.O[2])));
-        num = _mm_cvtsd_f64(_mm_sub_pd(_mm_set_sd(this->Offset[p]), dot));
-      }
-#else
-      const double denom = this->Nx[p] * ray.D[0] + this->Ny[p] * ray.D[1] + this->Nz[p] * ray.D[2];
-      const double num = this->SharedOrigin ? this->Num[p] : this->Numerator(p, ray);
-#endif
-      if (denom == 0 && (num < 0 || (num == 0 && !this->KeepsParallelRays(p))))
-      {
-        return true;
-      }
-    }
-    return false;
   }
 
   // Clip, and whether the interval's ends lie on a boundary plane (BoundaryMask): in / out
