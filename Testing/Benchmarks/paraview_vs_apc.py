@@ -95,6 +95,10 @@ parser.add_argument("--cameras", default="fill,overview",
 parser.add_argument("--apc-property", action="append", default=[], metavar="NAME=VALUE",
                     help="set an APC Volume property on the APC cases (repeatable), e.g. "
                     "APCStopWhereOpaque=1")
+parser.add_argument("--perf-control", metavar="FIFO",
+                    help="rank 0 writes 'enable' / 'disable' to this perf control FIFO around "
+                    "each case's first frame (perf record -D -1 --control fifo:FIFO ...): a "
+                    "profile of the first frames alone")
 parser.add_argument("--data", default=os.path.join(here, "..", "..", "Data",
                                                    "windAroundBuildings", "wind.pvtu"))
 
@@ -377,7 +381,16 @@ def main(args):
             start_sys = os.times().system
             start_faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
             start_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+            # A perf control FIFO on rank 0 (--perf-control): the profile covers first frames only.
+            control = args.perf_control if not cpu and os.environ.get(
+                "OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0" else None
+            if control:
+                with open(control, "w") as fifo:
+                    fifo.write("enable\n")
             Render(view)
+            if control:
+                with open(control, "w") as fifo:
+                    fifo.write("disable\n")
             seconds = time.perf_counter() - start
             cpu.append(time.process_time() - start_cpu)
             system.append(os.times().system - start_sys)
