@@ -376,26 +376,26 @@ def main(args):
             if move:
                 # A small camera move: nothing of the last frame's image can be reused.
                 view.GetActiveCamera().Azimuth(0.5)
+            # A perf control FIFO (--perf-control): the profile covers first frames only; written
+            # outside the timed span. pvbatch runs this script on rank 0 alone.
+            control = args.perf_control if not cpu else None
+            if control:
+                with open(control, "w") as fifo:
+                    fifo.write("enable\n")
             start = time.perf_counter()
             start_cpu = time.process_time()
             start_sys = os.times().system
             start_faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
             start_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-            # A perf control FIFO on rank 0 (--perf-control): the profile covers first frames only.
-            control = args.perf_control if not cpu and os.environ.get(
-                "OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0" else None
-            if control:
-                with open(control, "w") as fifo:
-                    fifo.write("enable\n")
             Render(view)
-            if control:
-                with open(control, "w") as fifo:
-                    fifo.write("disable\n")
             seconds = time.perf_counter() - start
             cpu.append(time.process_time() - start_cpu)
             system.append(os.times().system - start_sys)
             faults.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - start_faults)
             peak.append((resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - start_peak) / 1024.0)
+            if control:
+                with open(control, "w") as fifo:
+                    fifo.write("disable\n")
             if apc:
                 timings.append(apcparaview.last_timings(display))
             return seconds
