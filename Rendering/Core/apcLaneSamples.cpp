@@ -214,6 +214,192 @@ __attribute__((target("avx2"), always_inline)) inline int Lanes(
   return s;
 }
 
+// The same kernel on two groups of four rays at once, eight lanes (AVX-512): group a's lanes
+// low, group b's high, each lane's operations those of Lanes above in the same order, so that
+// every value is the four-wide kernel's bit for bit. The masks are mask registers where Lanes
+// has vector masks: blends and the zeroing of a lane (and_pd with a mask) select the same
+// values. Only AVX-512 F and VL instructions (HasAvx512); the file is compiled without
+// contraction to FMA, which avx512f brings.
+#define APC_LANES512 __attribute__((target("avx512f,avx512vl,avx2")))
+#define APC_LANES512_INLINE inline __attribute__((always_inline, target("avx512f,avx512vl,avx2")))
+
+// One of LaneCellVectors' four-lane constants in all eight lanes.
+APC_LANES512_INLINE __m512d W(const double* four)
+{
+  return _mm512_broadcast_f64x4(_mm256_load_pd(four));
+}
+
+// Group a's four values low, group b's high.
+APC_LANES512_INLINE __m512d Pair(const double* a, const double* b)
+{
+  return _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_load_pd(a)), _mm256_load_pd(b), 1);
+}
+
+// The low four lanes to a, the high four to b.
+APC_LANES512_INLINE void Split(__m512d v, double* a, double* b)
+{
+  _mm256_store_pd(a, _mm512_castpd512_pd256(v));
+  _mm256_store_pd(b, _mm512_extractf64x4_pd(v, 1));
+}
+
+APC_LANES512_INLINE __m512d StdMax8(__m512d a, __m512d b)
+{
+  return _mm512_max_pd(b, a);
+}
+
+// x with its sign flipped (xor with -0.0, as _mm256_xor_pd; _mm512_xor_pd would need DQ).
+APC_LANES512_INLINE __m512d Negate8(__m512d x)
+{
+  return _mm512_castsi512_pd(_mm512_xor_si512(
+    _mm512_castpd_si512(x), _mm512_set1_epi64(static_cast<long long>(1ULL << 63))));
+}
+
+APC_LANES512_INLINE __m512d Outside8(__m512d q0, __m512d q1, __m512d q2, __m512d one, __m512d zero)
+{
+  const __m512d below = _mm512_sub_pd(one, q2);
+  return StdMax8(StdMax8(StdMax8(Negate8(q0), _mm512_sub_pd(q0, below)),
+                   StdMax8(Negate8(q1), _mm512_sub_pd(q1, below))),
+    StdMax8(Negate8(q2), zero));
+}
+
+APC_LANES512_INLINE __m512d PyramidScalar8(
+  const LaneCellVectors& cell, __m512d a0, __m512d a1, __m512d a2, __m512d one, __m512d zero)
+{
+  const __m512d g[3] = { W(cell.G[0]), W(cell.G[1]), W(cell.G[2]) };
+  const __m512d b = _mm512_add_pd(
+    _mm512_add_pd(_mm512_sub_pd(one, a2), _mm512_mul_pd(a0, g[1])), _mm512_mul_pd(a1, g[0]));
+  const __m512d cc = _mm512_mul_pd(a0, a1);
+  const __m512d root = _mm512_sqrt_pd(
+    StdMax8(_mm512_add_pd(_mm512_mul_pd(b, b), _mm512_mul_pd(W(cell.FourA), cc)), zero));
+  const __m512d denom = _mm512_mask_blend_pd(
+    _mm512_cmp_pd_mask(b, zero, _CMP_GE_OQ), _mm512_sub_pd(b, root), _mm512_add_pd(b, root));
+  __m512d w = _mm512_maskz_mov_pd(_mm512_cmp_pd_mask(denom, zero, _CMP_NEQ_UQ),
+    _mm512_div_pd(_mm512_mul_pd(_mm512_set1_pd(2.0), cc), denom));
+  __m512d q0 = _mm512_sub_pd(a0, _mm512_mul_pd(g[0], w));
+  __m512d q1 = _mm512_sub_pd(a1, _mm512_mul_pd(g[1], w));
+  __m512d q2 = _mm512_sub_pd(a2, _mm512_mul_pd(g[2], w));
+  if (cell.Other)
+  {
+    const __m512d outside = Outside8(q0, q1, q2, one, zero);
+    const __mmask8 far = _mm512_cmp_pd_mask(
+      outside, _mm512_set1_pd(apc::CellInterpolator::kPyramidInside), _CMP_GT_OQ);
+    if (far != 0)
+    {
+      const __m512d other = _mm512_div_pd(Negate8(denom), W(cell.TwoA));
+      const __m512d r0 = _mm512_sub_pd(a0, _mm512_mul_pd(g[0], other));
+      const __m512d r1 = _mm512_sub_pd(a1, _mm512_mul_pd(g[1], other));
+      const __m512d r2 = _mm512_sub_pd(a2, _mm512_mul_pd(g[2], other));
+      const __mmask8 take =
+        far & _mm512_cmp_pd_mask(Outside8(r0, r1, r2, one, zero), outside, _CMP_LT_OQ);
+      w = _mm512_mask_blend_pd(take, w, other);
+      q0 = _mm512_mask_blend_pd(take, q0, r0);
+      q1 = _mm512_mask_blend_pd(take, q1, r1);
+      q2 = _mm512_mask_blend_pd(take, q2, r2);
+    }
+  }
+  __m512d v = _mm512_add_pd(W(cell.SC[0]), _mm512_mul_pd(q0, W(cell.SC[1])));
+  v = _mm512_add_pd(v, _mm512_mul_pd(q1, W(cell.SC[2])));
+  v = _mm512_add_pd(v, _mm512_mul_pd(q2, W(cell.SC[3])));
+  return _mm512_add_pd(v, _mm512_mul_pd(w, W(cell.SC[4])));
+}
+
+template <Form How>
+APC_LANES512_INLINE int Lanes8(
+  const LaneCellVectors& cell, const LaneRays& a, const LaneRays& b, LaneSteps& sa, LaneSteps& sb)
+{
+  const __m512d dx = Pair(a.D[0], b.D[0]);
+  const __m512d dy = Pair(a.D[1], b.D[1]);
+  const __m512d dz = Pair(a.D[2], b.D[2]);
+  __m512d dp[3];
+  for (int i = 0; i < 3; ++i)
+  {
+    dp[i] = _mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(W(cell.Inverse[i][0]), dx),
+                            _mm512_mul_pd(W(cell.Inverse[i][1]), dy)),
+      _mm512_mul_pd(W(cell.Inverse[i][2]), dz));
+  }
+  const __m512d zero = _mm512_setzero_pd();
+  const __m512d one = _mm512_set1_pd(1.0);
+  const __m512d inf = _mm512_set1_pd(std::numeric_limits<double>::infinity());
+  const long long* pairs = reinterpret_cast<const long long*>(cell.AbsorbancePairs);
+  const __m512d offset = Pair(a.Offset, b.Offset);
+  const __m512d tout = Pair(a.Tout, b.Tout);
+  __m512d k = Pair(a.K, b.K);
+  if (cell.Bins)
+  {
+    const __m512d d = _mm512_sub_pd(k, W(cell.BinBase));
+    __m512d bin = _mm512_roundscale_pd(
+      _mm512_mul_pd(d, W(cell.BinInverse)), _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+    const __m512d up = _mm512_add_pd(bin, one);
+    bin = _mm512_mask_blend_pd(
+      _mm512_cmp_pd_mask(_mm512_mul_pd(up, W(cell.BinWidth)), d, _CMP_LE_OQ), bin, up);
+    bin = _mm512_min_pd(_mm512_max_pd(bin, zero), _mm512_set1_pd(static_cast<double>(kBinEnds)));
+    const __m512i bins = _mm512_cvtepi32_epi64(_mm512_cvttpd_epi32(bin));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(sa.Bin), _mm512_castsi512_si256(bins));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(sb.Bin), _mm512_extracti64x4_epi64(bins, 1));
+  }
+  int s = 0;
+  for (; s < kLaneSteps; ++s, k = _mm512_add_pd(k, one))
+  {
+    const __m512d t = _mm512_mul_pd(_mm512_add_pd(k, offset), W(cell.Spacing));
+    if (_mm512_cmp_pd_mask(t, tout, _CMP_LT_OQ) == 0)
+    {
+      break;
+    }
+    const __m512d r = _mm512_add_pd(W(cell.P0[0]), _mm512_mul_pd(t, dp[0]));
+    const __m512d q = _mm512_add_pd(W(cell.P0[1]), _mm512_mul_pd(t, dp[1]));
+    const __m512d u = _mm512_add_pd(W(cell.P0[2]), _mm512_mul_pd(t, dp[2]));
+    __m512d v;
+    if (How == Form::PyramidScalarAt)
+    {
+      v = PyramidScalar8(cell, r, q, u, one, zero);
+    }
+    else if (How == Form::LinearPyramid)
+    {
+      const __m512d below = _mm512_sub_pd(one, u);
+      const __m512d rr = _mm512_min_pd(one, _mm512_max_pd(zero, _mm512_div_pd(r, below)));
+      const __m512d ss = _mm512_min_pd(one, _mm512_max_pd(zero, _mm512_div_pd(q, below)));
+      const __m512d twist = _mm512_maskz_mov_pd(
+        _mm512_cmp_pd_mask(below, zero, _CMP_GT_OQ), _mm512_mul_pd(_mm512_mul_pd(rr, ss), below));
+      v = _mm512_add_pd(W(cell.SC[0]), _mm512_mul_pd(u, W(cell.SC[3])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(r, W(cell.SC[1])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(q, W(cell.SC[2])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(twist, W(cell.SC[4])));
+    }
+    else
+    {
+      const __m512d rq = _mm512_mul_pd(r, q);
+      v = _mm512_add_pd(W(cell.SC[0]), _mm512_mul_pd(r, W(cell.SC[1])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(q, W(cell.SC[2])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(u, W(cell.SC[3])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(rq, W(cell.SC[4])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(_mm512_mul_pd(r, u), W(cell.SC[5])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(_mm512_mul_pd(q, u), W(cell.SC[6])));
+      v = _mm512_add_pd(v, _mm512_mul_pd(_mm512_mul_pd(rq, u), W(cell.SC[7])));
+    }
+    const __m512d scalar = _mm512_min_pd(W(cell.Hi), _mm512_max_pd(W(cell.Lo), v));
+    const __mmask8 finite = _mm512_cmp_pd_mask(_mm512_abs_pd(scalar), inf, _CMP_LT_OQ);
+    const __m512d position = _mm512_mul_pd(_mm512_sub_pd(scalar, W(cell.Min)), W(cell.Scale));
+    const __m512d above = _mm512_mask_blend_pd(
+      _mm512_cmp_pd_mask(position, W(cell.Last), _CMP_GT_OQ), position, W(cell.Last));
+    __m512d x = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(position, zero, _CMP_LT_OQ), above, zero);
+    x = _mm512_maskz_mov_pd(finite, x);
+    const __m256i i = _mm512_cvttpd_epi32(x);
+    const __m256 f = _mm512_cvtpd_ps(_mm512_sub_pd(x, _mm512_cvtepi32_pd(i)));
+    // Entry i's and entry j's absorbance, one pair each: the low and high halves of each
+    // 64-bit lane.
+    const __m512i e = _mm512_i32gather_epi64(i, pairs, 8);
+    const __m256 ea = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(e));
+    const __m256 eb = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(_mm512_srli_epi64(e, 32)));
+    const __m256 absorbance =
+      _mm256_maskz_mov_ps(finite, _mm256_add_ps(ea, _mm256_mul_ps(f, _mm256_sub_ps(eb, ea))));
+    Split(t, sa.T[s], sb.T[s]);
+    Split(scalar, sa.Scalar[s], sb.Scalar[s]);
+    _mm_store_ps(sa.Absorbance[s], _mm256_castps256_ps128(absorbance));
+    _mm_store_ps(sb.Absorbance[s], _mm256_extractf128_ps(absorbance, 1));
+  }
+  return s;
+}
+
 // value in each of four lanes.
 __attribute__((target("avx2"), always_inline)) inline void Broadcast(double value, double* four)
 {
@@ -241,6 +427,17 @@ __attribute__((target("avx2"))) int LaneSamplesAvx2(
   }
   return cell.Pyramid ? Lanes<Form::LinearPyramid>(cell, rays, steps)
                       : Lanes<Form::ScalarAt>(cell, rays, steps);
+}
+
+APC_LANES512 int LaneSamplesAvx512(
+  const LaneCellVectors& cell, const LaneRays& a, const LaneRays& b, LaneSteps& sa, LaneSteps& sb)
+{
+  if (cell.Twisted)
+  {
+    return Lanes8<Form::PyramidScalarAt>(cell, a, b, sa, sb);
+  }
+  return cell.Pyramid ? Lanes8<Form::LinearPyramid>(cell, a, b, sa, sb)
+                      : Lanes8<Form::ScalarAt>(cell, a, b, sa, sb);
 }
 
 __attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors)

@@ -104,6 +104,13 @@ void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors);
 // interpolation) in the same order and without FMA. Only where HasAvx2().
 int LaneSamplesAvx2(const LaneCellVectors& cell, const LaneRays& rays, LaneSteps& steps);
 
+// LaneSamplesAvx2 of two groups of four rays at once (a and b, eight lanes): the steps of each
+// group in sa and sb, bit for bit those LaneSamplesAvx2 gives it, and the count of steps of
+// the two together (the larger of the two calls' counts; a group's steps past its own count
+// are computed as its lanes' values there, past every lane's Tout). Only where HasAvx512().
+int LaneSamplesAvx512(
+  const LaneCellVectors& cell, const LaneRays& a, const LaneRays& b, LaneSteps& sa, LaneSteps& sb);
+
 // Fills rays with the tile's rays list[0 .. n - 1] (n <= 4; directions and offsets from packed,
 // first lattice indices and interval ends from clipped), lanes n .. 3 unused (Tout = -inf),
 // one vector store per field: loads of the lanes from stores of one double each waited for

@@ -3,7 +3,8 @@
 // p0 + t dp, LinearScalarAt or a twisted pyramid's PyramidScalarAt, the clamp,
 // TransferTable::Lookup): every depth, scalar and absorbance the same bit for bit, on random
 // distorted cells, rays, lattice offsets and tables; and with pass 1's own stop, each lane's
-// opaque bin (RayProgress::BinOf).
+// opaque bin (RayProgress::BinOf). Where the processor has AVX-512, the eight-wide kernel
+// (LaneSamplesAvx512: two groups of four at once) against the four-wide one, bit for bit.
 #include "apcCellInterpolation.h"
 #include "apcLaneSamples.h"
 #include "apcOpaqueBins.h"
@@ -85,7 +86,8 @@ void CheckLanes(double distortion, bool jitter, bool overflow, bool twisted = fa
   int visible = 0;
   int binsCompared = 0;
   int binsAboveZero = 0;
-  int otherRoots = 0; // twisted: samples whose closed form took the quadratic's other root
+  int otherRoots = 0;    // twisted: samples whose closed form took the quadratic's other root
+  int eightCompared = 0; // steps of LaneSamplesAvx512 compared with LaneSamplesAvx2's
   for (int trial = 0; trial < 2000; ++trial)
   {
     const CellShape shape = twisted ? CellShape::Pyramid : shapes[trial % 4];
@@ -135,6 +137,10 @@ void CheckLanes(double distortion, bool jitter, bool overflow, bool twisted = fa
     // walker's calls of one cell do).
     apc::walk::LaneCellVectors vectors;
     apc::walk::SetUpLaneCell(cell, vectors);
+    // The previous call's rays and four-wide steps: the eight-wide kernel's second group.
+    apc::walk::LaneRays previous;
+    apc::walk::LaneSteps previousSteps;
+    int previousCount = -1;
     for (int call = 0; call < 3; ++call)
     {
       apc::walk::LaneRays rays;
@@ -176,6 +182,45 @@ void CheckLanes(double distortion, bool jitter, bool overflow, bool twisted = fa
       }
       apc::walk::LaneSteps steps;
       const int n = apc::walk::LaneSamplesAvx2(vectors, rays, steps);
+      if (apc::walk::HasAvx512())
+      {
+        // Two groups at once: this call's rays low, the previous call's (or these again) high.
+        const bool again = previousCount < 0;
+        apc::walk::LaneSteps low;
+        apc::walk::LaneSteps high;
+        const int n8 =
+          apc::walk::LaneSamplesAvx512(vectors, rays, again ? rays : previous, low, high);
+        const int other = again ? n : previousCount;
+        ASSERT_EQ(n8, std::max(n, other)) << "trial " << trial;
+        const apc::walk::LaneSteps* expected[2] = { &steps, again ? &steps : &previousSteps };
+        const apc::walk::LaneSteps* got[2] = { &low, &high };
+        const int counts[2] = { n, other };
+        for (int g = 0; g < 2; ++g)
+        {
+          for (int i = 0; i < 4; ++i)
+          {
+            if (cell.BinEnds)
+            {
+              ASSERT_EQ(got[g]->Bin[i], expected[g]->Bin[i]) << "trial " << trial;
+            }
+            for (int s = 0; s < counts[g]; ++s)
+            {
+              const double a = got[g]->Scalar[s][i];
+              const double b = expected[g]->Scalar[s][i];
+              ASSERT_TRUE(SameBits(got[g]->T[s][i], expected[g]->T[s][i]))
+                << "trial " << trial << " group " << g << " lane " << i << " step " << s;
+              ASSERT_TRUE(SameBits(a, b) || (std::isnan(a) && std::isnan(b)))
+                << "trial " << trial << " group " << g << " lane " << i << " step " << s;
+              ASSERT_TRUE(SameBits(got[g]->Absorbance[s][i], expected[g]->Absorbance[s][i]))
+                << "trial " << trial << " group " << g << " lane " << i << " step " << s;
+              ++eightCompared;
+            }
+          }
+        }
+      }
+      previous = rays;
+      previousSteps = steps;
+      previousCount = n;
       if (cell.BinEnds)
       {
         for (int i = 0; i < 4; ++i)
@@ -251,6 +296,8 @@ void CheckLanes(double distortion, bool jitter, bool overflow, bool twisted = fa
   EXPECT_GT(binsAboveZero, binsCompared / 4);
   // The second root's blend is exercised.
   EXPECT_TRUE(!twisted || otherRoots > 100) << otherRoots << " other roots";
+  // The eight-wide kernel was compared wherever the processor has it.
+  EXPECT_TRUE(!apc::walk::HasAvx512() || eightCompared > 5000) << eightCompared;
 }
 
 } // namespace
