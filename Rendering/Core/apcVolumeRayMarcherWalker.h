@@ -99,6 +99,8 @@ struct VolumeRayMarcher::Walker
   // Nearly affine cells' and twisted pyramids' samples four rays at a time (LaneSamplesAvx2)
   // where the processor has AVX2 and the visitor reads only absorbance.
   bool Lanes = walk::HasAvx2();
+  // With Lanes: two groups of four rays per kernel call where the processor has AVX-512.
+  bool WideLanes = walk::HasAvx512();
   // Weight each (cell, ray) pair's end samples so that they sum to its exact length, and give
   // a pair without a lattice point one sample at its middle (apcEndWeights.h), for the
   // visitors that take them (the MBOIT passes; Visitor::TakesEndWeights). The lanes take
@@ -737,8 +739,27 @@ struct VolumeRayMarcher::Walker
     // Broadcast once here for all the cell's calls.
     walk::LaneCellVectors& vectors = state.Vectors;
     walk::SetUpLaneCell(cell, vectors);
-    walk::LaneRays lanes;
-    walk::LaneSteps steps;
+    // One group of four lanes: its rays, its steps and each lane's own state. With AVX-512 the
+    // kernel takes two groups at once (LaneSamplesAvx512: each group's steps bit for bit the
+    // four-wide kernel's), and each group's hand-over is the four-wide one.
+    struct Group
+    {
+      walk::LaneRays Lanes;
+      walk::LaneSteps Steps;
+      // Weighted: as LaneWeightedMomentsAvx2 reads them (GatherWeightedLaneRays).
+      walk::LaneWeights Weights;
+      int N = 0; // lanes used
+      int Local[4] = { 0, 0, 0, 0 };
+      int64_t K[4] = { 0, 0, 0, 0 };
+      // Weighted: each ray's pair's first and last index and their float weights (as
+      // EndWeights::Of gives them, then cast as the scalar loop does).
+      int64_t FirstK[4] = { 0, 0, 0, 0 };
+      int64_t LastK[4] = { 0, 0, 0, 0 };
+      float FirstWeight[4] = { 1, 1, 1, 1 };
+      float LastWeight[4] = { 1, 1, 1, 1 };
+      bool Live = false; // some lane has steps left (its Tout is not -inf)
+    };
+    Group groups[2];
     walk::LaneMoments across;
     int64_t samples = 0;
     // The rays the lanes take, in the rectangle's order; Weighted: then the pairs without a
@@ -752,207 +773,234 @@ struct VolumeRayMarcher::Walker
       std::copy(ends.MidHits, ends.MidHits + ends.MidCount, state.Clipped.Hits + hits);
       count = hits + ends.MidCount;
     }
-    for (int h = 0; h < count; h += 4)
+    const int span = this->WideLanes ? 8 : 4;
+    for (int h = 0; h < count; h += span)
     {
-      const int n = std::min(4, count - h);
-      int local[4] = { 0, 0, 0, 0 };
-      int64_t k[4] = { 0, 0, 0, 0 };
-      // Weighted: each ray's pair's first and last index and their float weights (as
-      // EndWeights::Of gives them, then cast as the scalar loop does).
-      int64_t firstK[4] = { 0, 0, 0, 0 };
-      int64_t lastK[4] = { 0, 0, 0, 0 };
-      float firstWeight[4] = { 1, 1, 1, 1 };
-      float lastWeight[4] = { 1, 1, 1, 1 };
-      // The same, as LaneWeightedMomentsAvx2 reads them (GatherWeightedLaneRays).
-      walk::LaneWeights laneWeights;
-      for (int i = 0; i < 4; ++i)
+      const int used = this->WideLanes && count - h > 4 ? 2 : 1;
+      for (int gi = 0; gi < used; ++gi)
       {
-        const int at = h + (i < n ? i : 0);
-        const int l = list[at];
-        local[i] = l;
+        Group& g = groups[gi];
+        const int first = h + 4 * gi;
+        g.N = std::min(4, count - first);
+        g.Live = true;
+        for (int i = 0; i < 4; ++i)
+        {
+          const int at = first + (i < g.N ? i : 0);
+          const int l = list[at];
+          g.Local[i] = l;
+          if constexpr (Weighted)
+          {
+            g.FirstK[i] = static_cast<int64_t>(ends.First[l]);
+            g.LastK[i] = static_cast<int64_t>(ends.Last[l]);
+            g.FirstWeight[i] = static_cast<float>(ends.FirstWeight[l]);
+            g.LastWeight[i] = static_cast<float>(ends.LastWeight[l]);
+            g.K[i] = g.FirstK[i];
+          }
+          else
+          {
+            g.K[i] = static_cast<int64_t>(c.Lattice[l]);
+          }
+          if (i < g.N)
+          {
+            visitor.Segment(l, c.Tin[l], c.Tout[l]);
+          }
+        }
+        // One vector store per field: the lanes' vector loads of fields stored one double at a
+        // time waited for those stores to reach the cache.
         if constexpr (Weighted)
         {
-          firstK[i] = static_cast<int64_t>(ends.First[l]);
-          lastK[i] = static_cast<int64_t>(ends.Last[l]);
-          firstWeight[i] = static_cast<float>(ends.FirstWeight[l]);
-          lastWeight[i] = static_cast<float>(ends.LastWeight[l]);
-          k[i] = firstK[i];
+          walk::GatherWeightedLaneRays(packed, c, ends, list + first, g.N, g.Lanes, g.Weights);
         }
         else
         {
-          k[i] = static_cast<int64_t>(c.Lattice[l]);
+          walk::GatherLaneRays(packed, c, list + first, g.N, g.Lanes);
         }
-        if (i < n)
-        {
-          visitor.Segment(l, c.Tin[l], c.Tout[l]);
-        }
-      }
-      // One vector store per field: the lanes' vector loads of fields stored one double at a
-      // time waited for those stores to reach the cache.
-      if constexpr (Weighted)
-      {
-        walk::GatherWeightedLaneRays(packed, c, ends, list + h, n, lanes, laneWeights);
-      }
-      else
-      {
-        walk::GatherLaneRays(packed, c, list + h, n, lanes);
       }
       for (bool more = true; more;)
       {
-        const int taken = walk::LaneSamplesAvx2(vectors, lanes, steps);
-        more = false;
-        // Four pixels' sums at once: each step's warp, moments and quanta across the lanes
-        // (Weighted: each step's weight first, and the records' weights).
-        constexpr bool acrossLanes =
-          LaneMomentsVisitor<Visitor>::value && (!Weighted || TakesWeights<Visitor>::value);
-        if constexpr (acrossLanes)
+        // Both groups at once where both have steps left, else the one that has.
+        int taken = 0;
+        if (used == 2 && groups[0].Live && groups[1].Live)
         {
-          const double* sums[4];
-          for (int i = 0; i < 4; ++i)
-          {
-            sums[i] = visitor.PixelSums(local[i]);
-          }
-          const double perAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0.0;
-          if constexpr (Weighted)
-          {
-            walk::LaneWeightedMomentsAvx2(
-              steps, taken, lanes, sums, *visitor.Warp, perAbsorbance, laneWeights, across);
-          }
-          else
-          {
-            walk::LaneMomentsAvx2(steps, taken, lanes, sums, *visitor.Warp, perAbsorbance, across);
-          }
+          taken = walk::LaneSamplesAvx512(
+            vectors, groups[0].Lanes, groups[1].Lanes, groups[0].Steps, groups[1].Steps);
         }
-        for (int i = 0; i < n; ++i)
+        else
         {
-          const int l = local[i];
-          double tout = lanes.Tout[i];
-          int64_t kk = k[i];
-          int s = 0;
-          bool kept = false;
+          Group& g = groups[used == 2 && !groups[0].Live ? 1 : 0];
+          taken = walk::LaneSamplesAvx2(vectors, g.Lanes, g.Steps);
+        }
+        more = false;
+        for (int gi = 0; gi < used; ++gi)
+        {
+          Group& g = groups[gi];
+          if (!g.Live)
+          {
+            continue; // every lane's Tout is -inf: nothing to hand over
+          }
+          // Four pixels' sums at once: each step's warp, moments and quanta across the lanes
+          // (Weighted: each step's weight first, and the records' weights).
+          constexpr bool acrossLanes =
+            LaneMomentsVisitor<Visitor>::value && (!Weighted || TakesWeights<Visitor>::value);
           if constexpr (acrossLanes)
           {
-            // The lane's run as LaneMomentsAvx2 found it: kept where it cannot turn the
-            // pixel opaque, else taken again sample by sample below.
-            const uint32_t sum = static_cast<uint32_t>(across.QuantaSum[i]);
-            kept = !own || progress.RunStaysOpen(l, sum);
-            if (kept)
+            const double* sums[4];
+            for (int i = 0; i < 4; ++i)
             {
-              s = static_cast<int>(across.Steps[i]);
-              visitor.template LaneRunEnd<Weighted>(l, across, i, kk, steps, taken);
-              if (own)
-              {
-                const uint64_t visible = static_cast<uint64_t>(across.Visible[i]);
-                const int last = visible ? 63 - __builtin_clzll(visible) : -1;
-                progress.AddRun(
-                  l, kk, static_cast<int>(steps.Bin[i]), &across.Quanta[0][i], sum, last, 4);
-              }
+              sums[i] = visitor.PixelSums(g.Local[i]);
+            }
+            const double perAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0.0;
+            if constexpr (Weighted)
+            {
+              walk::LaneWeightedMomentsAvx2(
+                g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, g.Weights, across);
+            }
+            else
+            {
+              walk::LaneMomentsAvx2(
+                g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, across);
             }
           }
-          else
+          for (int i = 0; i < g.N; ++i)
           {
-            // The ray's steps inside its interval, handed over as one run in one loop: the
-            // pixel's sums in registers, its records' room taken once. A run in which the
-            // pixel turns opaque is dropped and taken again sample by sample below, so that
-            // the samples past the stop are not taken.
-            typename Visitor::Run run;
-            visitor.RunBegin(run, l, taken, Weighted);
-            uint32_t q[RayProgress::kMaxRun];
-            uint32_t sum = 0;
-            int last = -1;
-            for (; s < taken; ++s)
+            const int l = g.Local[i];
+            double tout = g.Lanes.Tout[i];
+            int64_t kk = g.K[i];
+            int s = 0;
+            bool kept = false;
+            if constexpr (acrossLanes)
             {
-              const double t = steps.T[s][i];
-              if (!(t < tout))
+              // The lane's run as LaneMomentsAvx2 found it: kept where it cannot turn the
+              // pixel opaque, else taken again sample by sample below.
+              const uint32_t sum = static_cast<uint32_t>(across.QuantaSum[i]);
+              kept = !own || progress.RunStaysOpen(l, sum);
+              if (kept)
               {
-                break;
-              }
-              float absorbance = steps.Absorbance[s][i];
-              // A float weight and a float product, as in the scalar loop.
-              float weight = 1;
-              if constexpr (Weighted)
-              {
-                weight =
-                  kk + s == firstK[i] ? firstWeight[i] : (kk + s == lastK[i] ? lastWeight[i] : 1.f);
-                absorbance *= weight;
-              }
-              q[s] = 0;
-              if (absorbance > 0)
-              {
-                if constexpr (Weighted)
-                {
-                  visitor.RunAddWeighted(run, l, kk + s, t, steps.Scalar[s][i], absorbance, weight);
-                }
-                else
-                {
-                  visitor.RunAdd(run, l, kk + s, t, steps.Scalar[s][i], absorbance);
-                }
+                s = static_cast<int>(across.Steps[i]);
+                visitor.template LaneRunEnd<Weighted>(l, across, i, kk, g.Steps, taken);
                 if (own)
                 {
-                  q[s] = progress.Bins->Quanta(absorbance);
-                  sum += q[s]; // at most kMaxRun times kOpaque: no overflow
-                  last = s;
+                  const uint64_t visible = static_cast<uint64_t>(across.Visible[i]);
+                  const int last = visible ? 63 - __builtin_clzll(visible) : -1;
+                  progress.AddRun(
+                    l, kk, static_cast<int>(g.Steps.Bin[i]), &across.Quanta[0][i], sum, last, 4);
                 }
               }
             }
-            kept = !own || progress.RunStaysOpen(l, sum);
+            else
+            {
+              // The ray's steps inside its interval, handed over as one run in one loop: the
+              // pixel's sums in registers, its records' room taken once. A run in which the
+              // pixel turns opaque is dropped and taken again sample by sample below, so that
+              // the samples past the stop are not taken.
+              typename Visitor::Run run;
+              visitor.RunBegin(run, l, taken, Weighted);
+              uint32_t q[RayProgress::kMaxRun];
+              uint32_t sum = 0;
+              int last = -1;
+              for (; s < taken; ++s)
+              {
+                const double t = g.Steps.T[s][i];
+                if (!(t < tout))
+                {
+                  break;
+                }
+                float absorbance = g.Steps.Absorbance[s][i];
+                // A float weight and a float product, as in the scalar loop.
+                float weight = 1;
+                if constexpr (Weighted)
+                {
+                  weight = kk + s == g.FirstK[i] ? g.FirstWeight[i]
+                                                 : (kk + s == g.LastK[i] ? g.LastWeight[i] : 1.f);
+                  absorbance *= weight;
+                }
+                q[s] = 0;
+                if (absorbance > 0)
+                {
+                  if constexpr (Weighted)
+                  {
+                    visitor.RunAddWeighted(
+                      run, l, kk + s, t, g.Steps.Scalar[s][i], absorbance, weight);
+                  }
+                  else
+                  {
+                    visitor.RunAdd(run, l, kk + s, t, g.Steps.Scalar[s][i], absorbance);
+                  }
+                  if (own)
+                  {
+                    q[s] = progress.Bins->Quanta(absorbance);
+                    sum += q[s]; // at most kMaxRun times kOpaque: no overflow
+                    last = s;
+                  }
+                }
+              }
+              kept = !own || progress.RunStaysOpen(l, sum);
+              if (kept)
+              {
+                visitor.RunEnd(run, l);
+                if (own)
+                {
+                  progress.AddRun(l, kk, static_cast<int>(g.Steps.Bin[i]), q, sum, last);
+                }
+              }
+              else if constexpr (Weighted)
+              {
+                visitor.RunDrop(run);
+              }
+            }
             if (kept)
             {
-              visitor.RunEnd(run, l);
-              if (own)
-              {
-                progress.AddRun(l, kk, static_cast<int>(steps.Bin[i]), q, sum, last);
-              }
+              samples += s;
+              kk += s;
             }
-            else if constexpr (Weighted)
+            else
             {
-              visitor.RunDrop(run);
-            }
-          }
-          if (kept)
-          {
-            samples += s;
-            kk += s;
-          }
-          else
-          {
-            int bin = static_cast<int>(steps.Bin[i]);
-            int64_t binEnd = progress.Ends[bin];
-            for (s = 0; s < taken; ++s, ++kk)
-            {
-              const double t = steps.T[s][i];
-              if (!(t < tout))
+              int bin = static_cast<int>(g.Steps.Bin[i]);
+              int64_t binEnd = progress.Ends[bin];
+              for (s = 0; s < taken; ++s, ++kk)
               {
-                break;
-              }
-              ++samples;
-              float absorbance = steps.Absorbance[s][i];
-              float weight = 1;
-              if constexpr (Weighted)
-              {
-                weight = kk == firstK[i] ? firstWeight[i] : (kk == lastK[i] ? lastWeight[i] : 1.f);
-                absorbance *= weight;
-              }
-              if (absorbance > 0)
-              {
-                const TransferSample sample{ { 0.f, 0.f, 0.f }, absorbance };
-                if constexpr (Weighted && TakesWeights<Visitor>::value)
+                const double t = g.Steps.T[s][i];
+                if (!(t < tout))
                 {
-                  visitor.WeightedSample(l, kk, t, steps.Scalar[s][i], sample, weight);
+                  break;
                 }
-                else
+                ++samples;
+                float absorbance = g.Steps.Absorbance[s][i];
+                float weight = 1;
+                if constexpr (Weighted)
                 {
-                  visitor.Sample(l, kk, t, steps.Scalar[s][i], sample);
+                  weight = kk == g.FirstK[i] ? g.FirstWeight[i]
+                                             : (kk == g.LastK[i] ? g.LastWeight[i] : 1.f);
+                  absorbance *= weight;
                 }
-                this->OwnStop(l, rays[l].Offset, kk, absorbance, bin, binEnd, tout, progress);
+                if (absorbance > 0)
+                {
+                  const TransferSample sample{ { 0.f, 0.f, 0.f }, absorbance };
+                  if constexpr (Weighted && TakesWeights<Visitor>::value)
+                  {
+                    visitor.WeightedSample(l, kk, t, g.Steps.Scalar[s][i], sample, weight);
+                  }
+                  else
+                  {
+                    visitor.Sample(l, kk, t, g.Steps.Scalar[s][i], sample);
+                  }
+                  this->OwnStop(l, rays[l].Offset, kk, absorbance, bin, binEnd, tout, progress);
+                }
               }
             }
+            g.K[i] = kk;
+            g.Lanes.K[i] = static_cast<double>(kk);
+            // A ray that left the chunk before its end is done.
+            g.Lanes.Tout[i] =
+              s == walk::kLaneSteps ? tout : -std::numeric_limits<double>::infinity();
+            more = more || s == walk::kLaneSteps;
           }
-          k[i] = kk;
-          lanes.K[i] = static_cast<double>(kk);
-          // A ray that left the chunk before its end is done.
-          lanes.Tout[i] = s == walk::kLaneSteps ? tout : -std::numeric_limits<double>::infinity();
-          more = more || s == walk::kLaneSteps;
+          g.Live = false;
+          for (int i = 0; i < g.N; ++i)
+          {
+            g.Live = g.Live || g.Lanes.Tout[i] != -std::numeric_limits<double>::infinity();
+          }
+          more = more || g.Live;
         }
       }
     }
