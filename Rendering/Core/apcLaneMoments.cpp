@@ -154,6 +154,132 @@ __attribute__((target("avx2"), always_inline)) inline void Moments(const LaneSte
   _mm256_store_si256(reinterpret_cast<__m256i*>(out.QuantaSum), _mm256_cvtepi32_epi64(quanta));
 }
 
+// Moments<false> on two groups of four lanes at once (AVX-512): group a's pixels in lanes 0-3,
+// group b's in 4-7, each lane's operations Moments' in the same order (masks where it has
+// vector masks), so that every sum, depth, quanta and count is the four-wide hand-over's.
+#define APC_MOMENTS512 __attribute__((target("avx512f,avx512vl,avx2")))
+
+APC_MOMENTS512 inline __m512d Join(__m256d low, __m256d high)
+{
+  return _mm512_insertf64x4(_mm512_castpd256_pd512(low), high, 1);
+}
+
+// The low (high = 0) or high four lanes of v.
+APC_MOMENTS512 inline __m256d Half(__m512d v, int high)
+{
+  return high ? _mm512_extractf64x4_pd(v, 1) : _mm512_castpd512_pd256(v);
+}
+
+} // namespace
+
+APC_MOMENTS512 void LaneMomentsAvx512(const LaneSteps& sa, const LaneSteps& sb, int taken,
+  const LaneRays& ra, const LaneRays& rb, const double* const sumsA[4],
+  const double* const sumsB[4], const LatticeDepthWarp& warp, double quantaPerAbsorbance,
+  LaneMoments& oa, LaneMoments& ob)
+{
+  __m256d ca[4];
+  __m256d cb[4];
+  Transpose(_mm256_loadu_pd(sumsA[0]), _mm256_loadu_pd(sumsA[1]), _mm256_loadu_pd(sumsA[2]),
+    _mm256_loadu_pd(sumsA[3]), ca);
+  Transpose(_mm256_loadu_pd(sumsB[0]), _mm256_loadu_pd(sumsB[1]), _mm256_loadu_pd(sumsB[2]),
+    _mm256_loadu_pd(sumsB[3]), cb);
+  __m512d b[5];
+  for (int m = 0; m < 4; ++m)
+  {
+    b[m] = Join(ca[m], cb[m]);
+  }
+  b[4] = _mm512_setr_pd(sumsA[0][4], sumsA[1][4], sumsA[2][4], sumsA[3][4], sumsB[0][4],
+    sumsB[1][4], sumsB[2][4], sumsB[3][4]);
+  const __m512d zero = _mm512_setzero_pd();
+  const __m512d one = _mm512_set1_pd(1.0);
+  const __m512d tout = Join(_mm256_load_pd(ra.Tout), _mm256_load_pd(rb.Tout));
+  const double* entries = warp.GetEntries();
+  const __m512d base = _mm512_set1_pd(static_cast<double>(warp.GetBase()));
+  const __m512d size = _mm512_set1_pd(static_cast<double>(warp.GetNumberOfEntries()));
+  const __m512d spacing = _mm512_set1_pd(warp.GetSpacing());
+  const __m512d perAbsorbance = _mm512_set1_pd(quantaPerAbsorbance);
+  const __m512d opaque = _mm512_set1_pd(static_cast<double>(OpaqueBins::kOpaque));
+  __m512d k = Join(_mm256_load_pd(ra.K), _mm256_load_pd(rb.K));
+  __m512i count = _mm512_setzero_si512();
+  __m512i visible = _mm512_setzero_si512();
+  __m256i quanta = _mm256_setzero_si256();
+  for (int s = 0; s < taken; ++s, k = _mm512_add_pd(k, one))
+  {
+    const __m512d t = Join(_mm256_load_pd(sa.T[s]), _mm256_load_pd(sb.T[s]));
+    const __mmask8 inside = _mm512_cmp_pd_mask(t, tout, _CMP_LT_OQ);
+    const __m256 absorbance = _mm256_insertf128_ps(
+      _mm256_castps128_ps256(_mm_load_ps(sa.Absorbance[s])), _mm_load_ps(sb.Absorbance[s]), 1);
+    __m512d a = _mm512_cvtps_pd(absorbance);
+    const __mmask8 vis = inside & _mm512_cmp_pd_mask(a, zero, _CMP_GT_OQ);
+    a = _mm512_maskz_mov_pd(vis, a);
+    const __m512d index = _mm512_sub_pd(k, base);
+    const __mmask8 inTable = _mm512_cmp_pd_mask(index, zero, _CMP_GE_OQ) &
+      _mm512_cmp_pd_mask(index, size, _CMP_LT_OQ) &
+      _mm512_cmp_pd_mask(t, _mm512_mul_pd(k, spacing), _CMP_EQ_OQ);
+    const __mmask8 take = inTable & vis;
+    __m512d z = _mm512_mask_i32gather_pd(
+      zero, take, _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(take, index)), entries, 8);
+    const unsigned miss = static_cast<unsigned>(~inTable & vis) & 0xFFu;
+    if (miss != 0)
+    {
+      // A jittered ray's depth, or an index outside the table: the warp itself.
+      alignas(64) double zs[8];
+      alignas(64) double ts[8];
+      _mm512_store_pd(zs, z);
+      _mm512_store_pd(ts, t);
+      for (unsigned m = miss; m; m &= m - 1)
+      {
+        const int i = __builtin_ctz(m);
+        zs[i] = warp.GetWarp()(ts[i]);
+      }
+      z = _mm512_load_pd(zs);
+    }
+    b[0] = _mm512_add_pd(b[0], a);
+    __m512d w = _mm512_mul_pd(a, z);
+    b[1] = _mm512_add_pd(b[1], w);
+    w = _mm512_mul_pd(w, z);
+    b[2] = _mm512_add_pd(b[2], w);
+    w = _mm512_mul_pd(w, z);
+    b[3] = _mm512_add_pd(b[3], w);
+    w = _mm512_mul_pd(w, z);
+    b[4] = _mm512_add_pd(b[4], w);
+    const __m256 zf = _mm512_cvtpd_ps(z);
+    _mm_store_ps(oa.Z[s], _mm256_castps256_ps128(zf));
+    _mm_store_ps(ob.Z[s], _mm256_extractf128_ps(zf, 1));
+    __m512d q = _mm512_mul_pd(a, perAbsorbance);
+    q = _mm512_mask_blend_pd(_mm512_cmp_pd_mask(q, opaque, _CMP_GE_OQ), q, opaque);
+    q = _mm512_maskz_mov_pd(_mm512_cmp_pd_mask(q, zero, _CMP_GT_OQ), q);
+    const __m256i qi = _mm512_cvttpd_epi32(q);
+    _mm_store_si128(reinterpret_cast<__m128i*>(oa.Quanta[s]), _mm256_castsi256_si128(qi));
+    _mm_store_si128(reinterpret_cast<__m128i*>(ob.Quanta[s]), _mm256_extracti128_si256(qi, 1));
+    quanta = _mm256_add_epi32(quanta, qi); // at most kLaneSteps times kOpaque: no overflow
+    count = _mm512_mask_add_epi64(count, inside, count, _mm512_set1_epi64(1));
+    visible =
+      _mm512_mask_or_epi64(visible, vis, visible, _mm512_set1_epi64(static_cast<int64_t>(1) << s));
+  }
+  LaneMoments* out[2] = { &oa, &ob };
+  for (int g = 0; g < 2; ++g)
+  {
+    __m256d rows[4];
+    Transpose(Half(b[0], g), Half(b[1], g), Half(b[2], g), Half(b[3], g), rows);
+    for (int i = 0; i < 4; ++i)
+    {
+      _mm256_store_pd(out[g]->Sums[i], rows[i]);
+    }
+    _mm256_store_pd(out[g]->Sum4, Half(b[4], g));
+  }
+  const __m512i quantaSum = _mm512_cvtepi32_epi64(quanta);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(oa.Steps), _mm512_castsi512_si256(count));
+  _mm256_store_si256(reinterpret_cast<__m256i*>(ob.Steps), _mm512_extracti64x4_epi64(count, 1));
+  _mm256_store_si256(reinterpret_cast<__m256i*>(oa.Visible), _mm512_castsi512_si256(visible));
+  _mm256_store_si256(reinterpret_cast<__m256i*>(ob.Visible), _mm512_extracti64x4_epi64(visible, 1));
+  _mm256_store_si256(reinterpret_cast<__m256i*>(oa.QuantaSum), _mm512_castsi512_si256(quantaSum));
+  _mm256_store_si256(
+    reinterpret_cast<__m256i*>(ob.QuantaSum), _mm512_extracti64x4_epi64(quantaSum, 1));
+}
+
+namespace
+{
 } // namespace
 
 __attribute__((target("avx2"))) void GatherWeightedLaneRays(const TileRays& packed,

@@ -59,6 +59,14 @@ void LaneMomentsAvx2(const LaneSteps& steps, int taken, const LaneRays& rays,
   const double* const sums[4], const LatticeDepthWarp& warp, double quantaPerAbsorbance,
   LaneMoments& out);
 
+// LaneMomentsAvx2 of two groups of four lanes at once (eight lanes): group a's steps sa, rays
+// ra and pixels sumsA into oa, group b's into ob, taken steps of both (LaneSamplesAvx512's
+// count), each the same bit for bit as LaneMomentsAvx2 of that group with taken steps. Only
+// where HasAvx512().
+void LaneMomentsAvx512(const LaneSteps& sa, const LaneSteps& sb, int taken, const LaneRays& ra,
+  const LaneRays& rb, const double* const sumsA[4], const double* const sumsB[4],
+  const LatticeDepthWarp& warp, double quantaPerAbsorbance, LaneMoments& oa, LaneMoments& ob);
+
 // LaneMomentsAvx2 of end-weighted steps: each step's float absorbance is first multiplied by
 // its weight in float (weights: the lane's FirstWeight at its First index, else LastWeight at
 // its Last index, else 1), as the walker's scalar hand-over does, and out.Weight keeps each

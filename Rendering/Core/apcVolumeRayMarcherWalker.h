@@ -757,10 +757,14 @@ struct VolumeRayMarcher::Walker
       int64_t LastK[4] = { 0, 0, 0, 0 };
       float FirstWeight[4] = { 1, 1, 1, 1 };
       float LastWeight[4] = { 1, 1, 1, 1 };
-      bool Live = false; // some lane has steps left (its Tout is not -inf)
+      bool Live = false;        // some lane has steps left (its Tout is not -inf)
+      walk::LaneMoments Across; // its four pixels' hand-over (LaneMomentsAvx2's)
     };
     Group groups[2];
-    walk::LaneMoments across;
+    // Four pixels' sums at once: each step's warp, moments and quanta across the lanes
+    // (Weighted: each step's weight first, and the records' weights).
+    constexpr bool acrossLanes =
+      LaneMomentsVisitor<Visitor>::value && (!Weighted || TakesWeights<Visitor>::value);
     int64_t samples = 0;
     // The rays the lanes take, in the rectangle's order; Weighted: then the pairs without a
     // lattice point (Ends.MidHits), each a lane whose one step lies at its middle
@@ -820,10 +824,27 @@ struct VolumeRayMarcher::Walker
       {
         // Both groups at once where both have steps left, else the one that has.
         int taken = 0;
-        if (used == 2 && groups[0].Live && groups[1].Live)
+        const bool both = used == 2 && groups[0].Live && groups[1].Live;
+        const double perAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0.0;
+        if (both)
         {
           taken = walk::LaneSamplesAvx512(
             vectors, groups[0].Lanes, groups[1].Lanes, groups[0].Steps, groups[1].Steps);
+          if constexpr (acrossLanes && !Weighted)
+          {
+            // And both groups' sums at once (the weighted ones stay four wide).
+            const double* sums[2][4];
+            for (int gi = 0; gi < 2; ++gi)
+            {
+              for (int i = 0; i < 4; ++i)
+              {
+                sums[gi][i] = visitor.PixelSums(groups[gi].Local[i]);
+              }
+            }
+            walk::LaneMomentsAvx512(groups[0].Steps, groups[1].Steps, taken, groups[0].Lanes,
+              groups[1].Lanes, sums[0], sums[1], *visitor.Warp, perAbsorbance, groups[0].Across,
+              groups[1].Across);
+          }
         }
         else
         {
@@ -838,27 +859,27 @@ struct VolumeRayMarcher::Walker
           {
             continue; // every lane's Tout is -inf: nothing to hand over
           }
-          // Four pixels' sums at once: each step's warp, moments and quanta across the lanes
-          // (Weighted: each step's weight first, and the records' weights).
-          constexpr bool acrossLanes =
-            LaneMomentsVisitor<Visitor>::value && (!Weighted || TakesWeights<Visitor>::value);
+          walk::LaneMoments& across = g.Across;
+          // (Both groups' plain sums were found at once above.)
           if constexpr (acrossLanes)
           {
-            const double* sums[4];
-            for (int i = 0; i < 4; ++i)
+            if (Weighted || !both)
             {
-              sums[i] = visitor.PixelSums(g.Local[i]);
-            }
-            const double perAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0.0;
-            if constexpr (Weighted)
-            {
-              walk::LaneWeightedMomentsAvx2(
-                g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, g.Weights, across);
-            }
-            else
-            {
-              walk::LaneMomentsAvx2(
-                g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, across);
+              const double* sums[4];
+              for (int i = 0; i < 4; ++i)
+              {
+                sums[i] = visitor.PixelSums(g.Local[i]);
+              }
+              if constexpr (Weighted)
+              {
+                walk::LaneWeightedMomentsAvx2(
+                  g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, g.Weights, across);
+              }
+              else
+              {
+                walk::LaneMomentsAvx2(
+                  g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, across);
+              }
             }
           }
           for (int i = 0; i < g.N; ++i)

@@ -5,6 +5,8 @@
 // lane's end, clear steps, unused lanes, jittered depths and indices outside the depth warp's
 // table); and the marcher with the lanes against its scalar sample loops (pass 1's moments, the
 // opaque profile and cut, pass 2 from the cache) on a block of distorted hexahedra and pyramids.
+// Where the processor has AVX-512, the eight-wide hand-over (LaneMomentsAvx512: two groups at
+// once) against the four-wide one, bit for bit.
 #include "apcCellMesh.h"
 #include "apcDepthWarp.h"
 #include "apcLaneMoments.h"
@@ -57,6 +59,7 @@ void CheckAgainstRunAdd(bool weighted)
   int opaqueQuanta = 0;
   int firstSteps = 0;
   int lastSteps = 0;
+  int eightCompared = 0; // trials whose eight-wide hand-over was compared
   for (int trial = 0; trial < 20000; ++trial)
   {
     apc::walk::LaneRays rays;
@@ -128,6 +131,61 @@ void CheckAgainstRunAdd(bool weighted)
     else
     {
       apc::walk::LaneMomentsAvx2(steps, taken, rays, pointers, warp, perAbsorbance, out);
+      if (apc::walk::HasAvx512())
+      {
+        // Eight lanes: this group low and the same lanes in reverse order high, each half the
+        // same bit for bit as the four-wide hand-over of its group.
+        apc::walk::LaneRays reversed;
+        apc::walk::LaneSteps reversedSteps;
+        const double* reversedSums[4];
+        for (int i = 0; i < 4; ++i)
+        {
+          const int j = 3 - i;
+          reversed.K[i] = rays.K[j];
+          reversed.Offset[i] = rays.Offset[j];
+          reversed.Tout[i] = rays.Tout[j];
+          for (int d = 0; d < 3; ++d)
+          {
+            reversed.D[d][i] = rays.D[d][j];
+          }
+          for (int st = 0; st < kLaneSteps; ++st)
+          {
+            reversedSteps.T[st][i] = steps.T[st][j];
+            reversedSteps.Scalar[st][i] = steps.Scalar[st][j];
+            reversedSteps.Absorbance[st][i] = steps.Absorbance[st][j];
+          }
+          reversedSums[i] = pointers[j];
+        }
+        apc::walk::LaneMoments low;
+        apc::walk::LaneMoments high;
+        apc::walk::LaneMomentsAvx512(steps, reversedSteps, taken, rays, reversed, pointers,
+          reversedSums, warp, perAbsorbance, low, high);
+        for (int i = 0; i < 4; ++i)
+        {
+          const int j = 3 - i;
+          for (int m = 0; m < 4; ++m)
+          {
+            ASSERT_TRUE(Same(low.Sums[i][m], out.Sums[i][m])) << "trial " << trial;
+            ASSERT_TRUE(Same(high.Sums[i][m], out.Sums[j][m])) << "trial " << trial;
+          }
+          ASSERT_TRUE(Same(low.Sum4[i], out.Sum4[i])) << "trial " << trial;
+          ASSERT_TRUE(Same(high.Sum4[i], out.Sum4[j])) << "trial " << trial;
+          ASSERT_EQ(low.Steps[i], out.Steps[i]);
+          ASSERT_EQ(high.Steps[i], out.Steps[j]);
+          ASSERT_EQ(low.Visible[i], out.Visible[i]);
+          ASSERT_EQ(high.Visible[i], out.Visible[j]);
+          ASSERT_EQ(low.QuantaSum[i], out.QuantaSum[i]);
+          ASSERT_EQ(high.QuantaSum[i], out.QuantaSum[j]);
+          for (int st = 0; st < taken; ++st)
+          {
+            ASSERT_EQ(std::memcmp(&low.Z[st][i], &out.Z[st][i], sizeof(float)), 0);
+            ASSERT_EQ(std::memcmp(&high.Z[st][i], &out.Z[st][j], sizeof(float)), 0);
+            ASSERT_EQ(low.Quanta[st][i], out.Quanta[st][i]);
+            ASSERT_EQ(high.Quanta[st][i], out.Quanta[st][j]);
+          }
+        }
+        ++eightCompared;
+      }
     }
     for (int i = 0; i < 4; ++i)
     {
@@ -196,6 +254,7 @@ void CheckAgainstRunAdd(bool weighted)
   EXPECT_GT(jittered, 1000);
   EXPECT_GT(outside, 1000);
   EXPECT_GT(opaqueQuanta, 100);
+  EXPECT_TRUE(weighted || !apc::walk::HasAvx512() || eightCompared == 20000) << eightCompared;
   if (weighted)
   {
     EXPECT_GT(firstSteps, 5000);
