@@ -697,7 +697,9 @@ struct VolumeRayMarcher::Walker
   // the stop see it: the same weighted samples, sums, records, weights and cut as
   // WeightedRay's. Its four pixels' sums are found at once as the plain ones' are
   // (walk::LaneWeightedMomentsAvx2: the weights multiplied in the lanes, each record's weight
-  // kept by Moments::LaneRunEnd<true>).
+  // kept by Moments::LaneRunEnd<true>). With AVX-512 (WideLanes) eight rays at a time, as two
+  // groups of four whose kernel (walk::LaneSamplesAvx512) and plain sums
+  // (walk::LaneMomentsAvx512) run at once, each group's values bit for bit the four-wide ones.
   static_assert(walk::kLaneSteps <= RayProgress::kMaxRun, "a call's steps fit one run");
   template <bool Weighted, class Visitor>
   [[gnu::noinline]] int64_t LaneSamples(const std::vector<RaySetup>& rays, const TileRays& packed,
@@ -882,6 +884,7 @@ struct VolumeRayMarcher::Walker
               }
             }
           }
+          bool live = false; // some lane's chunk ended at kLaneSteps: it goes on
           for (int i = 0; i < g.N; ++i)
           {
             const int l = g.Local[i];
@@ -1014,13 +1017,9 @@ struct VolumeRayMarcher::Walker
             // A ray that left the chunk before its end is done.
             g.Lanes.Tout[i] =
               s == walk::kLaneSteps ? tout : -std::numeric_limits<double>::infinity();
-            more = more || s == walk::kLaneSteps;
+            live = live || s == walk::kLaneSteps;
           }
-          g.Live = false;
-          for (int i = 0; i < g.N; ++i)
-          {
-            g.Live = g.Live || g.Lanes.Tout[i] != -std::numeric_limits<double>::infinity();
-          }
+          g.Live = live;
           more = more || g.Live;
         }
       }
