@@ -452,11 +452,18 @@ struct SampleCache
     const size_t arenaBytes = n * sizeof(CachedSample) + orderBytes + weightBytes;
     if (this->CompactRecords && !this->DepthTable.empty())
     {
-      // Compact unless its escapes make it larger (a tile of jittered rays, say).
-      const size_t escapes = this->Escapes(recorded, n, weights);
+      // Compact unless its escapes make it larger (a tile of jittered rays, say). Each
+      // record's slot is found once, here, and read back by CopyCompact.
+      thread_local UninitializedVector<uint16_t> depthSlots;
+      if (depthSlots.size() < n)
+      {
+        depthSlots.resize(std::max(n, 2 * depthSlots.size()));
+      }
+      const size_t escapes = this->DepthSlots(recorded, n, weights, depthSlots.data());
       if (CachedTile::CompactBytes(n, escapes) < arenaBytes)
       {
-        this->KeepCompact(tile, recorded, n, escapes, counts, pixels, withOrder, weights);
+        this->KeepCompact(
+          tile, recorded, n, depthSlots.data(), escapes, counts, pixels, withOrder, weights);
         return;
       }
     }
@@ -534,8 +541,12 @@ struct SampleCache
     }
     return i < entries && want == have && w == 0x3f800000u ? i : kEscapedDepth;
   }
-  // How many of recorded[0, n) a compact tile keeps as escapes.
-  size_t Escapes(const RecordedSample* recorded, size_t n, const float* weights) const
+  // Each of recorded[0, n)'s depth slot (DepthSlot) into depthSlots[0, n), in record order;
+  // returns how many are escapes. The records are read in the order they were written, so
+  // the loop streams; the slots are read back by the counting sort's order (CopyCompact),
+  // which before looked each record's depth up a second time.
+  size_t DepthSlots(
+    const RecordedSample* recorded, size_t n, const float* weights, uint16_t* depthSlots) const
   {
     const float* table = this->DepthTable.data();
     const uint32_t entries = static_cast<uint32_t>(this->DepthTable.size());
@@ -543,19 +554,20 @@ struct SampleCache
     size_t escapes = 0;
     for (size_t r = 0; r < n; ++r)
     {
-      escapes += DepthSlot(recorded[r], table, entries, base16, weights ? weights + r : nullptr) ==
-        kEscapedDepth;
+      const uint16_t slot =
+        DepthSlot(recorded[r], table, entries, base16, weights ? weights + r : nullptr);
+      depthSlots[r] = slot;
+      escapes += slot == kEscapedDepth;
     }
     return escapes;
   }
-  // Keep in compact form (the depth table set, the tile's Starts sized, escapes counted).
-  void KeepCompact(size_t tile, const RecordedSample* recorded, size_t n, size_t escapes,
-    const uint32_t* counts, int pixels, bool withOrder, const float* weights)
+  // Keep in compact form (the depth table set, the tile's Starts sized, each record's depth
+  // slot in depthSlots (DepthSlots), escapes counted).
+  void KeepCompact(size_t tile, const RecordedSample* recorded, size_t n,
+    const uint16_t* depthSlots, size_t escapes, const uint32_t* counts, int pixels, bool withOrder,
+    const float* weights)
   {
     CachedTile& cached = this->Tiles[tile];
-    const float* table = this->DepthTable.data();
-    const uint32_t entries = static_cast<uint32_t>(this->DepthTable.size());
-    const uint16_t base16 = static_cast<uint16_t>(this->DepthBase);
     const size_t arenaBytes = CachedTile::CompactBytes(n, escapes);
     const size_t bytes = cached.Bytes() + arenaBytes;
     char* memory = nullptr;
@@ -580,11 +592,11 @@ struct SampleCache
     const uint32_t* slots = PixelSlots(recorded, n, counts, pixels, starts);
     if (weights)
     {
-      CopyCompact<true>(recorded, slots, n, compact, table, entries, base16, weights);
+      CopyCompact<true>(recorded, slots, n, compact, depthSlots, weights);
     }
     else
     {
-      CopyCompact<false>(recorded, slots, n, compact, table, entries, base16, nullptr);
+      CopyCompact<false>(recorded, slots, n, compact, depthSlots, nullptr);
     }
     StreamFence();
     for (int p = pixels; p > 0; --p)
@@ -594,23 +606,22 @@ struct SampleCache
     starts[0] = 0;
     this->Kept[tile] = 1;
   }
-  // Copy's compact form: the scalars and depth slots written front to back by streaming
-  // stores (four samples a step: two words of scalars, one of slots), the escapes in order.
+  // Copy's compact form: the scalars and depth slots (depthSlots, by record) written front to
+  // back by streaming stores (four samples a step: two words of scalars, one of slots), the
+  // escapes in order.
   template <bool WithWeights>
   static void CopyCompact(const RecordedSample* recorded, const uint32_t* slots, size_t n,
-    CompactSpan& compact, const float* table, uint32_t entries, uint16_t base16,
-    const float* weights)
+    CompactSpan& compact, const uint16_t* depthSlots, const float* weights)
   {
     float* scalars = compact.Scalars;
     uint16_t* depths = compact.Depths;
     EscapedSample* escape = compact.Escapes;
-    auto slotOf = [&](size_t at, const RecordedSample& r)
+    auto slotOf = [&](uint32_t record, const RecordedSample& r)
     {
-      const uint16_t slot =
-        DepthSlot(r, table, entries, base16, WithWeights ? weights + slots[at] : nullptr);
+      const uint16_t slot = depthSlots[record];
       if (slot == kEscapedDepth)
       {
-        *escape++ = { r.Z, WithWeights ? weights[slots[at]] : 1.0f, r.K16, 0 };
+        *escape++ = { r.Z, WithWeights ? weights[record] : 1.0f, r.K16, 0 };
       }
       return slot;
     };
@@ -622,9 +633,10 @@ struct SampleCache
       uint32_t scalarBits[4];
       for (size_t j = 0; j < 4; ++j)
       {
-        const RecordedSample& r = recorded[slots[at + j]];
+        const uint32_t record = slots[at + j];
+        const RecordedSample& r = recorded[record];
         std::memcpy(scalarBits + j, &r.Scalar, sizeof(float));
-        depthBits |= static_cast<uint64_t>(slotOf(at + j, r)) << (16 * j);
+        depthBits |= static_cast<uint64_t>(slotOf(record, r)) << (16 * j);
       }
       _mm_stream_si64(reinterpret_cast<long long*>(scalars + at),
         static_cast<long long>(scalarBits[0] | static_cast<uint64_t>(scalarBits[1]) << 32));
@@ -635,9 +647,10 @@ struct SampleCache
 #endif
     for (; at < n; ++at)
     {
-      const RecordedSample& r = recorded[slots[at]];
+      const uint32_t record = slots[at];
+      const RecordedSample& r = recorded[record];
       scalars[at] = r.Scalar;
-      depths[at] = slotOf(at, r);
+      depths[at] = slotOf(record, r);
     }
   }
 };

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <string>
 #include <vector>
 
 namespace
@@ -352,4 +353,138 @@ TEST(SampleCache, TheFullFormWhereCompactIsNotSmaller)
   cache.Keep(0, onTable, counts.data(), kPixels, true);
   EXPECT_TRUE(cache.Tiles[0].IsCompact());
   EXPECT_EQ(cache.Tiles[0].Compact.EscapeCount, 0u);
+}
+
+// The compact keep against a plain reference written from its definition, byte for byte: the
+// records stably sorted by pixel, each one's depth slot its lattice bits' index in the table
+// if the entry there is its depth bit for bit and its weight 1, else an escape in sample
+// order. Random tiles: runs of one pixel as pass 1 records them, empty pixels, short and full
+// tables, escapes of every kind, with and without lattice bits and weights.
+TEST(SampleCache, CompactKeepMatchesAPlainReference)
+{
+  uint32_t random = 987654321;
+  auto next = [&random]() { return (random = random * 1664525u + 1013904223u) >> 8; };
+  int compactTiles = 0;
+  for (int round = 0; round < 24; ++round)
+  {
+    const int64_t entries = round % 3 == 0 ? 65536 : 50 + static_cast<int64_t>(next() % 3000);
+    const int64_t base = static_cast<int64_t>(next() % 200000) - 100000;
+    std::vector<double> table(static_cast<size_t>(entries));
+    for (int64_t i = 0; i < entries; ++i)
+    {
+      table[static_cast<size_t>(i)] = -1.0 + 2.0 * static_cast<double>(i) / entries;
+    }
+    apc::SampleCache cache;
+    cache.SetDepthTable(table.data(), entries, base);
+    const std::vector<float>& depths = cache.DepthTable;
+    const int64_t kept = static_cast<int64_t>(depths.size());
+    // Pixels used: a few (most empty) or all of them.
+    const int used = round % 4 == 1 ? 3 : kPixels;
+    std::vector<apc::RecordedSample> recorded;
+    std::vector<float> weights;
+    std::vector<uint32_t> counts(kPixels, 0);
+    const size_t n = round % 5 == 4 ? 1 + next() % 7 : 200 + next() % 5000;
+    while (recorded.size() < n)
+    {
+      const uint16_t pixel = static_cast<uint16_t>((next() % used) * (kPixels / used));
+      const size_t run = 1 + next() % 9;
+      int64_t k = base + static_cast<int64_t>(next() % static_cast<uint32_t>(kept));
+      for (size_t j = 0; j < run && recorded.size() < n; ++j, ++k)
+      {
+        float z = k >= base && k - base < kept ? depths[static_cast<size_t>(k - base)] : 0.5f;
+        float weight = 1.0f;
+        const uint32_t kind = next() % 32;
+        if (kind == 0)
+        {
+          z = std::nextafter(z, 2.0f); // off the lattice
+        }
+        else if (kind == 1)
+        {
+          weight = static_cast<float>(next() % 100) / 64; // an end weight (may be 1)
+        }
+        else if (kind == 2)
+        {
+          k = base - 1 - static_cast<int64_t>(next() % 50); // in front of the table
+        }
+        else if (kind == 3)
+        {
+          z = -z; // -0 against +0, or another depth
+        }
+        recorded.push_back({ z, static_cast<float>(next()) * 1e-3f, pixel,
+          static_cast<uint16_t>(static_cast<uint64_t>(k)) });
+        weights.push_back(weight);
+        ++counts[pixel];
+      }
+    }
+    for (bool withOrder : { false, true })
+    {
+      for (bool withWeights : { false, true })
+      {
+        const float* w = withWeights ? weights.data() : nullptr;
+        // The reference.
+        std::vector<uint32_t> order(n);
+        for (size_t i = 0; i < n; ++i)
+        {
+          order[i] = static_cast<uint32_t>(i);
+        }
+        std::stable_sort(order.begin(), order.end(),
+          [&](uint32_t a, uint32_t b) { return recorded[a].Pixel < recorded[b].Pixel; });
+        std::vector<uint32_t> starts(kPixels + 1, 0);
+        for (int p = 0; p < kPixels; ++p)
+        {
+          starts[p + 1] = starts[p] + counts[p];
+        }
+        std::vector<float> scalars;
+        std::vector<uint16_t> slots;
+        std::vector<apc::EscapedSample> escapes;
+        for (uint32_t i : order)
+        {
+          const apc::RecordedSample& r = recorded[i];
+          const int64_t at = static_cast<uint16_t>(r.K16 - static_cast<uint16_t>(base));
+          const float weight = w ? w[i] : 1.0f;
+          const bool onTable = at < kept &&
+            std::memcmp(&depths[static_cast<size_t>(at)], &r.Z, sizeof(float)) == 0 &&
+            weight == 1.0f;
+          scalars.push_back(r.Scalar);
+          slots.push_back(onTable ? static_cast<uint16_t>(at) : apc::kEscapedDepth);
+          if (!onTable)
+          {
+            escapes.push_back({ r.Z, weight, r.K16, 0 });
+          }
+        }
+        cache.Empty(1, 0, 1);
+        cache.Keep(0, recorded.data(), n, counts.data(), kPixels, withOrder, w);
+        ASSERT_TRUE(cache.Kept[0]);
+        const apc::CachedTile& c = cache.Tiles[0];
+        const std::string what = "round " + std::to_string(round) +
+          (withOrder ? ", lattice bits" : "") + (withWeights ? ", weights" : "");
+        if (!c.IsCompact())
+        {
+          // The full form only where compact would not be smaller.
+          EXPECT_GE(apc::CachedTile::CompactBytes(n, escapes.size()),
+            n * (sizeof(apc::CachedSample) + (withOrder ? 2 : 0) + (withWeights ? 4 : 0)))
+            << what;
+          continue;
+        }
+        ++compactTiles;
+        const apc::CompactSpan& compact = c.Compact;
+        ASSERT_EQ(compact.Size, n) << what;
+        ASSERT_EQ(compact.EscapeCount, escapes.size()) << what;
+        EXPECT_EQ(compact.Ordered, withOrder) << what;
+        EXPECT_EQ(compact.Weighted, withWeights) << what;
+        EXPECT_TRUE(std::equal(starts.begin(), starts.end(), c.Starts.begin(), c.Starts.end()))
+          << what;
+        EXPECT_EQ(std::memcmp(compact.Scalars, scalars.data(), n * sizeof(float)), 0) << what;
+        EXPECT_EQ(std::memcmp(compact.Depths, slots.data(), n * sizeof(uint16_t)), 0) << what;
+        for (size_t e = 0; e < escapes.size(); ++e)
+        {
+          const apc::EscapedSample& have = compact.Escapes[e];
+          EXPECT_EQ(std::memcmp(&have.Z, &escapes[e].Z, sizeof(float)), 0) << what << " " << e;
+          EXPECT_EQ(std::memcmp(&have.Weight, &escapes[e].Weight, sizeof(float)), 0) << what;
+          EXPECT_EQ(have.K16, escapes[e].K16) << what << " " << e;
+        }
+      }
+    }
+  }
+  EXPECT_GT(compactTiles, 64); // of 96
 }
