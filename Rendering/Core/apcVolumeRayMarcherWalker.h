@@ -759,8 +759,9 @@ struct VolumeRayMarcher::Walker
       int64_t LastK[4] = { 0, 0, 0, 0 };
       float FirstWeight[4] = { 1, 1, 1, 1 };
       float LastWeight[4] = { 1, 1, 1, 1 };
-      bool Live = false;        // some lane has steps left (its Tout is not -inf)
-      walk::LaneMoments Across; // its four pixels' hand-over (LaneMomentsAvx2's)
+      bool Live = false;          // some lane has steps left (its Tout is not -inf)
+      walk::LaneMoments Across;   // its four pixels' hand-over (LaneMomentsAvx2's)
+      const double* Sums[4] = {}; // with acrossLanes: its pixels' sums (Moments::PixelSums)
     };
     Group groups[2];
     // Four pixels' sums at once: each step's warp, moments and quanta across the lanes
@@ -779,6 +780,7 @@ struct VolumeRayMarcher::Walker
       std::copy(ends.MidHits, ends.MidHits + ends.MidCount, state.Clipped.Hits + hits);
       count = hits + ends.MidCount;
     }
+    const double perAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0.0;
     const int span = this->WideLanes ? 8 : 4;
     for (int h = 0; h < count; h += span)
     {
@@ -806,6 +808,10 @@ struct VolumeRayMarcher::Walker
           {
             g.K[i] = static_cast<int64_t>(c.Lattice[l]);
           }
+          if constexpr (acrossLanes)
+          {
+            g.Sums[i] = visitor.PixelSums(l);
+          }
           if (i < g.N)
           {
             visitor.Segment(l, c.Tin[l], c.Tout[l]);
@@ -827,7 +833,6 @@ struct VolumeRayMarcher::Walker
         // Both groups at once where both have steps left, else the one that has.
         int taken = 0;
         const bool both = used == 2 && groups[0].Live && groups[1].Live;
-        const double perAbsorbance = own ? progress.Bins->QuantaPerAbsorbance : 0.0;
         if (both)
         {
           taken = walk::LaneSamplesAvx512(
@@ -835,17 +840,9 @@ struct VolumeRayMarcher::Walker
           if constexpr (acrossLanes && !Weighted)
           {
             // And both groups' sums at once (the weighted ones stay four wide).
-            const double* sums[2][4];
-            for (int gi = 0; gi < 2; ++gi)
-            {
-              for (int i = 0; i < 4; ++i)
-              {
-                sums[gi][i] = visitor.PixelSums(groups[gi].Local[i]);
-              }
-            }
             walk::LaneMomentsAvx512(groups[0].Steps, groups[1].Steps, taken, groups[0].Lanes,
-              groups[1].Lanes, sums[0], sums[1], *visitor.Warp, perAbsorbance, groups[0].Across,
-              groups[1].Across);
+              groups[1].Lanes, groups[0].Sums, groups[1].Sums, *visitor.Warp, perAbsorbance,
+              groups[0].Across, groups[1].Across);
           }
         }
         else
@@ -867,20 +864,15 @@ struct VolumeRayMarcher::Walker
           {
             if (Weighted || !both)
             {
-              const double* sums[4];
-              for (int i = 0; i < 4; ++i)
-              {
-                sums[i] = visitor.PixelSums(g.Local[i]);
-              }
               if constexpr (Weighted)
               {
                 walk::LaneWeightedMomentsAvx2(
-                  g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, g.Weights, across);
+                  g.Steps, taken, g.Lanes, g.Sums, *visitor.Warp, perAbsorbance, g.Weights, across);
               }
               else
               {
                 walk::LaneMomentsAvx2(
-                  g.Steps, taken, g.Lanes, sums, *visitor.Warp, perAbsorbance, across);
+                  g.Steps, taken, g.Lanes, g.Sums, *visitor.Warp, perAbsorbance, across);
               }
             }
           }
