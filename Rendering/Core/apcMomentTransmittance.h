@@ -33,6 +33,7 @@
 #ifndef apcMomentTransmittance_h
 #define apcMomentTransmittance_h
 
+#include "apcHiddenDecisions.h"
 #include "apcPolynomialRoots.h"
 #include "apcPowerMoments.h"
 
@@ -179,6 +180,8 @@ public:
 
 private:
   static constexpr int M = N / 2;
+  template <class Range>
+  double FourMomentHiddenDepth(double limit, const Range& range) const;
   double ChristoffelKernel(double x) const;
   TransmittanceQuery FullQuery(double z) const;
   TransmittanceQuery GeneralQuery(double z, double kernelAtZ, const double* c) const;
@@ -301,6 +304,13 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
     return kNone;
   }
   const double limit = maxWeight / this->B0;
+  if constexpr (M == 2)
+  {
+    if (limit < 1.0 && limit >= kLowestHiddenLimit)
+    {
+      return this->FourMomentHiddenDepth(limit, range);
+    }
+  }
   auto hidden = [&](double z)
   {
     const TransmittanceQuery q = this->Query(z);
@@ -337,6 +347,67 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
     const bool atMid = hidden(mid);
     const bool atLeft = hidden(left);
     const bool atRight = hidden(right);
+    (atMid ? hi : lo) = mid;
+    const double next = atMid ? left : right;
+    ((atMid ? atLeft : atRight) ? hi : lo) = next;
+  }
+  return hi;
+}
+
+// HiddenDepth's steps as above, each test T(z) <= limit decided for the points of a step at once
+// by DecideHidden (the same answers as Query's, see apcHiddenDecisions.h), Query asked only for
+// the points it leaves undecided: the depth returned is the one above to the bit. The first batch
+// holds 1, -1 and the first round's three points (most pixels that get this far bisect), each
+// later round its three.
+template <int N>
+template <class Range>
+inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const Range& range) const
+{
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  FourMomentPixel px;
+  this->GetFourMomentPixel(px);
+  const double lnLimit = std::log(limit);
+  auto resolve = [&](double z, int8_t decision)
+  {
+    if (decision == kHiddenUndecided)
+    {
+      const TransmittanceQuery q = this->Query(z);
+      return !q.Fallback && q.Transmittance <= limit;
+    }
+    return decision == kHiddenYes;
+  };
+  // Padded to whole vectors (a lane more costs nothing on the chain's latency).
+  const double first[8] = { 1.0, -1.0, 0.0, -0.5, 0.5, 0.5, 0.5, 0.5 };
+  int8_t decided[8];
+  DecideHidden(px, lnLimit, first, decided, 8);
+  if (!resolve(1.0, decided[0]))
+  {
+    return kNone;
+  }
+  if (resolve(-1.0, decided[1]))
+  {
+    return -1.0;
+  }
+  const std::pair<double, double> samples = range();
+  double lo = -1.0;
+  double hi = 1.0;
+  for (int step = 0; step < 10; step += 2)
+  {
+    if (samples.second <= lo || samples.first >= hi)
+    {
+      break;
+    }
+    const double mid = 0.5 * (lo + hi);
+    const double left = 0.5 * (lo + mid);
+    const double right = 0.5 * (mid + hi);
+    if (step > 0)
+    {
+      const double points[4] = { mid, left, right, right };
+      DecideHidden(px, lnLimit, points, decided + 2, 4);
+    }
+    const bool atMid = resolve(mid, decided[2]);
+    const bool atLeft = resolve(left, decided[3]);
+    const bool atRight = resolve(right, decided[4]);
     (atMid ? hi : lo) = mid;
     const double next = atMid ? left : right;
     ((atMid ? atLeft : atRight) ? hi : lo) = next;
