@@ -291,6 +291,24 @@ inline bool SurelyNoHiddenDepth(double b0, double w)
   return b0 * power > w * (1.0 + 1e-12);
 }
 
+// The other side: true where exp(-b0) b0 <= w is certain without an exponential. exp(-b0) <= 2^-k
+// for an integer k <= b0 log2(e), and b0 2^-k below w by the same margin. It answers b0 from
+// about ln 2 past the far crossing (b0 ~ ln(1/w) + ln ln(1/w)) up; pixels with a hidden depth
+// mostly lie there, and the rest, and b0 near the crossings, are not answered.
+inline bool SurelyMayHaveHiddenDepth(double b0, double w)
+{
+  if (!(b0 > 0.0 && b0 < 512.0))
+  {
+    return false;
+  }
+  // 1e-9 less than the rounded product is below the exact one, and so is its integer part.
+  const int k = static_cast<int>(b0 * 1.4426950408889634 - 1e-9);
+  const uint64_t bits = static_cast<uint64_t>(1023 - k) << 52;
+  double power;
+  std::memcpy(&power, &bits, sizeof(power));
+  return b0 * power < w * (1.0 - 1e-12);
+}
+
 template <int N>
 template <class Range>
 inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range& range) const
@@ -299,7 +317,8 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
   // Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
   // pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
   if (this->State != PixelState::Valid || !(maxWeight > 0.0) ||
-    SurelyNoHiddenDepth(this->B0, maxWeight) || !(std::exp(-this->B0) * this->B0 <= maxWeight))
+    SurelyNoHiddenDepth(this->B0, maxWeight) ||
+    !(SurelyMayHaveHiddenDepth(this->B0, maxWeight) || std::exp(-this->B0) * this->B0 <= maxWeight))
   {
     return kNone;
   }
