@@ -373,13 +373,11 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
   return hi;
 }
 
-// HiddenDepth's steps as above, each test T(z) <= limit decided for many depths at once by
-// DecideHidden (the same answers as Query's, see apcHiddenDecisions.h), Query asked only for the
-// depths it leaves undecided: the depth returned is the one above to the bit. A decision is a
-// chain of dependent divisions and a square root, so one batch answers two rounds: the round's
-// three depths and the three the next round may ask in each of the four quarters it may go on
-// in (15 depths, four vectors; the first batch also 1 and -1); most pixels that get this far
-// bisect, 3.2 rounds on average in ParaView's view filling the window.
+// HiddenDepth's steps as above, each test T(z) <= limit decided for the points of a step at once
+// by DecideHidden (the same answers as Query's, see apcHiddenDecisions.h), Query asked only for
+// the points it leaves undecided: the depth returned is the one above to the bit. The first batch
+// holds 1, -1 and the first round's three points (most pixels that get this far bisect), each
+// later round its three.
 template <int N>
 template <class Range>
 inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const Range& range) const
@@ -397,78 +395,38 @@ inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const 
     }
     return decision == kHiddenYes;
   };
-  // Two rounds from (lo, hi), with the formulas the rounds use (the depths are exact dyadic
-  // fractions, so any order of forming them gives the same bits): p[0..2] the round's middle,
-  // left and right, p[3 + q] the middle of quarter q, p[7 + 2q] and p[8 + 2q] its left and right.
-  auto twoRounds = [](double lo, double hi, double* p)
-  {
-    const double mid = 0.5 * (lo + hi);
-    const double bounds[5] = { lo, 0.5 * (lo + mid), mid, 0.5 * (mid + hi), hi };
-    p[0] = mid;
-    p[1] = bounds[1];
-    p[2] = bounds[3];
-    for (int q = 0; q < 4; ++q)
-    {
-      const double middle = 0.5 * (bounds[q] + bounds[q + 1]);
-      p[3 + q] = middle;
-      p[7 + 2 * q] = 0.5 * (bounds[q] + middle);
-      p[8 + 2 * q] = 0.5 * (middle + bounds[q + 1]);
-    }
-    p[15] = mid; // padding to whole vectors
-  };
-  double points[20];
-  int8_t decided[20];
-  points[0] = 1.0;
-  points[1] = -1.0;
-  twoRounds(-1.0, 1.0, points + 2);
-  points[18] = points[19] = 0.0;
-  DecideHidden(px, lnLimit, points, decided, 20);
-  if (!resolve(points[0], decided[0]))
+  // Padded to whole vectors (a lane more costs nothing on the chain's latency).
+  const double first[8] = { 1.0, -1.0, 0.0, -0.5, 0.5, 0.5, 0.5, 0.5 };
+  int8_t decided[8];
+  DecideHidden(px, lnLimit, first, decided, 8);
+  if (!resolve(1.0, decided[0]))
   {
     return kNone;
   }
-  if (resolve(points[1], decided[1]))
+  if (resolve(-1.0, decided[1]))
   {
     return -1.0;
   }
   const std::pair<double, double> samples = range();
   double lo = -1.0;
   double hi = 1.0;
-  int base = 2;
-  int quarter = 0;
   for (int step = 0; step < 10; step += 2)
   {
     if (samples.second <= lo || samples.first >= hi)
     {
       break;
     }
-    int m, l, r;
-    if (step % 4 == 0)
-    {
-      if (step > 0)
-      {
-        twoRounds(lo, hi, points);
-        // The last round (step 8) has no next one: its three depths alone.
-        DecideHidden(px, lnLimit, points, decided, step == 8 ? 4 : 16);
-        base = 0;
-      }
-      m = base;
-      l = base + 1;
-      r = base + 2;
-    }
-    else
-    {
-      m = base + 3 + quarter;
-      l = base + 7 + 2 * quarter;
-      r = base + 8 + 2 * quarter;
-    }
     const double mid = 0.5 * (lo + hi);
     const double left = 0.5 * (lo + mid);
     const double right = 0.5 * (mid + hi);
-    const bool atMid = resolve(mid, decided[m]);
-    const bool atLeft = resolve(left, decided[l]);
-    const bool atRight = resolve(right, decided[r]);
-    quarter = atMid ? (atLeft ? 0 : 1) : (atRight ? 2 : 3);
+    if (step > 0)
+    {
+      const double points[4] = { mid, left, right, right };
+      DecideHidden(px, lnLimit, points, decided + 2, 4);
+    }
+    const bool atMid = resolve(mid, decided[2]);
+    const bool atLeft = resolve(left, decided[3]);
+    const bool atRight = resolve(right, decided[4]);
     (atMid ? hi : lo) = mid;
     const double next = atMid ? left : right;
     ((atMid ? atLeft : atRight) ? hi : lo) = next;
