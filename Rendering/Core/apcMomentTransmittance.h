@@ -33,6 +33,7 @@
 #ifndef apcMomentTransmittance_h
 #define apcMomentTransmittance_h
 
+#include "apcHiddenDecisions.h"
 #include "apcPolynomialRoots.h"
 #include "apcPowerMoments.h"
 
@@ -179,6 +180,8 @@ public:
 
 private:
   static constexpr int M = N / 2;
+  template <class Range>
+  double FourMomentHiddenDepth(double limit, const Range& range) const;
   double ChristoffelKernel(double x) const;
   TransmittanceQuery FullQuery(double z) const;
   TransmittanceQuery GeneralQuery(double z, double kernelAtZ, const double* c) const;
@@ -288,6 +291,24 @@ inline bool SurelyNoHiddenDepth(double b0, double w)
   return b0 * power > w * (1.0 + 1e-12);
 }
 
+// The other side: true where exp(-b0) b0 <= w is certain without an exponential. exp(-b0) <= 2^-k
+// for an integer k <= b0 log2(e), and b0 2^-k below w by the same margin. It answers b0 from
+// about ln 2 past the far crossing (b0 ~ ln(1/w) + ln ln(1/w)) up; pixels with a hidden depth
+// mostly lie there, and the rest, and b0 near the crossings, are not answered.
+inline bool SurelyMayHaveHiddenDepth(double b0, double w)
+{
+  if (!(b0 > 0.0 && b0 < 512.0))
+  {
+    return false;
+  }
+  // 1e-9 less than the rounded product is below the exact one, and so is its integer part.
+  const int k = static_cast<int>(b0 * 1.4426950408889634 - 1e-9);
+  const uint64_t bits = static_cast<uint64_t>(1023 - k) << 52;
+  double power;
+  std::memcpy(&power, &bits, sizeof(power));
+  return b0 * power < w * (1.0 - 1e-12);
+}
+
 template <int N>
 template <class Range>
 inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range& range) const
@@ -296,11 +317,19 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
   // Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
   // pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
   if (this->State != PixelState::Valid || !(maxWeight > 0.0) ||
-    SurelyNoHiddenDepth(this->B0, maxWeight) || !(std::exp(-this->B0) * this->B0 <= maxWeight))
+    SurelyNoHiddenDepth(this->B0, maxWeight) ||
+    !(SurelyMayHaveHiddenDepth(this->B0, maxWeight) || std::exp(-this->B0) * this->B0 <= maxWeight))
   {
     return kNone;
   }
   const double limit = maxWeight / this->B0;
+  if constexpr (M == 2)
+  {
+    if (limit < 1.0 && limit >= kLowestHiddenLimit)
+    {
+      return this->FourMomentHiddenDepth(limit, range);
+    }
+  }
   auto hidden = [&](double z)
   {
     const TransmittanceQuery q = this->Query(z);
@@ -337,6 +366,67 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
     const bool atMid = hidden(mid);
     const bool atLeft = hidden(left);
     const bool atRight = hidden(right);
+    (atMid ? hi : lo) = mid;
+    const double next = atMid ? left : right;
+    ((atMid ? atLeft : atRight) ? hi : lo) = next;
+  }
+  return hi;
+}
+
+// HiddenDepth's steps as above, each test T(z) <= limit decided for the points of a step at once
+// by DecideHidden (the same answers as Query's, see apcHiddenDecisions.h), Query asked only for
+// the points it leaves undecided: the depth returned is the one above to the bit. The first batch
+// holds 1, -1 and the first round's three points (most pixels that get this far bisect), each
+// later round its three.
+template <int N>
+template <class Range>
+inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const Range& range) const
+{
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  FourMomentPixel px;
+  this->GetFourMomentPixel(px);
+  const double lnLimit = std::log(limit);
+  auto resolve = [&](double z, int8_t decision)
+  {
+    if (decision == kHiddenUndecided)
+    {
+      const TransmittanceQuery q = this->Query(z);
+      return !q.Fallback && q.Transmittance <= limit;
+    }
+    return decision == kHiddenYes;
+  };
+  // Padded to whole vectors (a lane more costs nothing on the chain's latency).
+  const double first[8] = { 1.0, -1.0, 0.0, -0.5, 0.5, 0.5, 0.5, 0.5 };
+  int8_t decided[8];
+  DecideHidden(px, lnLimit, first, decided, 8);
+  if (!resolve(1.0, decided[0]))
+  {
+    return kNone;
+  }
+  if (resolve(-1.0, decided[1]))
+  {
+    return -1.0;
+  }
+  const std::pair<double, double> samples = range();
+  double lo = -1.0;
+  double hi = 1.0;
+  for (int step = 0; step < 10; step += 2)
+  {
+    if (samples.second <= lo || samples.first >= hi)
+    {
+      break;
+    }
+    const double mid = 0.5 * (lo + hi);
+    const double left = 0.5 * (lo + mid);
+    const double right = 0.5 * (mid + hi);
+    if (step > 0)
+    {
+      const double points[4] = { mid, left, right, right };
+      DecideHidden(px, lnLimit, points, decided + 2, 4);
+    }
+    const bool atMid = resolve(mid, decided[2]);
+    const bool atLeft = resolve(left, decided[3]);
+    const bool atRight = resolve(right, decided[4]);
     (atMid ? hi : lo) = mid;
     const double next = atMid ? left : right;
     ((atMid ? atLeft : atRight) ? hi : lo) = next;

@@ -209,6 +209,60 @@ TEST(HiddenDepthBound, AnswersOnlyWhereTheExponentialWould)
   EXPECT_EQ(below, 0);
 }
 
+// The far side's test without an exponential answers only where exp(-b0) b0 <= w, and it
+// answers every b0 from 1.5 past the far crossing up to its end at 512: b0 on a
+// dense grid and 128 ulps about each crossing.
+TEST(HiddenDepthBound, AnswersTheFarSideOnlyWhereTheExponentialWould)
+{
+  int answered = 0;
+  int missed = 0;
+  for (const double w : { 1e-2, 1e-4, 1e-6, 0.3 })
+  {
+    std::vector<double> b0s;
+    for (double b = 1e-8; b < 600.0; b *= 1.0001)
+    {
+      b0s.push_back(b);
+    }
+    double farCrossing = 0.0;
+    for (double lo0 : { 1e-9, 1.0 })
+    {
+      double lo = lo0;
+      double hi = lo0 == 1.0 ? 700.0 : 1.0;
+      for (int i = 0; i < 200; ++i)
+      {
+        const double mid = 0.5 * (lo + hi);
+        const bool above = std::exp(-mid) * mid > w;
+        ((above == (lo0 == 1.0)) ? lo : hi) = mid;
+      }
+      farCrossing = lo;
+      double b = lo;
+      for (int i = 0; i < 64; ++i)
+      {
+        b = std::nextafter(b, 0.0);
+      }
+      for (int i = 0; i < 128; ++i, b = std::nextafter(b, 1e300))
+      {
+        b0s.push_back(b);
+      }
+    }
+    for (const double b0 : b0s)
+    {
+      const bool belowW = std::exp(-b0) * b0 <= w;
+      if (apc::SurelyMayHaveHiddenDepth(b0, w))
+      {
+        ++answered;
+        ASSERT_TRUE(belowW) << "b0 " << b0 << " w " << w;
+      }
+      else if (b0 > farCrossing + 1.5 && b0 < 512.0)
+      {
+        ++missed; // left to the exponential although far past the crossing
+      }
+    }
+  }
+  EXPECT_GT(answered, 100000);
+  EXPECT_EQ(missed, 0);
+}
+
 // Given the range of a pixel's samples, HiddenDepth stops its bisection once no sample lies
 // between its bounds: the depth may differ from HiddenDepth(w), but every sample, and every
 // depth in the range, falls on the same side of both. Rays as above, their samples as the
