@@ -3,8 +3,8 @@
 #include "apcLaneSamples.h"
 
 #include "apcCellInterpolation.h"
-#include "apcLaneMoments.h"
 #include "apcLaneGather.h"
+#include "apcLaneMoments.h"
 
 #include <immintrin.h>
 
