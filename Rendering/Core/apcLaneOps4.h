@@ -182,6 +182,24 @@ struct Ops4
     _mm256_store_si256(reinterpret_cast<__m256i*>(out.Visible), visible);
     _mm256_store_si256(reinterpret_cast<__m256i*>(out.QuantaSum), _mm256_cvtepi32_epi64(quanta));
   }
+
+  // The clip's (apcRayClipKernel.h): a packet of four rays from ray l on.
+  using Packet = int;
+  static constexpr int kAllLanes = 0xF;
+  // v[l .. l + 3].
+  APC_AVX2 D Row(const double* v, Packet l) { return _mm256_loadu_pd(v + l); }
+  // v[l .. l + 3] where valid, else 0 (nothing read there).
+  APC_AVX2 D RowWhere(const double* v, Packet l, M valid)
+  {
+    return _mm256_maskload_pd(v + l, _mm256_castpd_si256(valid));
+  }
+  APC_AVX2 D Ceil(D a) { return _mm256_round_pd(a, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC); }
+  APC_AVX2 M None() { return _mm256_setzero_pd(); }
+  APC_AVX2 M Or(M a, M b) { return _mm256_or_pd(a, b); }
+  // b and not a.
+  APC_AVX2 M AndNot(M a, M b) { return _mm256_andnot_pd(a, b); }
+  // A bit per lane.
+  APC_AVX2 int Bits(M m) { return _mm256_movemask_pd(m); }
 };
 
 #undef APC_AVX2

@@ -219,6 +219,35 @@ struct Ops8
     _mm256_store_si256(reinterpret_cast<__m256i*>(a), _mm512_castsi512_si256(v));
     _mm256_store_si256(reinterpret_cast<__m256i*>(b), _mm512_extracti64x4_epi64(v, 1));
   }
+
+  // The clip's (apcRayClipKernel.h): two packets of four rays, from ray L0 on low and from L1
+  // on high.
+  struct Packet
+  {
+    int L0;
+    int L1;
+  };
+  static constexpr int kAllLanes = 0xFF;
+  // v[L0 .. L0 + 3] low, v[L1 .. L1 + 3] high.
+  APC_AVX512 D Row(const double* v, Packet p)
+  {
+    return _mm512_insertf64x4(
+      _mm512_castpd256_pd512(_mm256_loadu_pd(v + p.L0)), _mm256_loadu_pd(v + p.L1), 1);
+  }
+  APC_AVX512 D RowWhere(const double* v, Packet p, M valid)
+  {
+    return _mm512_insertf64x4(
+      _mm512_castpd256_pd512(_mm256_maskz_loadu_pd(static_cast<__mmask8>(valid & 0xF), v + p.L0)),
+      _mm256_maskz_loadu_pd(static_cast<__mmask8>(valid >> 4), v + p.L1), 1);
+  }
+  APC_AVX512 D Ceil(D a)
+  {
+    return _mm512_roundscale_pd(a, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
+  }
+  APC_AVX512 M None() { return 0; }
+  APC_AVX512 M Or(M a, M b) { return static_cast<M>(a | b); }
+  APC_AVX512 M AndNot(M a, M b) { return static_cast<M>(~a & b); }
+  APC_AVX512 int Bits(M m) { return m; }
 };
 
 #undef APC_AVX512
