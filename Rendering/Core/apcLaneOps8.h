@@ -227,6 +227,9 @@ struct Ops8
     int L0;
     int L1;
   };
+  // The rays' origins loaded once per packet (per plane, each is two loads and an insert, and
+  // the plane loop compiled rolled).
+  static constexpr bool kOriginsOnce = true;
   static constexpr int kAllLanes = 0xFF;
   // v[L0 .. L0 + 3] low, v[L1 .. L1 + 3] high.
   APC_AVX512 D Row(const double* v, Packet p)

@@ -21,13 +21,14 @@ namespace walk
 namespace kernel
 {
 
-// Plane p against the packet's rays (directions dx, dy, dz, origins ox, oy, oz where the
-// rays do not share one): the denominator n.d and the numerator offset - n.o of Clip's
-// quotient. No FMA: the products and sums must round as Clip's do, and ParallelOut's as
-// ClipPacket's.
+// Plane p against the packet's rays (directions d, origins o where the rays do not share one
+// and O::kOriginsOnce, else the origins read from rays here): the denominator n.d and the
+// numerator offset - n.o of Clip's quotient. No FMA: the products and sums must round as
+// Clip's do, and ParallelOut's as ClipPacket's.
 template <class O>
-__attribute__((always_inline)) inline void PlaneTerms(const CellPlanes& planes, int p,
-  const typename O::D* d, const typename O::D* o, typename O::D& denom, typename O::D& num)
+__attribute__((always_inline)) inline void PlaneTerms(const CellPlanes& planes,
+  const TileRays& rays, typename O::Packet packet, int p, const typename O::D* d,
+  const typename O::D* o, typename O::D& denom, typename O::D& num)
 {
   using D = typename O::D;
   const D nx = O::Set(planes.Nx[p]);
@@ -39,11 +40,21 @@ __attribute__((always_inline)) inline void PlaneTerms(const CellPlanes& planes, 
     num = O::Set(planes.Num[p]);
     return;
   }
-  const D dot = O::Add(O::Add(O::Mul(nx, o[0]), O::Mul(ny, o[1])), O::Mul(nz, o[2]));
+  D dot;
+  if constexpr (O::kOriginsOnce)
+  {
+    dot = O::Add(O::Add(O::Mul(nx, o[0]), O::Mul(ny, o[1])), O::Mul(nz, o[2]));
+  }
+  else
+  {
+    dot = O::Add(O::Add(O::Mul(nx, O::Row(rays.Ox, packet)), O::Mul(ny, O::Row(rays.Oy, packet))),
+      O::Mul(nz, O::Row(rays.Oz, packet)));
+  }
   num = O::Sub(O::Set(planes.Offset[p]), dot);
 }
 
-// The packet's directions, and its origins where the rays do not share one (else zero).
+// The packet's directions, and with O::kOriginsOnce its origins where the rays do not share
+// one (else zero).
 template <class O>
 __attribute__((always_inline)) inline void Directions(const CellPlanes& planes,
   const TileRays& rays, typename O::Packet packet, typename O::D* d, typename O::D* o)
@@ -52,7 +63,7 @@ __attribute__((always_inline)) inline void Directions(const CellPlanes& planes,
   d[1] = O::Row(rays.Dy, packet);
   d[2] = O::Row(rays.Dz, packet);
   o[0] = o[1] = o[2] = O::Zero();
-  if (!planes.SharedOrigin)
+  if (O::kOriginsOnce && !planes.SharedOrigin)
   {
     o[0] = O::Row(rays.Ox, packet);
     o[1] = O::Row(rays.Oy, packet);
@@ -79,7 +90,7 @@ __attribute__((noinline)) typename O::M ParallelOut(
   {
     D denom;
     D num;
-    PlaneTerms<O>(planes, p, d, o, denom, num);
+    PlaneTerms<O>(planes, rays, packet, p, d, o, denom, num);
     M parallelOut = O::Lt(num, zero);
     if (planes.KeepsParallelRays[p] == 0)
     {
@@ -133,7 +144,7 @@ __attribute__((always_inline)) inline void ClipPacket(const CellPlanes& planes,
   {
     D denom;
     D num;
-    PlaneTerms<O>(planes, p, d, o, denom, num);
+    PlaneTerms<O>(planes, rays, packet, p, d, o, denom, num);
     const D q = O::Div(num, denom);
     const M entering = O::Lt(denom, zero);
     const M leaving = O::Gt(denom, zero);
