@@ -4,8 +4,12 @@
 // four rays per instruction keep the divider busy and leave only the rays with a sample to
 // the sample loop. Every lane performs the IEEE operations of CellPlanes::Clip and
 // Lattice::First in the same order, so the intervals and indices are the same bit for bit and
-// neighbouring cells still meet exactly.
+// neighbouring cells still meet exactly. The packet's clip and first indices are written once
+// over the width (apcRayClipKernel.h); the eight-wide clip is in apcRayClipAvx512.cpp.
 #include "apcRayClip.h"
+
+#include "apcLaneMoments.h" // apcLaneOps4.h's, for the default target
+#include "apcLaneSamples.h"
 
 #include <cmath>
 #include <limits>
@@ -154,177 +158,40 @@ int ClipRaysWeightedScalar(const CellPlanes& planes, const TileRays& rays, const
 }
 
 #ifdef APC_HAVE_AVX2_CLIP
+} // namespace walk
+} // namespace apc
+
+// The headers above are compiled for the default target (their inline functions are shared
+// with other files). Every function below, the kernels' templates included, may use AVX2 (only
+// called where HasAvx2()).
+#pragma GCC push_options
+#pragma GCC target("avx2")
+
+#include "apcLaneOps4.h"
+#include "apcRayClipKernel.h"
+
+namespace apc
+{
+namespace walk
+{
+
 namespace
 {
 
-// Plane p against four rays from l on (directions dx, dy, dz): the denominator n.d and the
-// numerator offset - n.o of Clip's quotient. No FMA: the products and sums must round as
-// Clip's do, and ParallelOut's as ClipFour's.
-__attribute__((target("avx2"), always_inline)) inline void PlaneTerms(const CellPlanes& planes,
-  const TileRays& rays, int l, int p, __m256d dx, __m256d dy, __m256d dz, __m256d& denom,
-  __m256d& num)
-{
-  const __m256d nx = _mm256_set1_pd(planes.Nx[p]);
-  const __m256d ny = _mm256_set1_pd(planes.Ny[p]);
-  const __m256d nz = _mm256_set1_pd(planes.Nz[p]);
-  denom = _mm256_add_pd(
-    _mm256_add_pd(_mm256_mul_pd(nx, dx), _mm256_mul_pd(ny, dy)), _mm256_mul_pd(nz, dz));
-  if (planes.SharedOrigin)
-  {
-    num = _mm256_set1_pd(planes.Num[p]);
-    return;
-  }
-  const __m256d dot = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(nx, _mm256_loadu_pd(rays.Ox + l)),
-                                      _mm256_mul_pd(ny, _mm256_loadu_pd(rays.Oy + l))),
-    _mm256_mul_pd(nz, _mm256_loadu_pd(rays.Oz + l)));
-  num = _mm256_sub_pd(_mm256_set1_pd(planes.Offset[p]), dot);
-}
+using kernel::kLaneList;
 
-// The lanes of four rays from l on that run inside a plane of the cell and are outside it (see
-// Clip). Rare (rays parallel to a plane), so ClipFour looks for them only where some lane's
-// denominator is zero, with the same products and sums.
-__attribute__((target("avx2"))) __m256d ParallelOut(
-  const CellPlanes& planes, const TileRays& rays, int l)
-{
-  const __m256d zero = _mm256_setzero_pd();
-  const __m256d dx = _mm256_loadu_pd(rays.Dx + l);
-  const __m256d dy = _mm256_loadu_pd(rays.Dy + l);
-  const __m256d dz = _mm256_loadu_pd(rays.Dz + l);
-  __m256d out = zero;
-  for (int p = 0; p < planes.Count; ++p)
-  {
-    __m256d denom;
-    __m256d num;
-    PlaneTerms(planes, rays, l, p, dx, dy, dz, denom, num);
-    __m256d parallelOut = _mm256_cmp_pd(num, zero, _CMP_LT_OQ);
-    if (planes.KeepsParallelRays[p] == 0)
-    {
-      parallelOut = _mm256_or_pd(parallelOut, _mm256_cmp_pd(num, zero, _CMP_EQ_OQ));
-    }
-    out = _mm256_or_pd(out, _mm256_and_pd(_mm256_cmp_pd(denom, zero, _CMP_EQ_OQ), parallelOut));
-  }
-  return out;
-}
-
-// The interval of four rays from l on; lanes past the row's end (valid) read no stop.
-// Only the planes the cell has: the padding planes of CellPlanes clip nothing. No FMA: the
-// products and sums must round as Clip's do. A packet left early holds empty intervals that
-// need not be Clip's (ClipRays keeps no ray of it either way).
-__attribute__((target("avx2"))) inline void ClipFour(const CellPlanes& planes, const TileRays& rays,
+// The clip's kernels four rays wide (apcRayClipKernel.h).
+__attribute__((always_inline)) inline void ClipFour(const CellPlanes& planes, const TileRays& rays,
   int l, __m256i valid, const double* stop, double near, __m256d& lo, __m256d& hi)
 {
-  const __m256d zero = _mm256_setzero_pd();
-  const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity());
-  const __m256d minusInf = _mm256_set1_pd(-std::numeric_limits<double>::infinity());
-  const __m256d dx = _mm256_loadu_pd(rays.Dx + l);
-  const __m256d dy = _mm256_loadu_pd(rays.Dy + l);
-  const __m256d dz = _mm256_loadu_pd(rays.Dz + l);
-  lo = zero;
-  hi = _mm256_loadu_pd(rays.End + l);
-  __m256d out = zero;
-  __m256d parallel = zero; // lanes running inside some plane (rare: see ParallelOut)
-  if (stop)
-  {
-    // min(tout, stop) as std::min keeps tout on a tie. stop holds no padding.
-    const __m256d s = _mm256_maskload_pd(stop + l, valid);
-    hi = _mm256_min_pd(s, hi);
-    out = _mm256_cmp_pd(_mm256_set1_pd(near), s, _CMP_GE_OQ);
-    // A lane out here (the cell lies behind where its ray is opaque) ends empty whatever the
-    // planes give: a packet whose valid lanes are all out needs no plane (such packets come
-    // in runs, where a tile's rays turned opaque in front of the cell), and the test after
-    // the third plane below counts only the others as open.
-    if (_mm256_movemask_pd(_mm256_andnot_pd(out, _mm256_castsi256_pd(valid))) == 0)
-    {
-      hi = minusInf;
-      return;
-    }
-  }
-  // The valid lanes not out: the only ones that can keep a ray.
-  const __m256d open = _mm256_andnot_pd(out, _mm256_castsi256_pd(valid));
-  for (int p = 0; p < planes.Count; ++p)
-  {
-    __m256d denom;
-    __m256d num;
-    PlaneTerms(planes, rays, l, p, dx, dy, dz, denom, num);
-    const __m256d q = _mm256_div_pd(num, denom);
-    const __m256d entering = _mm256_cmp_pd(denom, zero, _CMP_LT_OQ);
-    const __m256d leaving = _mm256_cmp_pd(denom, zero, _CMP_GT_OQ);
-    lo = _mm256_max_pd(_mm256_blendv_pd(minusInf, q, entering), lo);
-    hi = _mm256_min_pd(_mm256_blendv_pd(inf, q, leaving), hi);
-    parallel = _mm256_or_pd(parallel, _mm256_cmp_pd(denom, zero, _CMP_EQ_OQ));
-    // lo only grows and hi only falls from plane to plane: where no valid lane is open after
-    // three planes, the packet keeps no ray whatever the others give (about half of the
-    // packets keep none at 1024²). Once per packet: a test after every plane cost more in
-    // unpredictable branches than the planes it saved.
-    if (p == 2 && planes.Count > 4 &&
-      _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(lo, hi, _CMP_LT_OQ), open)) == 0)
-    {
-      hi = minusInf; // an out lane may still be open here
-      return;
-    }
-  }
-  if (_mm256_movemask_pd(parallel) != 0)
-  {
-    out = _mm256_or_pd(out, ParallelOut(planes, rays, l));
-  }
-  hi = _mm256_blendv_pd(hi, minusInf, out);
+  kernel::ClipPacket<Ops4>(planes, rays, l, _mm256_castsi256_pd(valid), stop, near, lo, hi);
 }
 
-// Lattice::First(lo) of four rays, as doubles, and t_k: the smallest k with t_k >= lo. The
-// ceiling k0 of the quotient is Lattice::First's first guess (truncation, then up for a
-// positive fraction), which rounding leaves at most one off; t_k = (k + offset) spacing with
-// Lattice::At's operations does not decrease with k, so t_(k0-2) < lo <= t_(k0+1) puts the
-// answer in k0-1 .. k0+1, and the compares of those four values, formed side by side instead
-// of a step down, a step up and a check one after the other, say which. A lane the window
-// does not settle (never seen) is marked in the returned mask and left to Lattice::First.
-__attribute__((target("avx2"))) inline __m256d FirstFour(
+__attribute__((always_inline)) inline __m256d FirstFour(
   const Lattice& lattice, __m256d lo, __m256d offset, __m256d& tk, int& unsettled)
 {
-  const __m256d one = _mm256_set1_pd(1.0);
-  const __m256d two = _mm256_set1_pd(2.0);
-  const __m256d spacing = _mm256_set1_pd(lattice.Spacing);
-  const __m256d x =
-    _mm256_sub_pd(_mm256_mul_pd(lo, _mm256_set1_pd(lattice.InverseSpacing)), offset);
-  const __m256d k0 = _mm256_round_pd(x, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
-  const __m256d k1 = _mm256_add_pd(k0, one);
-  // t_(k0+j), j = -2 .. 1 (the integers k0 + j are exact).
-  const __m256d tm2 = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(k0, two), offset), spacing);
-  const __m256d tm1 = _mm256_mul_pd(_mm256_add_pd(_mm256_sub_pd(k0, one), offset), spacing);
-  const __m256d t0 = _mm256_mul_pd(_mm256_add_pd(k0, offset), spacing);
-  const __m256d t1 = _mm256_mul_pd(_mm256_add_pd(k1, offset), spacing);
-  const __m256d cm2 = _mm256_cmp_pd(tm2, lo, _CMP_GE_OQ);
-  const __m256d cm1 = _mm256_cmp_pd(tm1, lo, _CMP_GE_OQ);
-  const __m256d c0 = _mm256_cmp_pd(t0, lo, _CMP_GE_OQ);
-  const __m256d c1 = _mm256_cmp_pd(t1, lo, _CMP_GE_OQ);
-  // Settled: not t_(k0-2) >= lo, and t_(k0+1) >= lo; then k = k0 + 1 - [c_-1] - [c_0].
-  unsettled = _mm256_movemask_pd(_mm256_andnot_pd(cm2, c1)) ^ 0xF;
-  tk = _mm256_blendv_pd(_mm256_blendv_pd(t1, t0, c0), tm1, cm1);
-  return _mm256_sub_pd(_mm256_sub_pd(k1, _mm256_and_pd(cm1, one)), _mm256_and_pd(c0, one));
+  return kernel::FirstIndex<Ops4>(lattice, lo, offset, tk, unsettled);
 }
-
-// The offsets in a packet of four rays of the lanes set in a 4-bit mask, in order, as four
-// 16-bit numbers: the packet's kept rays are appended to ClippedRays::Hits with one store
-// and a count instead of a loop per set lane, whose exits the processor could not predict.
-struct LaneList
-{
-  uint64_t Lanes[16];
-  constexpr LaneList()
-    : Lanes()
-  {
-    for (int m = 0; m < 16; ++m)
-    {
-      int n = 0;
-      for (int b = 0; b < 4; ++b)
-      {
-        if (m >> b & 1)
-        {
-          this->Lanes[m] |= static_cast<uint64_t>(b) << (16 * n++);
-        }
-      }
-    }
-  }
-};
-constexpr LaneList kLaneList;
 
 } // namespace
 
@@ -443,216 +310,6 @@ __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const
   return n;
 }
 
-namespace
-{
-
-// The eight lanes of two packets of four rays (l0 and l1 on, each as ClipFour reads it) as
-// one vector: the low half packet l0's, the high half l1's.
-__attribute__((target("avx512f,avx512vl"), always_inline)) inline __m512d Halves(
-  const double* v, int l0, int l1)
-{
-  return _mm512_insertf64x4(
-    _mm512_castpd256_pd512(_mm256_loadu_pd(v + l0)), _mm256_loadu_pd(v + l1), 1);
-}
-
-// ClipFour of two packets at once (valid: bits 0-3 packet l0's lanes, 4-7 packet l1's): the
-// same operations lane by lane, so the same intervals where they are not empty; one division
-// per plane for eight rays instead of two. The packets leave early together: where all
-// their valid lanes are out, or none is open after three planes.
-__attribute__((target("avx512f,avx512vl"))) inline void ClipEight(const CellPlanes& planes,
-  const TileRays& rays, int l0, int l1, __mmask8 valid, const double* stop, double near,
-  __m512d& lo, __m512d& hi)
-{
-  const __m512d zero = _mm512_setzero_pd();
-  const __m512d inf = _mm512_set1_pd(std::numeric_limits<double>::infinity());
-  const __m512d minusInf = _mm512_set1_pd(-std::numeric_limits<double>::infinity());
-  const __m512d dx = Halves(rays.Dx, l0, l1);
-  const __m512d dy = Halves(rays.Dy, l0, l1);
-  const __m512d dz = Halves(rays.Dz, l0, l1);
-  lo = zero;
-  hi = Halves(rays.End, l0, l1);
-  __mmask8 out = 0;
-  if (stop)
-  {
-    // min(tout, stop) as std::min keeps tout on a tie. stop holds no padding.
-    const __m512d s = _mm512_insertf64x4(
-      _mm512_castpd256_pd512(_mm256_maskz_loadu_pd(static_cast<__mmask8>(valid & 0xF), stop + l0)),
-      _mm256_maskz_loadu_pd(static_cast<__mmask8>(valid >> 4), stop + l1), 1);
-    hi = _mm512_min_pd(s, hi);
-    out = _mm512_cmp_pd_mask(_mm512_set1_pd(near), s, _CMP_GE_OQ);
-    if ((valid & ~out & 0xFF) == 0)
-    {
-      hi = minusInf;
-      return;
-    }
-  }
-  const __mmask8 open = valid & ~out;
-  __mmask8 parallel = 0;
-  __m512d ox = zero;
-  __m512d oy = zero;
-  __m512d oz = zero;
-  if (!planes.SharedOrigin)
-  {
-    ox = Halves(rays.Ox, l0, l1);
-    oy = Halves(rays.Oy, l0, l1);
-    oz = Halves(rays.Oz, l0, l1);
-  }
-  for (int p = 0; p < planes.Count; ++p)
-  {
-    // PlaneTerms' products and sums, no FMA.
-    const __m512d nx = _mm512_set1_pd(planes.Nx[p]);
-    const __m512d ny = _mm512_set1_pd(planes.Ny[p]);
-    const __m512d nz = _mm512_set1_pd(planes.Nz[p]);
-    const __m512d denom = _mm512_add_pd(
-      _mm512_add_pd(_mm512_mul_pd(nx, dx), _mm512_mul_pd(ny, dy)), _mm512_mul_pd(nz, dz));
-    __m512d num;
-    if (planes.SharedOrigin)
-    {
-      num = _mm512_set1_pd(planes.Num[p]);
-    }
-    else
-    {
-      const __m512d dot = _mm512_add_pd(
-        _mm512_add_pd(_mm512_mul_pd(nx, ox), _mm512_mul_pd(ny, oy)), _mm512_mul_pd(nz, oz));
-      num = _mm512_sub_pd(_mm512_set1_pd(planes.Offset[p]), dot);
-    }
-    const __m512d q = _mm512_div_pd(num, denom);
-    const __mmask8 entering = _mm512_cmp_pd_mask(denom, zero, _CMP_LT_OQ);
-    const __mmask8 leaving = _mm512_cmp_pd_mask(denom, zero, _CMP_GT_OQ);
-    lo = _mm512_max_pd(_mm512_mask_blend_pd(entering, minusInf, q), lo);
-    hi = _mm512_min_pd(_mm512_mask_blend_pd(leaving, inf, q), hi);
-    parallel |= _mm512_cmp_pd_mask(denom, zero, _CMP_EQ_OQ);
-    if (p == 2 && planes.Count > 4 && (_mm512_cmp_pd_mask(lo, hi, _CMP_LT_OQ) & open) == 0)
-    {
-      hi = minusInf; // an out lane may still be open here
-      return;
-    }
-  }
-  if (parallel != 0)
-  {
-    // Rare: each half as ClipFour finds its lanes.
-    if (parallel & 0xF)
-    {
-      out |= static_cast<__mmask8>(_mm256_movemask_pd(ParallelOut(planes, rays, l0)));
-    }
-    if (parallel >> 4)
-    {
-      out |= static_cast<__mmask8>(_mm256_movemask_pd(ParallelOut(planes, rays, l1)) << 4);
-    }
-  }
-  hi = _mm512_mask_blend_pd(out, hi, minusInf);
-}
-
-// FirstFour of eight rays: the same operations lane by lane.
-__attribute__((target("avx512f,avx512vl"))) inline __m512d FirstEight(
-  const Lattice& lattice, __m512d lo, __m512d offset, __m512d& tk, int& unsettled)
-{
-  const __m512d one = _mm512_set1_pd(1.0);
-  const __m512d two = _mm512_set1_pd(2.0);
-  const __m512d spacing = _mm512_set1_pd(lattice.Spacing);
-  const __m512d x =
-    _mm512_sub_pd(_mm512_mul_pd(lo, _mm512_set1_pd(lattice.InverseSpacing)), offset);
-  const __m512d k0 = _mm512_roundscale_pd(x, _MM_FROUND_TO_POS_INF | _MM_FROUND_NO_EXC);
-  const __m512d k1 = _mm512_add_pd(k0, one);
-  const __m512d tm2 = _mm512_mul_pd(_mm512_add_pd(_mm512_sub_pd(k0, two), offset), spacing);
-  const __m512d tm1 = _mm512_mul_pd(_mm512_add_pd(_mm512_sub_pd(k0, one), offset), spacing);
-  const __m512d t0 = _mm512_mul_pd(_mm512_add_pd(k0, offset), spacing);
-  const __m512d t1 = _mm512_mul_pd(_mm512_add_pd(k1, offset), spacing);
-  const __mmask8 cm2 = _mm512_cmp_pd_mask(tm2, lo, _CMP_GE_OQ);
-  const __mmask8 cm1 = _mm512_cmp_pd_mask(tm1, lo, _CMP_GE_OQ);
-  const __mmask8 c0 = _mm512_cmp_pd_mask(t0, lo, _CMP_GE_OQ);
-  const __mmask8 c1 = _mm512_cmp_pd_mask(t1, lo, _CMP_GE_OQ);
-  unsettled = (~cm2 & c1) ^ 0xFF;
-  tk = _mm512_mask_blend_pd(cm1, _mm512_mask_blend_pd(c0, t1, t0), tm1);
-  // k1 - [c_-1] - [c_0], as FirstFour's subtractions of 1 or 0.
-  const __m512d m1 = _mm512_maskz_mov_pd(cm1, one);
-  const __m512d m0 = _mm512_maskz_mov_pd(c0, one);
-  return _mm512_sub_pd(_mm512_sub_pd(k1, m1), m0);
-}
-
-} // namespace
-
-// ClipRaysAvx2 two packets at a time: the rectangle's packets of four rays (a row's from its
-// first ray on, as ClipRaysAvx2 forms them) taken in pairs, across rows too, so that a
-// rectangle a packet wide (most of them at 1024²) fills the eight lanes as well.
-__attribute__((target("avx512f,avx512vl"))) int ClipRaysAvx512(const CellPlanes& planes,
-  const TileRays& rays, const RayRect& rect, const double* stop, double near,
-  const Lattice* lattice, ClippedRays& out)
-{
-  int n = 0;
-  // The next packet: its first ray, and how many rays of the row it holds (up to 4).
-  int row = 0;
-  int next = rect.First;
-  int rowEnd = rect.First + rect.Width;
-  auto take = [&](int& l, int& count)
-  {
-    l = next;
-    count = std::min(rowEnd - next, 4);
-    next += 4;
-    if (next >= rowEnd)
-    {
-      ++row;
-      next = rect.First + row * rect.Stride;
-      rowEnd = next + rect.Width;
-    }
-  };
-  while (row < rect.Rows)
-  {
-    int l0;
-    int c0;
-    take(l0, c0);
-    int l1 = l0;
-    int c1 = 0;
-    if (row < rect.Rows)
-    {
-      take(l1, c1);
-    }
-    const __mmask8 valid = static_cast<__mmask8>(((1u << c0) - 1u) | ((1u << c1) - 1u) << 4);
-    __m512d lo;
-    __m512d hi;
-    ClipEight(planes, rays, l0, l1, valid, stop, near, lo, hi);
-    // Packet l1's valid lanes only: nothing where there is no second packet (l1 = l0), and
-    // no lane past its row over one of packet l0's.
-    const __mmask8 valid1 = static_cast<__mmask8>(valid >> 4);
-    _mm256_storeu_pd(out.Tin + l0, _mm512_castpd512_pd256(lo));
-    _mm256_storeu_pd(out.Tout + l0, _mm512_castpd512_pd256(hi));
-    _mm256_mask_storeu_pd(out.Tin + l1, valid1, _mm512_extractf64x4_pd(lo, 1));
-    _mm256_mask_storeu_pd(out.Tout + l1, valid1, _mm512_extractf64x4_pd(hi, 1));
-    int keep = _mm512_cmp_pd_mask(lo, hi, _CMP_LT_OQ) & valid;
-    if (lattice)
-    {
-      const __m512d offset = Halves(rays.Offset, l0, l1);
-      int unsettled = 0;
-      __m512d first;
-      const __m512d k = FirstEight(*lattice, lo, offset, first, unsettled);
-      _mm256_storeu_pd(out.Lattice + l0, _mm512_castpd512_pd256(k));
-      _mm256_mask_storeu_pd(out.Lattice + l1, valid1, _mm512_extractf64x4_pd(k, 1));
-      const int inside = _mm512_cmp_pd_mask(first, hi, _CMP_LT_OQ);
-      keep = (keep & inside) | (keep & unsettled);
-      for (int m = keep & unsettled; m; m &= m - 1)
-      {
-        const int lane = __builtin_ctz(m);
-        const int r = (lane < 4 ? l0 : l1) + (lane & 3);
-        const int64_t kr = lattice->First(out.Tin[r], rays.Offset[r]);
-        out.Lattice[r] = static_cast<double>(kr);
-        keep &= lattice->At(kr, rays.Offset[r]) < out.Tout[r] ? ~0 : ~(1 << lane);
-      }
-    }
-    // Each packet's four 16-bit ray numbers, of which the first popcount are kept.
-    const int keep0 = keep & 0xF;
-    const int keep1 = keep >> 4;
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n),
-      _mm_add_epi16(_mm_set1_epi16(static_cast<short>(l0)),
-        _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[keep0]))));
-    n += __builtin_popcount(keep0);
-    _mm_storel_epi64(reinterpret_cast<__m128i*>(out.Hits + n),
-      _mm_add_epi16(_mm_set1_epi16(static_cast<short>(l1)),
-        _mm_cvtsi64_si128(static_cast<long long>(kLaneList.Lanes[keep1]))));
-    n += __builtin_popcount(keep1);
-  }
-  return n;
-}
-
 // ClipRaysAvx2 without a lattice, and the end weights of the kept rays' pairs: EndWeightsOf's
 // operations, four rays at a time. Where some lane's interval ends at its stop, the packet is
 // clipped again without the stop for the pair's own end (ClipFour's arithmetic is Clip's);
@@ -749,6 +406,16 @@ __attribute__((target("avx2"))) int ClipRaysWeightedAvx2(const CellPlanes& plane
   weights.MidCount = mids;
   return n;
 }
+
+} // namespace walk
+} // namespace apc
+
+#pragma GCC pop_options
+
+namespace apc
+{
+namespace walk
+{
 #else
 void BoundaryEndsAvx2(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
   const uint16_t* hits, int count, uint8_t* ends)
@@ -756,11 +423,6 @@ void BoundaryEndsAvx2(const CellPlanes& planes, const TileRays& rays, const Clip
   BoundaryEndsScalar(planes, rays, out, hits, count, ends);
 }
 int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
-  const double* stop, double near, const Lattice* lattice, ClippedRays& out)
-{
-  return ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
-}
-int ClipRaysAvx512(const CellPlanes& planes, const TileRays& rays, const RayRect& rect,
   const double* stop, double near, const Lattice* lattice, ClippedRays& out)
 {
   return ClipRaysScalar(planes, rays, rect, stop, near, lattice, out);
