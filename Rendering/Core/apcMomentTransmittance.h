@@ -309,6 +309,48 @@ inline bool SurelyMayHaveHiddenDepth(double b0, double w)
   return b0 * power < w * (1.0 - 1e-12);
 }
 
+// HiddenDepth's bisection over [-1, 1], whatever answers its tests T(z) <= limit: atEnd(z) at
+// z = 1 and -1, atRound(step, mid, left, right, hidden) at a round's three points.
+// T(hi) <= limit throughout; T non-increasing carries it to every z >= hi. 2^-9 of the warped
+// range: a sample or two of a ray's front lie between the true crossing and hi. Two steps a
+// round: the middle and both points the next step may query, three tests independent of each
+// other, which the CPU overlaps (a query is a chain of dependent divisions, a square root and
+// an exponential); the same points, hence the same answer, as one step at a time, in about half
+// the time. range() gives the nearest and farthest of the pixel's samples, asked for only here.
+template <class Range, class AtEnd, class AtRound>
+inline double BisectHiddenDepth(const Range& range, const AtEnd& atEnd, const AtRound& atRound)
+{
+  if (!atEnd(1.0))
+  {
+    return std::numeric_limits<double>::infinity();
+  }
+  if (atEnd(-1.0))
+  {
+    return -1.0;
+  }
+  const std::pair<double, double> samples = range();
+  double lo = -1.0;
+  double hi = 1.0;
+  for (int step = 0; step < 10; step += 2)
+  {
+    // The depth found lies in (lo, hi]: a sample at or before lo stays in front of it, one at
+    // or behind hi behind it, whatever the steps left decide.
+    if (samples.second <= lo || samples.first >= hi)
+    {
+      break;
+    }
+    const double mid = 0.5 * (lo + hi);
+    const double left = 0.5 * (lo + mid);
+    const double right = 0.5 * (mid + hi);
+    bool hidden[3]; // at mid, left, right
+    atRound(step, mid, left, right, hidden);
+    (hidden[0] ? hi : lo) = mid;
+    const double next = hidden[0] ? left : right;
+    ((hidden[0] ? hidden[1] : hidden[2]) ? hi : lo) = next;
+  }
+  return hi;
+}
+
 template <int N>
 template <class Range>
 inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range& range) const
@@ -335,54 +377,24 @@ inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range&
     const TransmittanceQuery q = this->Query(z);
     return !q.Fallback && q.Transmittance <= limit;
   };
-  if (!hidden(1.0))
-  {
-    return kNone;
-  }
-  if (hidden(-1.0))
-  {
-    return -1.0;
-  }
-  // T(hi) <= limit throughout; T non-increasing carries it to every z >= hi. 2^-9 of the
-  // warped range: a sample or two of a ray's front lie between the true crossing and hi.
-  // Two steps a round: the middle and both points the next step may query, three queries
-  // independent of each other, which the CPU overlaps (a query is a chain of dependent
-  // divisions, a square root and an exponential); the same points, hence the same answer,
-  // as one step at a time, in about half the time.
-  const std::pair<double, double> samples = range();
-  double lo = -1.0;
-  double hi = 1.0;
-  for (int step = 0; step < 10; step += 2)
-  {
-    // The depth found lies in (lo, hi]: a sample at or before lo stays in front of it, one at
-    // or behind hi behind it, whatever the steps left decide.
-    if (samples.second <= lo || samples.first >= hi)
+  return BisectHiddenDepth(range, hidden,
+    [&](int, double mid, double left, double right, bool* at)
     {
-      break;
-    }
-    const double mid = 0.5 * (lo + hi);
-    const double left = 0.5 * (lo + mid);
-    const double right = 0.5 * (mid + hi);
-    const bool atMid = hidden(mid);
-    const bool atLeft = hidden(left);
-    const bool atRight = hidden(right);
-    (atMid ? hi : lo) = mid;
-    const double next = atMid ? left : right;
-    ((atMid ? atLeft : atRight) ? hi : lo) = next;
-  }
-  return hi;
+      at[0] = hidden(mid);
+      at[1] = hidden(left);
+      at[2] = hidden(right);
+    });
 }
 
-// HiddenDepth's steps as above, each test T(z) <= limit decided for the points of a step at once
-// by DecideHidden (the same answers as Query's, see apcHiddenDecisions.h), Query asked only for
-// the points it leaves undecided: the depth returned is the one above to the bit. The first batch
+// HiddenDepth's bisection, each test T(z) <= limit decided for the points of a round at once by
+// DecideHidden (the same answers as Query's, see apcHiddenDecisions.h), Query asked only for the
+// points it leaves undecided: the depth returned is the one above to the bit. The first batch
 // holds 1, -1 and the first round's three points (most pixels that get this far bisect), each
 // later round its three.
 template <int N>
 template <class Range>
 inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const Range& range) const
 {
-  constexpr double kNone = std::numeric_limits<double>::infinity();
   FourMomentPixel px;
   this->GetFourMomentPixel(px);
   const double lnLimit = std::log(limit);
@@ -399,39 +411,19 @@ inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const 
   const double first[8] = { 1.0, -1.0, 0.0, -0.5, 0.5, 0.5, 0.5, 0.5 };
   int8_t decided[8];
   DecideHidden(px, lnLimit, first, decided, 8);
-  if (!resolve(1.0, decided[0]))
-  {
-    return kNone;
-  }
-  if (resolve(-1.0, decided[1]))
-  {
-    return -1.0;
-  }
-  const std::pair<double, double> samples = range();
-  double lo = -1.0;
-  double hi = 1.0;
-  for (int step = 0; step < 10; step += 2)
-  {
-    if (samples.second <= lo || samples.first >= hi)
+  return BisectHiddenDepth(
+    range, [&](double z) { return resolve(z, decided[z > 0.0 ? 0 : 1]); },
+    [&](int step, double mid, double left, double right, bool* at)
     {
-      break;
-    }
-    const double mid = 0.5 * (lo + hi);
-    const double left = 0.5 * (lo + mid);
-    const double right = 0.5 * (mid + hi);
-    if (step > 0)
-    {
-      const double points[4] = { mid, left, right, right };
-      DecideHidden(px, lnLimit, points, decided + 2, 4);
-    }
-    const bool atMid = resolve(mid, decided[2]);
-    const bool atLeft = resolve(left, decided[3]);
-    const bool atRight = resolve(right, decided[4]);
-    (atMid ? hi : lo) = mid;
-    const double next = atMid ? left : right;
-    ((atMid ? atLeft : atRight) ? hi : lo) = next;
-  }
-  return hi;
+      if (step > 0)
+      {
+        const double points[4] = { mid, left, right, right };
+        DecideHidden(px, lnLimit, points, decided + 2, 4);
+      }
+      at[0] = resolve(mid, decided[2]);
+      at[1] = resolve(left, decided[3]);
+      at[2] = resolve(right, decided[4]);
+    });
 }
 
 extern template class MomentTransmittance<4>;
