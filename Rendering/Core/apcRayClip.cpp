@@ -101,16 +101,6 @@ void BoundaryEndsScalar(const CellPlanes& planes, const TileRays& rays, const Cl
   }
 }
 
-void FirstIndicesScalar(
-  const Lattice& lattice, const TileRays& rays, ClippedRays& out, const uint16_t* hits, int count)
-{
-  for (int h = 0; h < count; ++h)
-  {
-    const int l = hits[h];
-    out.Lattice[l] = static_cast<double>(lattice.First(out.Tin[l], rays.Offset[l]));
-  }
-}
-
 namespace
 {
 
@@ -271,39 +261,6 @@ __attribute__((target("avx2"))) void BoundaryEndsAvx2(const CellPlanes& planes,
   }
 }
 
-// Four of the hits at a time, each lane a ray gathered by its index (the last group repeats
-// its last ray), FirstIndex's window as ClipRaysAvx2 takes it, and Lattice::First for a lane
-// the window does not settle.
-__attribute__((target("avx2"))) void FirstIndicesAvx2(
-  const Lattice& lattice, const TileRays& rays, ClippedRays& out, const uint16_t* hits, int count)
-{
-  for (int h = 0; h < count; h += 4)
-  {
-    int r[4];
-    for (int j = 0; j < 4; ++j)
-    {
-      r[j] = hits[std::min(h + j, count - 1)];
-    }
-    const __m256d tin = _mm256_setr_pd(out.Tin[r[0]], out.Tin[r[1]], out.Tin[r[2]], out.Tin[r[3]]);
-    const __m256d offset =
-      _mm256_setr_pd(rays.Offset[r[0]], rays.Offset[r[1]], rays.Offset[r[2]], rays.Offset[r[3]]);
-    __m256d tk;
-    int unsettled = 0;
-    alignas(32) double k[4];
-    _mm256_store_pd(k, FirstFour(lattice, tin, offset, tk, unsettled));
-    const int n = std::min(count - h, 4);
-    for (int j = 0; j < n; ++j)
-    {
-      out.Lattice[r[j]] = k[j];
-    }
-    for (int m = unsettled & ((1 << n) - 1); m; m &= m - 1)
-    {
-      const int l = r[__builtin_ctz(m)];
-      out.Lattice[l] = static_cast<double>(lattice.First(out.Tin[l], rays.Offset[l]));
-    }
-  }
-}
-
 __attribute__((target("avx2"))) int ClipRaysAvx2(const CellPlanes& planes, const TileRays& rays,
   const RayRect& rect, const double* stop, double near, const Lattice* lattice, ClippedRays& out)
 {
@@ -460,11 +417,6 @@ namespace apc
 namespace walk
 {
 #else
-void FirstIndicesAvx2(
-  const Lattice& lattice, const TileRays& rays, ClippedRays& out, const uint16_t* hits, int count)
-{
-  FirstIndicesScalar(lattice, rays, out, hits, count);
-}
 void BoundaryEndsAvx2(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
   const uint16_t* hits, int count, uint8_t* ends)
 {
@@ -504,19 +456,6 @@ void BoundaryEnds(const CellPlanes& planes, const TileRays& rays, const ClippedR
   else
   {
     BoundaryEndsScalar(planes, rays, out, hits, count, ends);
-  }
-}
-
-void FirstIndices(
-  const Lattice& lattice, const TileRays& rays, ClippedRays& out, const uint16_t* hits, int count)
-{
-  if (HasAvx2())
-  {
-    FirstIndicesAvx2(lattice, rays, out, hits, count);
-  }
-  else
-  {
-    FirstIndicesScalar(lattice, rays, out, hits, count);
   }
 }
 

@@ -103,18 +103,6 @@ void BoundaryEndsScalar(const CellPlanes& planes, const TileRays& rays, const Cl
 void BoundaryEndsAvx2(const CellPlanes& planes, const TileRays& rays, const ClippedRays& out,
   const uint16_t* hits, int count, uint8_t* ends);
 
-// Lattice::First(Tin, Offset) of the rays hits[0, count) of out into out.Lattice, bit for bit,
-// four rays at a time where the processor has AVX2 (ClipRays' first indices without its
-// lattice filter: Sample End Weights = Boundary keeps pairs without a lattice point too). Each
-// Tin finite.
-void FirstIndices(
-  const Lattice& lattice, const TileRays& rays, ClippedRays& out, const uint16_t* hits, int count);
-// The two forms FirstIndices chooses from (tests); the AVX2 one only where HasAvx2().
-void FirstIndicesScalar(
-  const Lattice& lattice, const TileRays& rays, ClippedRays& out, const uint16_t* hits, int count);
-void FirstIndicesAvx2(
-  const Lattice& lattice, const TileRays& rays, ClippedRays& out, const uint16_t* hits, int count);
-
 // With end weights (apcEndWeights.h): each kept pair's EndWeightsOf(lattice, Tin, End,
 // Offset), bit for bit, by the ray's index in the tile, End the pair's end before the opaque
 // stop cut it (CellPlanes::Clip from [0, TileRays::End)). Found with the clipping, four rays

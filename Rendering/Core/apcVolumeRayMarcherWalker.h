@@ -533,14 +533,14 @@ struct VolumeRayMarcher::Walker
     {
       walk::BoundaryEnds(state.Planes, packed, c, c.Hits, hits, boundary);
     }
-    walk::FirstIndices(this->Grid, packed, c, c.Hits, hits);
     for (int h = 0; h < hits; ++h)
     {
       const int l = c.Hits[h];
       const RaySetup& ray = rays[l];
       const double tin = c.Tin[l];
       const double tout = c.Tout[l];
-      const int64_t first = static_cast<int64_t>(c.Lattice[l]);
+      const int64_t first = this->Grid.First(tin, ray.Offset);
+      c.Lattice[l] = static_cast<double>(first);
       // PairWeights' Boundary form, with the ends' flags kept.
       bool plainEnds = false;
       walk::EndWeights w;

@@ -7,7 +7,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -438,88 +437,4 @@ TEST(CellPlanes, ClipRaysFindTheFirstLatticeIndexOnALatticePoint)
   // Both ways of missing must occur, or the test would not show that both are corrected.
   EXPECT_GT(guessHigh, 100);
   EXPECT_GT(guessLow, 100);
-}
-
-// FirstIndices (Boundary's first indices, found four at a time) against Lattice::First, bit for
-// bit: tin on a lattice point, one ulp either side of it, and anywhere between; hits in any
-// order and any count (a last group of one to four rays); the rays not in hits untouched.
-TEST(CellPlanes, FirstIndicesMatchLatticeFirst)
-{
-  using FirstIndicesForm =
-    void (*)(const Lattice&, const TileRays&, ClippedRays&, const uint16_t*, int);
-  std::vector<FirstIndicesForm> forms{ apc::walk::FirstIndicesScalar, apc::walk::FirstIndices };
-  if (apc::walk::HasAvx2())
-  {
-    forms.push_back(apc::walk::FirstIndicesAvx2);
-  }
-  std::mt19937 rng(53);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  const double sentinel = -12345.0;
-  int onPoint = 0;
-  for (int trial = 0; trial < 3000; ++trial)
-  {
-    const Lattice grid(0.001 + 10.0 * u(rng) * u(rng));
-    const int n = 1 + static_cast<int>(u(rng) * 60);
-    std::vector<RaySetup> rays(n);
-    std::vector<double> tin(n);
-    for (int l = 0; l < n; ++l)
-    {
-      const double offset = trial % 3 == 0 ? 0.0 : u(rng);
-      rays[l] = RaySetup{ { 0, 0, 0 }, { 0, 0, 1 }, 1e6, offset };
-      const int64_t k = static_cast<int64_t>(u(rng) * 5000);
-      const double t = grid.At(k, offset);
-      switch (static_cast<int>(u(rng) * 4))
-      {
-        case 0:
-          tin[l] = t;
-          ++onPoint;
-          break;
-        case 1:
-          tin[l] = std::nextafter(t, 1e300);
-          break;
-        case 2:
-          tin[l] = t > 0.0 ? std::nextafter(t, 0.0) : 0.0;
-          break;
-        default:
-          tin[l] = t + u(rng) * grid.Spacing;
-      }
-    }
-    TileRays packed;
-    packed.Set(rays.data(), n, 1e6);
-    // A random subset of the rays in random order.
-    std::vector<uint16_t> hits;
-    for (int l = 0; l < n; ++l)
-    {
-      if (u(rng) < 0.7)
-      {
-        hits.push_back(static_cast<uint16_t>(l));
-      }
-    }
-    std::shuffle(hits.begin(), hits.end(), rng);
-    hits.resize(hits.size() + 3, hits.empty() ? 0 : hits.back());
-    const int count = static_cast<int>(hits.size()) - 3;
-    for (FirstIndicesForm form : forms)
-    {
-      ClippedRays out;
-      for (int l = 0; l < TileRays::kSize; ++l)
-      {
-        out.Tin[l] = l < n ? tin[l] : 0.0;
-        out.Lattice[l] = sentinel;
-      }
-      form(grid, packed, out, hits.data(), count);
-      std::vector<bool> hit(n, false);
-      for (int h = 0; h < count; ++h)
-      {
-        hit[hits[h]] = true;
-      }
-      for (int l = 0; l < n; ++l)
-      {
-        const double expected =
-          hit[l] ? static_cast<double>(grid.First(tin[l], rays[l].Offset)) : sentinel;
-        ASSERT_TRUE(SameBits(out.Lattice[l], expected))
-          << "trial " << trial << " ray " << l << " " << out.Lattice[l] << " " << expected;
-      }
-    }
-  }
-  EXPECT_GT(onPoint, 10000);
 }
