@@ -37,6 +37,9 @@ namespace
 // than a comparison sort of the cells.
 constexpr int kDepthBins = 1 << 14;
 
+// How many cells ahead BinCells fetches the corners' projections.
+constexpr int64_t kPrefetchCells = 16;
+
 using ProjectedPoint = TileBins::ProjectedPoint;
 
 // A point's pixel coordinates (X NaN if the camera cannot project it), its depth along the
@@ -247,10 +250,21 @@ void BinCells(
     {
       double lo = std::numeric_limits<double>::infinity();
       double hi = -lo;
+      const TileBins::ProjectedPoint* points = bins.Projected.data();
       for (int64_t cell = begin; cell < end; ++cell)
       {
-        BinCell(*mesh, bins.Projected.data(), w, h, cell, bins.Rects[cell], bins.Near[cell],
-          bins.Far[cell]);
+        // The corners' entries are scattered over the points: ask for them a few cells ahead
+        // (the cells' ids come in order).
+        if (cell + kPrefetchCells < end)
+        {
+          const int64_t* ids = mesh->GetCellPoints(cell + kPrefetchCells);
+          const int corners = static_cast<int>(mesh->GetShape(cell + kPrefetchCells));
+          for (int c = 0; c < corners; ++c)
+          {
+            __builtin_prefetch(points + ids[c]);
+          }
+        }
+        BinCell(*mesh, points, w, h, cell, bins.Rects[cell], bins.Near[cell], bins.Far[cell]);
         if (Covers(bins.Rects[cell]))
         {
           lo = std::min(lo, bins.Near[cell]);
