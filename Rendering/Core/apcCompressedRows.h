@@ -1,5 +1,6 @@
 // Compressed rows (CSR): the entries of row r are Values[Offsets[r] .. Offsets[r + 1]). The
-// one builder of them in APC: cells per screen tile, segments per pixel of a strip.
+// builder of segments per pixel of a strip; the cells per screen tile (apcTileBins.cpp) count
+// and fill their rows in different orders, so they use only PrefixSum.
 #ifndef apcCompressedRows_h
 #define apcCompressedRows_h
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 namespace apc
 {
@@ -36,103 +37,75 @@ namespace
 // than a comparison sort of the cells.
 constexpr int kDepthBins = 1 << 14;
 
-// The smallest depth of a cell's corners along the view direction: a lower bound of t over
-// the cell (a linear function takes its minimum over a convex cell at a corner, and t is that
-// depth for a parallel camera and at least it for a perspective one, whose rays are unit
-// vectors from the eye). And the largest distance of its corners from the eye: an upper bound
-// of t over the cell (the distance is convex, and at least t for either camera).
-std::array<double, 2> NearFar(const CellMesh& mesh, const RayCamera& camera, int64_t cell)
+// How many cells ahead BinCells fetches the corners' projections.
+constexpr int64_t kPrefetchCells = 16;
+
+using ProjectedPoint = TileBins::ProjectedPoint;
+
+// A point's pixel coordinates (X NaN if the camera cannot project it), its depth along the
+// view direction and its squared distance from the eye.
+ProjectedPoint ProjectPoint(const RayCamera& camera, const std::array<double, 3>& x)
 {
   const auto& eye = camera.GetPosition();
   const auto& forward = camera.GetViewDirection();
-  const int64_t* ids = mesh.GetCellPoints(cell);
-  const int corners = static_cast<int>(mesh.GetShape(cell));
-  double nearest = std::numeric_limits<double>::infinity();
-  double farthest = 0;
-  for (int c = 0; c < corners; ++c)
+  ProjectedPoint p;
+  if (!camera.Project(x, p.X, p.Y))
   {
-    const auto& x = mesh.Points[ids[c]];
-    const double d[3] = { x[0] - eye[0], x[1] - eye[1], x[2] - eye[2] };
-    nearest = std::min(nearest, d[0] * forward[0] + d[1] * forward[1] + d[2] * forward[2]);
-    farthest = std::max(farthest, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    p.X = std::numeric_limits<double>::quiet_NaN();
+    p.Y = 0;
   }
-  return { nearest, std::sqrt(farthest) };
+  const double d[3] = { x[0] - eye[0], x[1] - eye[1], x[2] - eye[2] };
+  p.Depth = d[0] * forward[0] + d[1] * forward[1] + d[2] * forward[2];
+  p.Distance2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+  return p;
 }
 
-// The cells that cover a pixel, nearest first (Near binned to kDepthBins depths; a stable
-// counting sort, so the order is the same whenever the view is).
-std::vector<int64_t> FrontToBackOrder(const TileBins& bins)
+bool Covers(const std::array<int, 4>& r)
 {
-  const int64_t numCells = static_cast<int64_t>(bins.Rects.size());
-  auto covers = [&bins](int64_t cell)
-  {
-    const auto& r = bins.Rects[cell];
-    return r[0] <= r[2] && r[1] <= r[3];
-  };
-  double lo = std::numeric_limits<double>::infinity();
-  double hi = -lo;
-  for (int64_t cell = 0; cell < numCells; ++cell)
-  {
-    if (covers(cell))
-    {
-      lo = std::min(lo, bins.Near[cell]);
-      hi = std::max(hi, bins.Near[cell]);
-    }
-  }
-  const double scale = hi > lo ? (kDepthBins - 1) / (hi - lo) : 0.0;
-  auto binOf = [&](int64_t cell)
-  {
-    const double x = (bins.Near[cell] - lo) * scale;
-    return x > 0 ? std::min(static_cast<int64_t>(x), int64_t(kDepthBins - 1)) : int64_t(0);
-  };
-  std::vector<int64_t> start;
-  std::vector<int64_t> order;
-  BuildCompressedRows<int64_t>(
-    kDepthBins,
-    [&](auto&& emit)
-    {
-      for (int64_t cell = 0; cell < numCells; ++cell)
-      {
-        if (covers(cell))
-        {
-          emit(binOf(cell), cell);
-        }
-      }
-    },
-    start, order);
-  return order;
+  return r[0] <= r[2] && r[1] <= r[3];
 }
 
-// The pixel centres a cell's projected corners cover.
-std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, int64_t cell)
+// The pixel centres a cell's projected corners cover, and its Near and Far: the smallest
+// depth of its corners along the view direction, a lower bound of t over the cell (a linear
+// function takes its minimum over a convex cell at a corner, and t is that depth for a
+// parallel camera and at least it for a perspective one, whose rays are unit vectors from the
+// eye), and the largest distance of its corners from the eye, an upper bound of t over the
+// cell (the distance is convex, and at least t for either camera).
+void BinCell(const CellMesh& mesh, const ProjectedPoint* points, double w, double h, int64_t cell,
+  std::array<int, 4>& rect, double& nearT, double& farT)
 {
-  const double w = camera.GetWidth();
-  const double h = camera.GetHeight();
   const int64_t* ids = mesh.GetCellPoints(cell);
   const int corners = static_cast<int>(mesh.GetShape(cell));
   double x0 = std::numeric_limits<double>::infinity();
   double y0 = x0;
   double x1 = -x0;
   double y1 = -x0;
+  double nearest = x0;
+  double farthest = 0;
   int behind = 0;
   for (int c = 0; c < corners; ++c)
   {
-    double px, py;
-    if (camera.Project(mesh.Points[ids[c]], px, py))
+    const ProjectedPoint& p = points[ids[c]];
+    if (p.X == p.X)
     {
-      x0 = std::min(x0, px);
-      x1 = std::max(x1, px);
-      y0 = std::min(y0, py);
-      y1 = std::max(y1, py);
+      x0 = std::min(x0, p.X);
+      x1 = std::max(x1, p.X);
+      y0 = std::min(y0, p.Y);
+      y1 = std::max(y1, p.Y);
     }
     else
     {
       ++behind;
     }
+    nearest = std::min(nearest, p.Depth);
+    farthest = std::max(farthest, p.Distance2);
   }
+  nearT = nearest;
+  farT = std::sqrt(farthest);
   if (behind == corners)
   {
-    return { 1, 1, 0, 0 };
+    rect = { 1, 1, 0, 0 };
+    return;
   }
   if (behind > 0)
   {
@@ -141,37 +114,103 @@ std::array<int, 4> CoveredPixels(const CellMesh& mesh, const RayCamera& camera, 
     y1 = h;
   }
   // Pixel centres sit at integers: the covered ones are ceil(x0) .. floor(x1).
-  return { static_cast<int>(std::max(0.0, std::ceil(x0))),
+  rect = { static_cast<int>(std::max(0.0, std::ceil(x0))),
     static_cast<int>(std::max(0.0, std::ceil(y0))),
     static_cast<int>(std::min(w - 1.0, std::floor(x1))),
     static_cast<int>(std::min(h - 1.0, std::floor(y1))) };
 }
-}
 
-namespace
+// The smallest and largest Near of the cells that cover a pixel, merged from the chunks of a
+// parallel loop (the same whatever order the chunks arrive in).
+struct NearRange
 {
-// Tiles' cell lists from the per-cell Rects and Near already in bins, on bins.Grid.
-void BinByRects(TileBins& bins)
+  double Lo = std::numeric_limits<double>::infinity();
+  double Hi = -std::numeric_limits<double>::infinity();
+  std::mutex Mutex;
+
+  void Merge(double lo, double hi)
+  {
+    std::lock_guard<std::mutex> lock(this->Mutex);
+    this->Lo = std::min(this->Lo, lo);
+    this->Hi = std::max(this->Hi, hi);
+  }
+};
+
+// Tiles' cell lists from the per-cell Rects and Near already in bins, on bins.Grid; lo and hi:
+// the range of Near over the cells that cover a pixel. A tile lists its cells nearest first
+// (Near binned to kDepthBins depths, ties in cell order: a stable counting sort, so the order
+// is the same whenever the view is). Three passes: the depth bins' and the tiles' counts in
+// cell order, the covering cells with their tiles sorted front to back, and the tiles' lists
+// filled from those in order.
+void BinByRects(TileBins& bins, double lo, double hi)
 {
   const TileGrid& grid = bins.Grid;
-  const std::vector<int64_t> order = FrontToBackOrder(bins);
-  BuildCompressedRows<int64_t>(
-    grid.Count(),
-    [&](auto&& emit)
+  const int64_t numCells = static_cast<int64_t>(bins.Rects.size());
+  const double scale = hi > lo ? (kDepthBins - 1) / (hi - lo) : 0.0;
+  auto binOf = [&](int64_t cell)
+  {
+    const double x = (bins.Near[cell] - lo) * scale;
+    return x > 0 ? std::min(static_cast<int64_t>(x), int64_t(kDepthBins - 1)) : int64_t(0);
+  };
+  // A covering cell's rectangle lies inside the image: its tiles by look-up, not division.
+  std::vector<int> tileOfColumn(std::max(grid.Width, 0));
+  std::vector<int> tileOfRow(std::max(grid.Height, 0));
+  for (size_t i = 0; i < tileOfColumn.size(); ++i)
+  {
+    tileOfColumn[i] = static_cast<int>(i) / grid.Size;
+  }
+  for (size_t j = 0; j < tileOfRow.size(); ++j)
+  {
+    tileOfRow[j] = static_cast<int>(j) / grid.Size;
+  }
+  std::vector<int64_t> depthStart(kDepthBins + 1, 0);
+  std::vector<int64_t>& tileStart = bins.Start;
+  tileStart.assign(static_cast<size_t>(grid.Count()) + 1, 0);
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const auto& r = bins.Rects[cell];
+    if (Covers(r))
     {
-      for (int64_t cell : order)
+      ++depthStart[binOf(cell) + 1];
+      const int tx0 = tileOfColumn[r[0]];
+      const int tx1 = tileOfColumn[r[2]];
+      for (int ty = tileOfRow[r[1]]; ty <= tileOfRow[r[3]]; ++ty)
       {
-        const auto& r = bins.Rects[cell];
-        for (int ty = r[1] / grid.Size; ty <= r[3] / grid.Size; ++ty)
+        int64_t* row = tileStart.data() + 1 + static_cast<int64_t>(ty) * grid.TilesX;
+        for (int tx = tx0; tx <= tx1; ++tx)
         {
-          for (int tx = r[0] / grid.Size; tx <= r[2] / grid.Size; ++tx)
-          {
-            emit(static_cast<int64_t>(ty) * grid.TilesX + tx, cell);
-          }
+          ++row[tx];
         }
       }
-    },
-    bins.Start, bins.Cells);
+    }
+  }
+  PrefixSum(depthStart);
+  PrefixSum(tileStart);
+  bins.Sorted.resize(static_cast<size_t>(depthStart.back()));
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const auto& r = bins.Rects[cell];
+    if (Covers(r))
+    {
+      bins.Sorted[depthStart[binOf(cell)]++] = { cell,
+        { tileOfColumn[r[0]], tileOfRow[r[1]], tileOfColumn[r[2]], tileOfRow[r[3]] } };
+    }
+  }
+  bins.Cells.resize(static_cast<size_t>(tileStart.back()));
+  std::vector<int64_t> fill(tileStart.begin(), tileStart.end() - 1);
+  int64_t* cells = bins.Cells.data();
+  for (const TileBins::SortedCell& sorted : bins.Sorted)
+  {
+    const auto& t = sorted.Tiles;
+    for (int ty = t[1]; ty <= t[3]; ++ty)
+    {
+      int64_t* row = fill.data() + static_cast<int64_t>(ty) * grid.TilesX;
+      for (int tx = t[0]; tx <= t[2]; ++tx)
+      {
+        cells[row[tx]++] = sorted.Cell;
+      }
+    }
+  }
 }
 
 // The decimated pixels k (k * step + offset in [first, last]) of an inclusive range of
@@ -190,21 +229,51 @@ void BinCells(
 {
   bins.Grid = TileGrid(tileSize, camera.GetWidth(), camera.GetHeight());
   const int64_t numCells = mesh ? mesh->GetNumberOfCells() : 0;
+  const int64_t numPoints = mesh ? static_cast<int64_t>(mesh->Points.size()) : 0;
   bins.Rects.resize(numCells);
   bins.Near.resize(numCells);
   bins.Far.resize(numCells);
+  bins.Projected.resize(numPoints);
+  ParallelFor(threads, numPoints, 4096,
+    [&](int64_t begin, int64_t end)
+    {
+      for (int64_t point = begin; point < end; ++point)
+      {
+        bins.Projected[point] = ProjectPoint(camera, mesh->Points[point]);
+      }
+    });
+  const double w = camera.GetWidth();
+  const double h = camera.GetHeight();
+  NearRange range;
   ParallelFor(threads, numCells, 4096,
     [&](int64_t begin, int64_t end)
     {
+      double lo = std::numeric_limits<double>::infinity();
+      double hi = -lo;
+      const TileBins::ProjectedPoint* points = bins.Projected.data();
       for (int64_t cell = begin; cell < end; ++cell)
       {
-        bins.Rects[cell] = CoveredPixels(*mesh, camera, cell);
-        const std::array<double, 2> nearFar = NearFar(*mesh, camera, cell);
-        bins.Near[cell] = nearFar[0];
-        bins.Far[cell] = nearFar[1];
+        // The corners' entries are scattered over the points: ask for them a few cells ahead
+        // (the cells' ids come in order).
+        if (cell + kPrefetchCells < end)
+        {
+          const int64_t* ids = mesh->GetCellPoints(cell + kPrefetchCells);
+          const int corners = static_cast<int>(mesh->GetShape(cell + kPrefetchCells));
+          for (int c = 0; c < corners; ++c)
+          {
+            __builtin_prefetch(points + ids[c]);
+          }
+        }
+        BinCell(*mesh, points, w, h, cell, bins.Rects[cell], bins.Near[cell], bins.Far[cell]);
+        if (Covers(bins.Rects[cell]))
+        {
+          lo = std::min(lo, bins.Near[cell]);
+          hi = std::max(hi, bins.Near[cell]);
+        }
       }
+      range.Merge(lo, hi);
     });
-  BinByRects(bins);
+  BinByRects(bins, range.Lo, range.Hi);
 }
 
 bool DecimateBins(const TileBins& fine, int step, int offset, int width, int height, int tileSize,
@@ -224,9 +293,12 @@ bool DecimateBins(const TileBins& fine, int step, int offset, int width, int hei
   bins.Rects.resize(numCells);
   bins.Near.resize(numCells);
   bins.Far.resize(numCells);
+  NearRange range;
   ParallelFor(threads, numCells, 4096,
     [&](int64_t begin, int64_t end)
     {
+      double lo = std::numeric_limits<double>::infinity();
+      double hi = -lo;
       for (int64_t cell = begin; cell < end; ++cell)
       {
         const auto& r = fine.Rects[cell];
@@ -244,9 +316,15 @@ bool DecimateBins(const TileBins& fine, int step, int offset, int width, int hei
         }
         bins.Near[cell] = fine.Near[cell];
         bins.Far[cell] = fine.Far[cell];
+        if (Covers(to))
+        {
+          lo = std::min(lo, fine.Near[cell]);
+          hi = std::max(hi, fine.Near[cell]);
+        }
       }
+      range.Merge(lo, hi);
     });
-  BinByRects(bins);
+  BinByRects(bins, range.Lo, range.Hi);
   return true;
 }
 

@@ -72,6 +72,23 @@ struct TileBins
   std::vector<int64_t> Start{ 0 };
   UninitializedVector<int64_t> Cells;
 
+  // Per point: where BinCells projected it (X NaN: behind the eye or not finite), its depth
+  // along the view direction and its squared distance from the eye, each corner's numbers
+  // once per view instead of once per cell holding it (about eight on a hexahedral mesh).
+  struct ProjectedPoint
+  {
+    double X, Y, Depth, Distance2;
+  };
+  UninitializedVector<ProjectedPoint> Projected;
+  // The covering cells front to back with their tiles (first and last column, row): the
+  // tiles' lists are filled from it in one sequential pass, without a random read per cell.
+  struct SortedCell
+  {
+    int64_t Cell;
+    std::array<int, 4> Tiles;
+  };
+  UninitializedVector<SortedCell> Sorted;
+
   bool Empty(int64_t tile) const { return this->Start[tile] == this->Start[tile + 1]; }
 };
 

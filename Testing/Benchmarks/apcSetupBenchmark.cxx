@@ -308,9 +308,17 @@ int main(int argc, char* argv[])
   {
     onScreen += r[0] <= r[2] && r[1] <= r[3] ? 1 : 0;
   }
-  std::printf("# mesh checksum %016llx, %lld cells, %lld on screen, %zu tile entries\n",
+  // Everything the marcher reads of the bins: two builds that bin alike print the same sum.
+  unsigned long long binsHash = 1469598103934665603ull;
+  Mix(binsHash, bins.Rects.data(), bins.Rects.size() * sizeof(bins.Rects[0]));
+  Mix(binsHash, bins.Near.data(), bins.Near.size() * sizeof(double));
+  Mix(binsHash, bins.Far.data(), bins.Far.size() * sizeof(double));
+  Mix(binsHash, bins.Start.data(), bins.Start.size() * sizeof(int64_t));
+  Mix(binsHash, bins.Cells.data(), bins.Cells.size() * sizeof(int64_t));
+  std::printf("# mesh checksum %016llx, %lld cells, %lld on screen, %zu tile entries, bins "
+              "checksum %016llx\n",
     Checksum(mesh), static_cast<long long>(mesh.GetNumberOfCells()),
-    static_cast<long long>(onScreen), bins.Cells.size());
+    static_cast<long long>(onScreen), bins.Cells.size(), binsHash);
   // A first frame's probe (every 8th ray, FrameSettings' default step): binning every cell
   // for its camera, as its marcher's SetView does, against its bins derived from the frame's
   // (DecimateBins, as SetDecimatedView does: this build's interface).
