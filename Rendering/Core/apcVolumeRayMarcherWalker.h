@@ -752,7 +752,7 @@ struct VolumeRayMarcher::Walker
       walk::LaneWeights Weights;
       int N = 0; // lanes used
       int Local[4] = { 0, 0, 0, 0 };
-      int64_t K[4] = { 0, 0, 0, 0 };
+      int64_t K[4] = { 0, 0, 0, 0 }; // Weighted: each lane's next index (plain: Lanes.K)
       // Weighted: each ray's pair's first and last index and their float weights (as
       // EndWeights::Of gives them, then cast as the scalar loop does).
       int64_t FirstK[4] = { 0, 0, 0, 0 };
@@ -803,10 +803,6 @@ struct VolumeRayMarcher::Walker
             g.FirstWeight[i] = static_cast<float>(ends.FirstWeight[l]);
             g.LastWeight[i] = static_cast<float>(ends.LastWeight[l]);
             g.K[i] = g.FirstK[i];
-          }
-          else
-          {
-            g.K[i] = static_cast<int64_t>(c.Lattice[l]);
           }
           if constexpr (acrossLanes)
           {
@@ -881,7 +877,11 @@ struct VolumeRayMarcher::Walker
           {
             const int l = g.Local[i];
             double tout = g.Lanes.Tout[i];
-            int64_t kk = g.K[i];
+            // Plain: the lane's first index as GatherLaneRays gathered it (Clipped.Lattice) or
+            // the call before left it, an integer below 2^53: converted here, where it is read,
+            // instead of once more from Clipped.Lattice per group (a chain of dependent loads
+            // and a conversion for each lane before the kernel).
+            int64_t kk = Weighted ? g.K[i] : static_cast<int64_t>(g.Lanes.K[i]);
             int s = 0;
             bool kept = false;
             if constexpr (acrossLanes)
@@ -1004,7 +1004,10 @@ struct VolumeRayMarcher::Walker
                 }
               }
             }
-            g.K[i] = kk;
+            if constexpr (Weighted)
+            {
+              g.K[i] = kk;
+            }
             g.Lanes.K[i] = static_cast<double>(kk);
             // A ray that left the chunk before its end is done.
             g.Lanes.Tout[i] =
