@@ -181,32 +181,38 @@ APC_AVX2_INLINE Looked Lookup4(
   __m256d x =
     _mm256_mul_pd(_mm256_sub_pd(scalar, _mm256_set1_pd(table.Min)), _mm256_set1_pd(table.Scale));
   const __m256d last = _mm256_set1_pd(table.Last);
-  x = _mm256_blendv_pd(x, last, _mm256_cmp_pd(x, last, _CMP_GT_OQ));
-  x = _mm256_blendv_pd(x, zero, _mm256_cmp_pd(x, zero, _CMP_LT_OQ));
+  // Lookup's clamps, x > last ? last : x and x < 0 ? 0 : x, as min and max take their
+  // operands (the first where the comparison holds, else the second: a NaN stays).
+  x = _mm256_max_pd(zero, _mm256_min_pd(last, x));
   x = _mm256_and_pd(x, finite); // a non-finite scalar: entry 0, made transparent below
   const __m128i i = _mm256_cvttpd_epi32(x);
-  const __m128i j =
-    _mm_min_epi32(_mm_add_epi32(i, _mm_set1_epi32(1)), _mm_set1_epi32(table.Count - 1));
   const __m128 f = _mm256_cvtpd_ps(_mm256_sub_pd(x, _mm256_cvtepi32_pd(i)));
-  alignas(16) int ii[4];
-  alignas(16) int jj[4];
-  _mm_store_si128(reinterpret_cast<__m128i*>(ii), i);
-  _mm_store_si128(reinterpret_cast<__m128i*>(jj), j);
-  const float* entries = reinterpret_cast<const float*>(table.Entries);
-  static_assert(sizeof(TransferSample) == 4 * sizeof(float), "an entry is r, g, b, absorbance");
-  __m128 e[4];
-  for (int k = 0; k < 4; ++k)
-  {
-    const __m128 a = _mm_loadu_ps(entries + 4 * ii[k]);
-    const __m128 b = _mm_loadu_ps(entries + 4 * jj[k]);
-    const __m128 fk = _mm_permutevar_ps(f, _mm_set1_epi32(k));
-    __m128 step = _mm_mul_ps(fk, _mm_sub_ps(b, a));
-    // Rounded before the add, as Lookup's baseline code does: no contraction into an FMA,
-    // so that the colours and absorbances are Lookup's to the bit.
-    __asm__("" : "+x"(step));
-    e[k] = _mm_add_ps(a, step);
-  }
-  _MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
+  // Each lane's entry and its difference to the next in one aligned 32-byte load, two
+  // lanes' halves paired into one vector each, so that two lanes interpolate in one product
+  // and one sum.
+  const float* pairs = table.EntryDifferences;
+  const __m256 p0 = _mm256_load_ps(pairs + 8 * _mm_cvtsi128_si32(i));
+  const __m256 p1 = _mm256_load_ps(pairs + 8 * _mm_extract_epi32(i, 1));
+  const __m256 p2 = _mm256_load_ps(pairs + 8 * _mm_extract_epi32(i, 2));
+  const __m256 p3 = _mm256_load_ps(pairs + 8 * _mm_extract_epi32(i, 3));
+  const __m256 f8 = _mm256_castps128_ps256(f);
+  __m256 step01 =
+    _mm256_mul_ps(_mm256_permutevar8x32_ps(f8, _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)),
+      _mm256_permute2f128_ps(p0, p1, 0x31));
+  __m256 step23 =
+    _mm256_mul_ps(_mm256_permutevar8x32_ps(f8, _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3)),
+      _mm256_permute2f128_ps(p2, p3, 0x31));
+  // Rounded before the add, as Lookup's baseline code does: no contraction into an FMA,
+  // so that the colours and absorbances are Lookup's to the bit.
+  __asm__("" : "+x"(step01), "+x"(step23));
+  const __m256 e01 = _mm256_add_ps(_mm256_permute2f128_ps(p0, p1, 0x20), step01);
+  const __m256 e23 = _mm256_add_ps(_mm256_permute2f128_ps(p2, p3, 0x20), step23);
+  // Lanes 0-3's (r, g, b, a) to channels: (r0 r2 g0 g2 | r1 r3 g1 g3), then in lane order.
+  const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+  const __m256 rg = _mm256_permutevar8x32_ps(_mm256_unpacklo_ps(e01, e23), order);
+  const __m256 ba = _mm256_permutevar8x32_ps(_mm256_unpackhi_ps(e01, e23), order);
+  __m128 e[4] = { _mm256_castps256_ps128(rg), _mm256_extractf128_ps(rg, 1),
+    _mm256_castps256_ps128(ba), _mm256_extractf128_ps(ba, 1) };
   if (Weighted)
   {
     const __m128 w = lanes >= 4
@@ -352,6 +358,17 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
   return skipped;
 }
 
+template <bool Weighted>
+APC_AVX2 void LookupFour(const TransferTable::Layout& table, const double scalars[4],
+  const float* weights, int lanes, double out[16])
+{
+  const Looked s = Lookup4<Weighted>(table, _mm256_loadu_pd(scalars), weights, lanes);
+  _mm256_storeu_pd(out, s.R);
+  _mm256_storeu_pd(out + 4, s.G);
+  _mm256_storeu_pd(out + 8, s.B);
+  _mm256_storeu_pd(out + 12, s.Absorbance);
+}
+
 } // namespace
 #endif
 
@@ -423,6 +440,31 @@ bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
   (void)hidden;
   (void)weights;
   (void)kernel;
+  return false;
+}
+
+bool ReplayLookupFour(const TransferTable::Layout& table, const double scalars[4],
+  const float* weights, int lanes, double out[16])
+{
+#ifdef APC_HAVE_AVX2_REPLAY
+  if (HasAvx2Replay())
+  {
+    if (weights)
+    {
+      LookupFour<true>(table, scalars, weights, lanes, out);
+    }
+    else
+    {
+      LookupFour<false>(table, scalars, nullptr, lanes, out);
+    }
+    return true;
+  }
+#endif
+  (void)table;
+  (void)scalars;
+  (void)weights;
+  (void)lanes;
+  (void)out;
   return false;
 }
 
