@@ -166,6 +166,11 @@ struct Looked
   __m256d R, G, B, Absorbance;
 };
 
+APC_AVX2_INLINE __m256 EntryAt(const char* pairs, uint32_t offset)
+{
+  return _mm256_load_ps(reinterpret_cast<const float*>(pairs + offset));
+}
+
 // Weighted: times the samples' end weights (apcEndWeights.h; lanes of them from weights,
 // none read past), each a float product as pass 1 took it, formed on the float absorbance
 // before it is widened (a product of the widened one, narrowed and widened again, lay on
@@ -187,14 +192,16 @@ APC_AVX2_INLINE Looked Lookup4(
   x = _mm256_and_pd(x, finite); // a non-finite scalar: entry 0, made transparent below
   const __m128i i = _mm256_cvttpd_epi32(x);
   const __m128 f = _mm256_cvtpd_ps(_mm256_sub_pd(x, _mm256_cvtepi32_pd(i)));
-  // Each lane's entry and its difference to the next in one aligned 32-byte load, two
-  // lanes' halves paired into one vector each, so that two lanes interpolate in one product
-  // and one sum.
-  const float* pairs = table.EntryDifferences;
-  const __m256 p0 = _mm256_load_ps(pairs + 8 * _mm_cvtsi128_si32(i));
-  const __m256 p1 = _mm256_load_ps(pairs + 8 * _mm_extract_epi32(i, 1));
-  const __m256 p2 = _mm256_load_ps(pairs + 8 * _mm_extract_epi32(i, 2));
-  const __m256 p3 = _mm256_load_ps(pairs + 8 * _mm_extract_epi32(i, 3));
+  // Each lane's entry and its difference to the next in one aligned 32-byte load (its byte
+  // offset shifted four lanes at a time and taken as unsigned: no shift or sign extension a
+  // lane), two lanes' halves paired into one vector each, so that two lanes interpolate in
+  // one product and one sum.
+  const char* pairs = reinterpret_cast<const char*>(table.EntryDifferences);
+  const __m128i offsets = _mm_slli_epi32(i, 5);
+  const __m256 p0 = EntryAt(pairs, static_cast<uint32_t>(_mm_cvtsi128_si32(offsets)));
+  const __m256 p1 = EntryAt(pairs, static_cast<uint32_t>(_mm_extract_epi32(offsets, 1)));
+  const __m256 p2 = EntryAt(pairs, static_cast<uint32_t>(_mm_extract_epi32(offsets, 2)));
+  const __m256 p3 = EntryAt(pairs, static_cast<uint32_t>(_mm_extract_epi32(offsets, 3)));
   const __m256 f8 = _mm256_castps128_ps256(f);
   __m256 step01 =
     _mm256_mul_ps(_mm256_permutevar8x32_ps(f8, _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)),
