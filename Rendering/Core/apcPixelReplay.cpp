@@ -103,16 +103,38 @@ struct Lanes
   __m256d Fallback; // lanes the vector arithmetic cannot answer (Query's full path)
 };
 
+// A pixel's constants in every lane, set once a pixel: set in each group, they were loaded,
+// broadcast and spilled again in every group (the loop has more live vectors than registers).
+struct Pixel4
+{
+  __m256d L3, L4, L6, L7, L8, D0, D1, D2, Beta, OneMinusBeta, B0;
+
+  APC_AVX2_INLINE explicit Pixel4(const FourMomentPixel& px)
+    : L3(_mm256_set1_pd(px.L3))
+    , L4(_mm256_set1_pd(px.L4))
+    , L6(_mm256_set1_pd(px.L6))
+    , L7(_mm256_set1_pd(px.L7))
+    , L8(_mm256_set1_pd(px.L8))
+    , D0(_mm256_set1_pd(px.D0))
+    , D1(_mm256_set1_pd(px.D1))
+    , D2(_mm256_set1_pd(px.D2))
+    , Beta(_mm256_set1_pd(px.Beta))
+    , OneMinusBeta(_mm256_sub_pd(_mm256_set1_pd(1.0), this->Beta))
+    , B0(_mm256_set1_pd(px.B0))
+  {
+  }
+};
+
 // alpha T(z) of 4 samples, FourMomentWeightsBody's arithmetic.
-APC_AVX2_INLINE Lanes Weights4(const FourMomentPixel& px, __m256d raw, __m256d absorbance)
+APC_AVX2_INLINE Lanes Weights4(const Pixel4& px, __m256d raw, __m256d absorbance)
 {
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d zero = _mm256_setzero_pd();
-  const __m256d l3 = _mm256_set1_pd(px.L3), l4 = _mm256_set1_pd(px.L4);
-  const __m256d l6 = _mm256_set1_pd(px.L6), l7 = _mm256_set1_pd(px.L7);
-  const __m256d l8 = _mm256_set1_pd(px.L8);
-  const __m256d d0 = _mm256_set1_pd(px.D0), d1 = _mm256_set1_pd(px.D1);
-  const __m256d d2 = _mm256_set1_pd(px.D2), beta = _mm256_set1_pd(px.Beta);
+  const __m256d l3 = px.L3, l4 = px.L4;
+  const __m256d l6 = px.L6, l7 = px.L7;
+  const __m256d l8 = px.L8;
+  const __m256d d0 = px.D0, d1 = px.D1;
+  const __m256d d2 = px.D2, beta = px.Beta;
   const __m256d z = _mm256_min_pd(_mm256_max_pd(raw, _mm256_set1_pd(-1.0)), one);
   const __m256d y1 = _mm256_fmadd_pd(l4, z, l3);
   const __m256d y2 = _mm256_fmadd_pd(_mm256_fmadd_pd(l8, z, l7), z, l6);
@@ -128,7 +150,7 @@ APC_AVX2_INLINE Lanes Weights4(const FourMomentPixel& px, __m256d raw, __m256d a
   const __m256d pastVertex = _mm256_cmp_pd(
     _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), c2), z), _mm256_sub_pd(zero, c1), _CMP_GT_OQ);
   const __m256d outside = _mm256_blendv_pd(
-    _mm256_mul_pd(beta, wz), _mm256_fnmadd_pd(_mm256_sub_pd(one, beta), wz, one), pastVertex);
+    _mm256_mul_pd(beta, wz), _mm256_fnmadd_pd(px.OneMinusBeta, wz, one), pastVertex);
   const __m256d discPositive = _mm256_cmp_pd(disc, zero, _CMP_GT_OQ);
   const __m256d root = _mm256_sqrt_pd(_mm256_and_pd(disc, discPositive));
   const __m256d c1Negative = _mm256_cmp_pd(c1, zero, _CMP_LT_OQ);
@@ -152,7 +174,7 @@ APC_AVX2_INLINE Lanes Weights4(const FourMomentPixel& px, __m256d raw, __m256d a
   usual = _mm256_and_pd(usual, _mm256_or_pd(c2Positive, loFinite));
   usual = _mm256_and_pd(
     usual, _mm256_cmp_pd(_mm256_and_pd(absorbanceInFront, absMask), largest, _CMP_LE_OQ));
-  const __m256d b0 = _mm256_set1_pd(px.B0);
+  const __m256d b0 = px.B0;
   const __m256d t = ExpNonPositive4(
     _mm256_sub_pd(zero, _mm256_mul_pd(b0, _mm256_and_pd(absorbanceInFront, usual))));
   const __m256d clamped = _mm256_min_pd(_mm256_max_pd(t, zero), one);
@@ -279,7 +301,7 @@ APC_AVX2_INLINE Group Load(const CachedSample* samples, int lanes, __m256d hidde
 // ColourSums::Add skips them) NaN or not positive; what the vector arithmetic cannot answer
 // comes from the pixel's query.
 APC_AVX2_INLINE __m256d Weigh(
-  const MomentTransmittance<4>& t, const FourMomentPixel& px, const Group& g, const Looked& s)
+  const MomentTransmittance<4>& t, const Pixel4& px, const Group& g, const Looked& s)
 {
   Lanes l = Weights4(px, g.Z, s.Absorbance);
   const int fallback = _mm256_movemask_pd(_mm256_and_pd(l.Fallback, g.Visible));
@@ -327,6 +349,7 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
   double hiddenFrom, const TransferTable::Layout& table, const CachedSample* samples, int n,
   double sums[4], const float* weights)
 {
+  const Pixel4 pixel(px);
   const __m256d hidden = _mm256_set1_pd(hiddenFrom);
   const __m256d zero = _mm256_setzero_pd();
   Sums4 a{ zero, zero, zero, zero };
@@ -342,7 +365,7 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
       {
         const Looked s =
           Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, n - at);
-        a.Add(Weigh(t, px, first, s), s);
+        a.Add(Weigh(t, pixel, first, s), s);
       }
       break;
     }
@@ -355,8 +378,8 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
     const Looked s1 = Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, 4);
     const Looked s2 =
       Lookup4<Weighted>(table, second.Scalar, Weighted ? weights + at + 4 : nullptr, n - at - 4);
-    a.Add(Weigh(t, px, first, s1), s1);
-    b.Add(Weigh(t, px, second, s2), s2);
+    a.Add(Weigh(t, pixel, first, s1), s1);
+    b.Add(Weigh(t, pixel, second, s2), s2);
   }
   sums[0] += Total(_mm256_add_pd(a.R, b.R));
   sums[1] += Total(_mm256_add_pd(a.G, b.G));
