@@ -33,6 +33,7 @@ template <int N>
 struct Colour : NoSegments
 {
   static constexpr bool StopsWhenOpaque = true;
+  static constexpr bool ReadsCacheOrder = false; // ReplayTile never reads the lattice bits
 
   double* Output;
   int Width;
@@ -247,6 +248,7 @@ template <int N>
 struct HybridColour : NoSegments
 {
   static constexpr bool StopsWhenOpaque = true;
+  static constexpr bool ReadsCacheOrder = true; // ties ordered by their lattice bits
   struct OwnSample
   {
     int64_t Order; // lattice index k, or ReplayOrder for cached samples

@@ -238,17 +238,17 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
   this->Beta = SanitiseUnit(settings.Overestimation, kDefaultOverestimation);
   const double eps = settings.Bias < 0.0 ? DefaultMomentBias<N>()
                                          : SanitiseUnit(settings.Bias, DefaultMomentBias<N>());
-  this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
-
   // Written so that NaN lands in the degenerate branch, not in the empty one.
   if (this->B0 < kEmptyPixelAbsorbance)
   {
     this->State = PixelState::Empty;
+    this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
     return;
   }
   if (!std::isfinite(this->B0))
   {
     this->State = PixelState::Degenerate;
+    this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
     return;
   }
 
@@ -260,6 +260,7 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
     if (!std::isfinite(normalised))
     {
       this->State = PixelState::Degenerate;
+      this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
       return;
     }
     moments[k] = (1.0 - eps) * normalised + eps * settings.BiasVector[k - 1];
@@ -281,6 +282,7 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
     if (!(dj > 0.0) || !std::isfinite(dj))
     {
       this->State = PixelState::Degenerate;
+      this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
       return;
     }
     d[j] = dj;
@@ -316,16 +318,21 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
 }
 
 template <int N>
+double MomentTransmittance<N>::FallbackTransmittance() const
+{
+  return this->State == PixelState::Valid ? AllAtQueryDepth(this->Beta, this->B0) : this->Fallback;
+}
+
+template <int N>
 TransmittanceQuery MomentTransmittance<N>::FullQuery(double z) const
 {
   if (this->State == PixelState::Empty)
   {
     return { 1.0, false };
   }
-  const TransmittanceQuery fallback{ this->Fallback, true };
   if (this->State == PixelState::Degenerate || std::isnan(z))
   {
-    return fallback;
+    return { this->FallbackTransmittance(), true };
   }
   z = z < -1.0 ? -1.0 : (z > 1.0 ? 1.0 : z);
 
@@ -360,7 +367,9 @@ template <int N>
 TransmittanceQuery MomentTransmittance<N>::GeneralQuery(
   double z, double kernelAtZ, const double* c) const
 {
-  const TransmittanceQuery fallback{ this->Fallback, true };
+  const auto fallback = [this] {
+    return TransmittanceQuery{ this->FallbackTransmittance(), true };
+  };
   // Support points: z plus the real roots of the kernel polynomial. A vanishing leading
   // coefficient (exactly 0 e.g. at z = 0 for moments symmetric about 0) moves a support
   // point to infinity, where its weight is 0: such a root is missing, not an error.
@@ -373,7 +382,7 @@ TransmittanceQuery MomentTransmittance<N>::GeneralQuery(
   const int count = KernelRoots<M>(c, roots.data());
   if (count != degree)
   {
-    return fallback;
+    return fallback();
   }
 
   // The interpolant of the step function (beta at z, 1 at support points in front of z, 0
@@ -391,7 +400,7 @@ TransmittanceQuery MomentTransmittance<N>::GeneralQuery(
   {
     if (!std::isfinite(roots[i]))
     {
-      return fallback;
+      return fallback();
     }
     if (roots[i] < z)
     {
@@ -405,7 +414,7 @@ TransmittanceQuery MomentTransmittance<N>::GeneralQuery(
   const double t = std::exp(-this->B0 * absorbance);
   if (!std::isfinite(absorbance) || std::isnan(t))
   {
-    return fallback;
+    return fallback();
   }
   return { t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t), false };
 }

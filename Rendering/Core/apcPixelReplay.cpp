@@ -103,16 +103,38 @@ struct Lanes
   __m256d Fallback; // lanes the vector arithmetic cannot answer (Query's full path)
 };
 
+// A pixel's constants in every lane, set once a pixel: set in each group, they were loaded,
+// broadcast and spilled again in every group (the loop has more live vectors than registers).
+struct Pixel4
+{
+  __m256d L3, L4, L6, L7, L8, D0, D1, D2, Beta, OneMinusBeta, B0;
+
+  APC_AVX2_INLINE explicit Pixel4(const FourMomentPixel& px)
+    : L3(_mm256_set1_pd(px.L3))
+    , L4(_mm256_set1_pd(px.L4))
+    , L6(_mm256_set1_pd(px.L6))
+    , L7(_mm256_set1_pd(px.L7))
+    , L8(_mm256_set1_pd(px.L8))
+    , D0(_mm256_set1_pd(px.D0))
+    , D1(_mm256_set1_pd(px.D1))
+    , D2(_mm256_set1_pd(px.D2))
+    , Beta(_mm256_set1_pd(px.Beta))
+    , OneMinusBeta(_mm256_sub_pd(_mm256_set1_pd(1.0), this->Beta))
+    , B0(_mm256_set1_pd(px.B0))
+  {
+  }
+};
+
 // alpha T(z) of 4 samples, FourMomentWeightsBody's arithmetic.
-APC_AVX2_INLINE Lanes Weights4(const FourMomentPixel& px, __m256d raw, __m256d absorbance)
+APC_AVX2_INLINE Lanes Weights4(const Pixel4& px, __m256d raw, __m256d absorbance)
 {
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d zero = _mm256_setzero_pd();
-  const __m256d l3 = _mm256_set1_pd(px.L3), l4 = _mm256_set1_pd(px.L4);
-  const __m256d l6 = _mm256_set1_pd(px.L6), l7 = _mm256_set1_pd(px.L7);
-  const __m256d l8 = _mm256_set1_pd(px.L8);
-  const __m256d d0 = _mm256_set1_pd(px.D0), d1 = _mm256_set1_pd(px.D1);
-  const __m256d d2 = _mm256_set1_pd(px.D2), beta = _mm256_set1_pd(px.Beta);
+  const __m256d l3 = px.L3, l4 = px.L4;
+  const __m256d l6 = px.L6, l7 = px.L7;
+  const __m256d l8 = px.L8;
+  const __m256d d0 = px.D0, d1 = px.D1;
+  const __m256d d2 = px.D2, beta = px.Beta;
   const __m256d z = _mm256_min_pd(_mm256_max_pd(raw, _mm256_set1_pd(-1.0)), one);
   const __m256d y1 = _mm256_fmadd_pd(l4, z, l3);
   const __m256d y2 = _mm256_fmadd_pd(_mm256_fmadd_pd(l8, z, l7), z, l6);
@@ -128,7 +150,7 @@ APC_AVX2_INLINE Lanes Weights4(const FourMomentPixel& px, __m256d raw, __m256d a
   const __m256d pastVertex = _mm256_cmp_pd(
     _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(2.0), c2), z), _mm256_sub_pd(zero, c1), _CMP_GT_OQ);
   const __m256d outside = _mm256_blendv_pd(
-    _mm256_mul_pd(beta, wz), _mm256_fnmadd_pd(_mm256_sub_pd(one, beta), wz, one), pastVertex);
+    _mm256_mul_pd(beta, wz), _mm256_fnmadd_pd(px.OneMinusBeta, wz, one), pastVertex);
   const __m256d discPositive = _mm256_cmp_pd(disc, zero, _CMP_GT_OQ);
   const __m256d root = _mm256_sqrt_pd(_mm256_and_pd(disc, discPositive));
   const __m256d c1Negative = _mm256_cmp_pd(c1, zero, _CMP_LT_OQ);
@@ -152,7 +174,7 @@ APC_AVX2_INLINE Lanes Weights4(const FourMomentPixel& px, __m256d raw, __m256d a
   usual = _mm256_and_pd(usual, _mm256_or_pd(c2Positive, loFinite));
   usual = _mm256_and_pd(
     usual, _mm256_cmp_pd(_mm256_and_pd(absorbanceInFront, absMask), largest, _CMP_LE_OQ));
-  const __m256d b0 = _mm256_set1_pd(px.B0);
+  const __m256d b0 = px.B0;
   const __m256d t = ExpNonPositive4(
     _mm256_sub_pd(zero, _mm256_mul_pd(b0, _mm256_and_pd(absorbanceInFront, usual))));
   const __m256d clamped = _mm256_min_pd(_mm256_max_pd(t, zero), one);
@@ -165,6 +187,11 @@ struct Looked
 {
   __m256d R, G, B, Absorbance;
 };
+
+APC_AVX2_INLINE __m256 EntryAt(const char* pairs, uint32_t offset)
+{
+  return _mm256_load_ps(reinterpret_cast<const float*>(pairs + offset));
+}
 
 // Weighted: times the samples' end weights (apcEndWeights.h; lanes of them from weights,
 // none read past), each a float product as pass 1 took it, formed on the float absorbance
@@ -181,32 +208,40 @@ APC_AVX2_INLINE Looked Lookup4(
   __m256d x =
     _mm256_mul_pd(_mm256_sub_pd(scalar, _mm256_set1_pd(table.Min)), _mm256_set1_pd(table.Scale));
   const __m256d last = _mm256_set1_pd(table.Last);
-  x = _mm256_blendv_pd(x, last, _mm256_cmp_pd(x, last, _CMP_GT_OQ));
-  x = _mm256_blendv_pd(x, zero, _mm256_cmp_pd(x, zero, _CMP_LT_OQ));
+  // Lookup's clamps, x > last ? last : x and x < 0 ? 0 : x, as min and max take their
+  // operands (the first where the comparison holds, else the second: a NaN stays).
+  x = _mm256_max_pd(zero, _mm256_min_pd(last, x));
   x = _mm256_and_pd(x, finite); // a non-finite scalar: entry 0, made transparent below
   const __m128i i = _mm256_cvttpd_epi32(x);
-  const __m128i j =
-    _mm_min_epi32(_mm_add_epi32(i, _mm_set1_epi32(1)), _mm_set1_epi32(table.Count - 1));
   const __m128 f = _mm256_cvtpd_ps(_mm256_sub_pd(x, _mm256_cvtepi32_pd(i)));
-  alignas(16) int ii[4];
-  alignas(16) int jj[4];
-  _mm_store_si128(reinterpret_cast<__m128i*>(ii), i);
-  _mm_store_si128(reinterpret_cast<__m128i*>(jj), j);
-  const float* entries = reinterpret_cast<const float*>(table.Entries);
-  static_assert(sizeof(TransferSample) == 4 * sizeof(float), "an entry is r, g, b, absorbance");
-  __m128 e[4];
-  for (int k = 0; k < 4; ++k)
-  {
-    const __m128 a = _mm_loadu_ps(entries + 4 * ii[k]);
-    const __m128 b = _mm_loadu_ps(entries + 4 * jj[k]);
-    const __m128 fk = _mm_permutevar_ps(f, _mm_set1_epi32(k));
-    __m128 step = _mm_mul_ps(fk, _mm_sub_ps(b, a));
-    // Rounded before the add, as Lookup's baseline code does: no contraction into an FMA,
-    // so that the colours and absorbances are Lookup's to the bit.
-    __asm__("" : "+x"(step));
-    e[k] = _mm_add_ps(a, step);
-  }
-  _MM_TRANSPOSE4_PS(e[0], e[1], e[2], e[3]);
+  // Each lane's entry and its difference to the next in one aligned 32-byte load (its byte
+  // offset shifted four lanes at a time and taken as unsigned: no shift or sign extension a
+  // lane), two lanes' halves paired into one vector each, so that two lanes interpolate in
+  // one product and one sum.
+  const char* pairs = reinterpret_cast<const char*>(table.EntryDifferences);
+  const __m128i offsets = _mm_slli_epi32(i, 5);
+  const __m256 p0 = EntryAt(pairs, static_cast<uint32_t>(_mm_cvtsi128_si32(offsets)));
+  const __m256 p1 = EntryAt(pairs, static_cast<uint32_t>(_mm_extract_epi32(offsets, 1)));
+  const __m256 p2 = EntryAt(pairs, static_cast<uint32_t>(_mm_extract_epi32(offsets, 2)));
+  const __m256 p3 = EntryAt(pairs, static_cast<uint32_t>(_mm_extract_epi32(offsets, 3)));
+  const __m256 f8 = _mm256_castps128_ps256(f);
+  __m256 step01 =
+    _mm256_mul_ps(_mm256_permutevar8x32_ps(f8, _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1)),
+      _mm256_permute2f128_ps(p0, p1, 0x31));
+  __m256 step23 =
+    _mm256_mul_ps(_mm256_permutevar8x32_ps(f8, _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3)),
+      _mm256_permute2f128_ps(p2, p3, 0x31));
+  // Rounded before the add, as Lookup's baseline code does: no contraction into an FMA,
+  // so that the colours and absorbances are Lookup's to the bit.
+  __asm__("" : "+x"(step01), "+x"(step23));
+  const __m256 e01 = _mm256_add_ps(_mm256_permute2f128_ps(p0, p1, 0x20), step01);
+  const __m256 e23 = _mm256_add_ps(_mm256_permute2f128_ps(p2, p3, 0x20), step23);
+  // Lanes 0-3's (r, g, b, a) to channels: (r0 r2 g0 g2 | r1 r3 g1 g3), then in lane order.
+  const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+  const __m256 rg = _mm256_permutevar8x32_ps(_mm256_unpacklo_ps(e01, e23), order);
+  const __m256 ba = _mm256_permutevar8x32_ps(_mm256_unpackhi_ps(e01, e23), order);
+  __m128 e[4] = { _mm256_castps256_ps128(rg), _mm256_extractf128_ps(rg, 1),
+    _mm256_castps256_ps128(ba), _mm256_extractf128_ps(ba, 1) };
   if (Weighted)
   {
     const __m128 w = lanes >= 4
@@ -266,7 +301,7 @@ APC_AVX2_INLINE Group Load(const CachedSample* samples, int lanes, __m256d hidde
 // ColourSums::Add skips them) NaN or not positive; what the vector arithmetic cannot answer
 // comes from the pixel's query.
 APC_AVX2_INLINE __m256d Weigh(
-  const MomentTransmittance<4>& t, const FourMomentPixel& px, const Group& g, const Looked& s)
+  const MomentTransmittance<4>& t, const Pixel4& px, const Group& g, const Looked& s)
 {
   Lanes l = Weights4(px, g.Z, s.Absorbance);
   const int fallback = _mm256_movemask_pd(_mm256_and_pd(l.Fallback, g.Visible));
@@ -314,6 +349,7 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
   double hiddenFrom, const TransferTable::Layout& table, const CachedSample* samples, int n,
   double sums[4], const float* weights)
 {
+  const Pixel4 pixel(px);
   const __m256d hidden = _mm256_set1_pd(hiddenFrom);
   const __m256d zero = _mm256_setzero_pd();
   Sums4 a{ zero, zero, zero, zero };
@@ -329,7 +365,7 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
       {
         const Looked s =
           Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, n - at);
-        a.Add(Weigh(t, px, first, s), s);
+        a.Add(Weigh(t, pixel, first, s), s);
       }
       break;
     }
@@ -342,14 +378,25 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
     const Looked s1 = Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, 4);
     const Looked s2 =
       Lookup4<Weighted>(table, second.Scalar, Weighted ? weights + at + 4 : nullptr, n - at - 4);
-    a.Add(Weigh(t, px, first, s1), s1);
-    b.Add(Weigh(t, px, second, s2), s2);
+    a.Add(Weigh(t, pixel, first, s1), s1);
+    b.Add(Weigh(t, pixel, second, s2), s2);
   }
   sums[0] += Total(_mm256_add_pd(a.R, b.R));
   sums[1] += Total(_mm256_add_pd(a.G, b.G));
   sums[2] += Total(_mm256_add_pd(a.B, b.B));
   sums[3] += Total(_mm256_add_pd(a.W, b.W));
   return skipped;
+}
+
+template <bool Weighted>
+APC_AVX2 void LookupFour(const TransferTable::Layout& table, const double scalars[4],
+  const float* weights, int lanes, double out[16])
+{
+  const Looked s = Lookup4<Weighted>(table, _mm256_loadu_pd(scalars), weights, lanes);
+  _mm256_storeu_pd(out, s.R);
+  _mm256_storeu_pd(out + 4, s.G);
+  _mm256_storeu_pd(out + 8, s.B);
+  _mm256_storeu_pd(out + 12, s.Absorbance);
 }
 
 } // namespace
@@ -423,6 +470,31 @@ bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
   (void)hidden;
   (void)weights;
   (void)kernel;
+  return false;
+}
+
+bool ReplayLookupFour(const TransferTable::Layout& table, const double scalars[4],
+  const float* weights, int lanes, double out[16])
+{
+#ifdef APC_HAVE_AVX2_REPLAY
+  if (HasAvx2Replay())
+  {
+    if (weights)
+    {
+      LookupFour<true>(table, scalars, weights, lanes, out);
+    }
+    else
+    {
+      LookupFour<false>(table, scalars, nullptr, lanes, out);
+    }
+    return true;
+  }
+#endif
+  (void)table;
+  (void)scalars;
+  (void)weights;
+  (void)lanes;
+  (void)out;
   return false;
 }
 

@@ -41,6 +41,12 @@ bool ReplayFourMomentPixel(const MomentTransmittance<4>& t, double hiddenFrom,
   const TransferTable::Layout& table, const CachedSample* samples, int n, double sums[4],
   int64_t& hidden, const float* weights = nullptr, ReplayKernel kernel = ReplayKernel::Best);
 
+// The AVX2 replay's look-up of 4 scalars, for tests: out[4 c + k] is lane k's channel c (r, g,
+// b, absorbance) widened to double; weights, if not null, as the replay takes them (lanes
+// of them read). False, and nothing done, if the CPU lacks AVX2 with FMA.
+bool ReplayLookupFour(const TransferTable::Layout& table, const double scalars[4],
+  const float* weights, int lanes, double out[16]);
+
 } // namespace apc
 
 #endif

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 #include <vector>
 
 #ifdef __SSE2__
@@ -668,9 +669,10 @@ struct ExpandedTile
 // tile itself if it is in the full form, else its samples, lattice bits (if kept) and end
 // weights (if kept) as the full form holds them, bit for bit, in scratch.View (valid until
 // scratch's next Expand). table and base: the depth table the tile was kept with
-// (SampleCache::DepthTable, DepthBase).
-inline const CachedTile& Expand(
-  const CachedTile& tile, const std::vector<float>& table, int64_t base, ExpandedTile& scratch)
+// (SampleCache::DepthTable, DepthBase). withOrder false: no lattice bits in the view (a
+// reader that never looks at them, as pass 2's colour, saves writing them).
+inline const CachedTile& Expand(const CachedTile& tile, const std::vector<float>& table,
+  int64_t base, ExpandedTile& scratch, bool withOrder = true)
 {
   if (!tile.IsCompact())
   {
@@ -694,33 +696,50 @@ inline const CachedTile& Expand(
   CachedSample* samples = scratch.Samples.data();
   uint16_t* order = scratch.Order.data();
   float* weights = scratch.Weights.data();
-  for (size_t s = 0; s < n; ++s)
+  const auto expand = [&](auto ordered)
   {
-    const uint16_t slot = compact.Depths[s];
-    if (slot != kEscapedDepth)
+    for (size_t s = 0; s < n; ++s)
     {
-      samples[s] = { z[slot], compact.Scalars[s] };
-      order[s] = static_cast<uint16_t>(base16 + slot);
-      if (weighted)
+      const uint16_t slot = compact.Depths[s];
+      if (slot != kEscapedDepth)
       {
-        weights[s] = 1.0f;
+        samples[s] = { z[slot], compact.Scalars[s] };
+        if constexpr (decltype(ordered)::value)
+        {
+          order[s] = static_cast<uint16_t>(base16 + slot);
+        }
+        if (weighted)
+        {
+          weights[s] = 1.0f;
+        }
+      }
+      else
+      {
+        samples[s] = { escape->Z, compact.Scalars[s] };
+        if constexpr (decltype(ordered)::value)
+        {
+          order[s] = escape->K16;
+        }
+        if (weighted)
+        {
+          weights[s] = escape->Weight;
+        }
+        ++escape;
       }
     }
-    else
-    {
-      samples[s] = { escape->Z, compact.Scalars[s] };
-      order[s] = escape->K16;
-      if (weighted)
-      {
-        weights[s] = escape->Weight;
-      }
-      ++escape;
-    }
+  };
+  if (withOrder)
+  {
+    expand(std::true_type());
+  }
+  else
+  {
+    expand(std::false_type());
   }
   CachedTile& view = scratch.View;
   view.Starts.assign(tile.Starts.begin(), tile.Starts.end());
   view.Samples = { samples, n };
-  view.K16 = compact.Ordered ? OrderSpan{ order, n } : OrderSpan();
+  view.K16 = compact.Ordered && withOrder ? OrderSpan{ order, n } : OrderSpan();
   view.Weights = weighted ? WeightSpan{ weights, n } : WeightSpan();
   view.Compact = CompactSpan();
   return view;

@@ -32,6 +32,20 @@ TransferTable::TransferTable(double scalarMin, double scalarMax,
     this->AbsorbancePairs[2 * i] = this->Entries[i].Absorbance;
     this->AbsorbancePairs[2 * i + 1] = this->Entries[std::min(i + 1, n - 1)].Absorbance;
   }
+  this->EntryDifferences.resize(n);
+  for (size_t i = 0; i < n; ++i)
+  {
+    const TransferSample& a = this->Entries[i];
+    const TransferSample& b = this->Entries[std::min(i + 1, n - 1)];
+    float* pair = this->EntryDifferences[i].Values;
+    for (int c = 0; c < 3; ++c)
+    {
+      pair[c] = a.Colour[c];
+      pair[4 + c] = b.Colour[c] - a.Colour[c];
+    }
+    pair[3] = a.Absorbance;
+    pair[7] = b.Absorbance - a.Absorbance;
+  }
   this->VisibleBefore.assign(n + 1, 0);
   for (size_t i = 0; i < n; ++i)
   {

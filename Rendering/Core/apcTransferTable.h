@@ -53,11 +53,16 @@ public:
     // or i for the last), side by side, so that a vectorised lookup reads both with one 64-bit
     // gather instead of two gathers of floats (pass 1's lanes).
     const float* AbsorbancePairs;
+    // By entry i, 8 floats on a 32-byte boundary: entry i (r, g, b, absorbance), then entry j
+    // minus entry i, each difference the float subtraction Lookup makes, so that a vectorised
+    // lookup reads both with one aligned load and interpolates without subtracting (pass 2's
+    // replay), to the bit as Lookup.
+    const float* EntryDifferences;
   };
   Layout GetLayout() const
   {
     return { this->Entries.data(), this->Count(), this->Min, this->Scale, this->Last,
-      this->AbsorbancePairs.data() };
+      this->AbsorbancePairs.data(), this->EntryDifferences.data()->Values };
   }
   // Lookup from a layout held in registers: a loop that stores samples between its look-ups
   // (the marcher's) otherwise reloads the table's fields through the table for every one.
@@ -120,6 +125,11 @@ private:
   double Spacing;
   std::vector<TransferSample> Entries;
   std::vector<float> AbsorbancePairs; // Layout::AbsorbancePairs
+  struct alignas(32) EntryDifference
+  {
+    float Values[8];
+  };
+  std::vector<EntryDifference> EntryDifferences; // Layout::EntryDifferences
   // VisibleBefore[i]: how many of the first i entries have a positive absorbance.
   std::vector<int> VisibleBefore;
 };

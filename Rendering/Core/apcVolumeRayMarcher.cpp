@@ -557,7 +557,9 @@ int64_t VolumeRayMarcher::ReplayColour(
           continue;
         }
         visitor.ReplayTile(Walker::Shifted(grid.Tile(t), rows.J0),
-          Expand(recorded, cache.DepthTable, cache.DepthBase, expanded.local()), table);
+          Expand(recorded, cache.DepthTable, cache.DepthBase, expanded.local(),
+            Visitor::ReadsCacheOrder),
+          table);
         samples.local() += static_cast<int64_t>(recorded.Count());
       }
     });

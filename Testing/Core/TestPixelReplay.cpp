@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <iostream>
 #include <limits>
@@ -228,4 +229,98 @@ TEST(PixelReplay, LeavesEmptyPixelsToThePerSamplePath)
     table.GetLayout(), samples.data(), 2, sums.Data(), hidden));
   EXPECT_EQ(sums.W(), 0.0);
   EXPECT_EQ(hidden, 0);
+}
+
+// The AVX2 replay's look-up (entry and difference read together, apcTransferTable.h's
+// EntryDifferences) against TransferTable::Lookup, to the bit: every entry's scalar and those
+// about it, the last entry, scalars beyond both ends, -0, non-finite ones (the replay's entry
+// 0 with absorbance +0), every lane count, with and without end weights (a float product; 0
+// past the lanes). Tables: the ramp, a random one with negative zeros, infinities' neighbours
+// and denormals, two entries, and a zero-width range.
+TEST(PixelReplay, LookupIsTheTablesToTheBit)
+{
+  std::mt19937_64 rng(314);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<apc::TransferTable> tables = { Table() };
+  {
+    std::vector<std::array<float, 3>> colours;
+    std::vector<double> opacities;
+    const float odd[] = { -0.0f, 0.0f, 1e-40f, -1e-40f, 3.4e38f, -3.4e38f, 1.0f, 0.1f };
+    for (int i = 0; i < 37; ++i)
+    {
+      colours.push_back({ odd[i % 8], static_cast<float>(unit(rng)), odd[(i * 3) % 8] });
+      opacities.push_back(i % 5 == 0 ? 0.0 : (i % 7 == 0 ? 1.0 : unit(rng)));
+    }
+    tables.emplace_back(0.0, 7.0, colours, opacities, 0.3, 0.01);
+  }
+  tables.emplace_back(-1.0, 1.0,
+    std::vector<std::array<float, 3>>{ { 1.f, 0.f, 0.5f }, { 0.f, 1.f, 0.25f } },
+    std::vector<double>{ 0.1, 0.9 }, 1.0, 1.0);
+  tables.emplace_back(2.0, 2.0,
+    std::vector<std::array<float, 3>>{ { 1.f, 0.f, 0.5f }, { 0.f, 1.f, 0.25f } },
+    std::vector<double>{ 0.1, 0.9 }, 1.0, 1.0);
+  const double inf = std::numeric_limits<double>::infinity();
+  int compared = 0;
+  for (const apc::TransferTable& table : tables)
+  {
+    const apc::TransferTable::Layout layout = table.GetLayout();
+    ASSERT_EQ(reinterpret_cast<uintptr_t>(layout.EntryDifferences) % 32, 0u);
+    std::vector<double> scalars = { -0.0, 0.0, inf, -inf, std::numeric_limits<double>::quiet_NaN(),
+      1e300, -1e300, layout.Min - 1, layout.Min + layout.Last / layout.Scale + 1 };
+    for (int i = 0; i < layout.Count; ++i)
+    {
+      const double at = layout.Scale > 0 ? layout.Min + i / layout.Scale : layout.Min;
+      scalars.push_back(at);
+      scalars.push_back(std::nextafter(at, -inf));
+      scalars.push_back(std::nextafter(at, inf));
+      scalars.push_back(at + unit(rng) / std::max(layout.Scale, 1.0));
+    }
+    std::shuffle(scalars.begin(), scalars.end(), rng);
+    for (size_t at = 0; at < scalars.size(); at += 3)
+    {
+      double four[4];
+      float weights[4];
+      for (int k = 0; k < 4; ++k)
+      {
+        four[k] = scalars[(at + k) % scalars.size()];
+        weights[k] = k == 1 ? 0.0f : static_cast<float>(unit(rng) * 2);
+      }
+      for (int lanes = 1; lanes <= 4; ++lanes)
+      {
+        for (const float* w :
+          { static_cast<const float*>(nullptr), static_cast<const float*>(weights) })
+        {
+          double out[16];
+          if (!apc::ReplayLookupFour(layout, four, w, lanes, out))
+          {
+            GTEST_SKIP() << "this CPU does not run the AVX2 replay";
+          }
+          for (int k = 0; k < 4; ++k)
+          {
+            apc::TransferSample want = std::isfinite(four[k])
+              ? apc::TransferTable::Lookup(layout, four[k])
+              : apc::TransferTable::Lookup(layout, layout.Min);
+            if (!std::isfinite(four[k]))
+            {
+              want.Absorbance = 0.0f;
+            }
+            else if (w)
+            {
+              want.Absorbance *= k < lanes ? w[k] : 0.0f;
+            }
+            const double expected[4] = { want.Colour[0], want.Colour[1], want.Colour[2],
+              want.Absorbance };
+            for (int c = 0; c < 4; ++c)
+            {
+              ASSERT_EQ(std::memcmp(&out[4 * c + k], &expected[c], sizeof(double)), 0)
+                << "scalar " << four[k] << " lane " << k << " channel " << c << " got "
+                << out[4 * c + k] << " want " << expected[c] << " lanes " << lanes;
+            }
+            ++compared;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 10000);
 }
