@@ -242,13 +242,11 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
   if (this->B0 < kEmptyPixelAbsorbance)
   {
     this->State = PixelState::Empty;
-    this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
     return;
   }
   if (!std::isfinite(this->B0))
   {
     this->State = PixelState::Degenerate;
-    this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
     return;
   }
 
@@ -260,7 +258,6 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
     if (!std::isfinite(normalised))
     {
       this->State = PixelState::Degenerate;
-      this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
       return;
     }
     moments[k] = (1.0 - eps) * normalised + eps * settings.BiasVector[k - 1];
@@ -282,7 +279,6 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
     if (!(dj > 0.0) || !std::isfinite(dj))
     {
       this->State = PixelState::Degenerate;
-      this->Fallback = AllAtQueryDepth(this->Beta, this->B0);
       return;
     }
     d[j] = dj;
@@ -317,10 +313,13 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
   }
 }
 
+// exp(-beta b0) computed where a query falls back, not kept per pixel: pass 2 sets up a
+// pixel for every few dozen samples and falls back rarely, and a libm exp per set-up was a few
+// per cent of it.
 template <int N>
 double MomentTransmittance<N>::FallbackTransmittance() const
 {
-  return this->State == PixelState::Valid ? AllAtQueryDepth(this->Beta, this->B0) : this->Fallback;
+  return AllAtQueryDepth(this->Beta, this->B0);
 }
 
 template <int N>

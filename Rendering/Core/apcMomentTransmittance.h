@@ -196,10 +196,6 @@ private:
   PixelState State = PixelState::Valid;
   double B0 = 0.0;
   double Beta = kDefaultOverestimation;
-  // exp(-beta b0), kept for a pixel that is not valid (its every query answers it); a valid
-  // pixel computes it only where a query falls back, which is rare: pass 2 sets up a pixel
-  // for every few dozen samples, and a libm exp each was a few per cent of it.
-  double Fallback = 1.0;
   // Per-pixel precomputation, so that a query is a few multiply-adds before its roots:
   // B = L D L^T is the normalised, biased Hankel matrix. Row i of L^-1 holds the coefficients
   // (lowest degree first) of y_i(x) = (L^-1 e(x))_i: the terms of the Christoffel kernel,

@@ -303,7 +303,7 @@ bool DecimateBins(const TileBins& fine, int step, int offset, int width, int hei
       {
         const auto& r = fine.Rects[cell];
         std::array<int, 4>& to = bins.Rects[cell];
-        if (r[0] > r[2] || r[1] > r[3])
+        if (!Covers(r))
         {
           to = { 1, 1, 0, 0 };
         }
