@@ -125,8 +125,11 @@ struct Pixel4
   }
 };
 
-// alpha T(z) of 4 samples, FourMomentWeightsBody's arithmetic.
-APC_AVX2_INLINE Lanes Weights4(const Pixel4& px, __m256d raw, __m256d absorbance)
+// alpha T(z) of 4 samples, FourMomentWeightsBody's arithmetic. Where every visible lane has
+// c2 > 0 (the sample outside its support points) the nearer root and its kernel (a square root
+// and three divisions) are not formed: no such lane takes them, and the lanes that are not
+// visible are never read.
+APC_AVX2_INLINE Lanes Weights4(const Pixel4& px, __m256d raw, __m256d absorbance, __m256d visible)
 {
   const __m256d one = _mm256_set1_pd(1.0);
   const __m256d zero = _mm256_setzero_pd();
@@ -152,26 +155,30 @@ APC_AVX2_INLINE Lanes Weights4(const Pixel4& px, __m256d raw, __m256d absorbance
   const __m256d outside = _mm256_blendv_pd(
     _mm256_mul_pd(beta, wz), _mm256_fnmadd_pd(px.OneMinusBeta, wz, one), pastVertex);
   const __m256d discPositive = _mm256_cmp_pd(disc, zero, _CMP_GT_OQ);
-  const __m256d root = _mm256_sqrt_pd(_mm256_and_pd(disc, discPositive));
-  const __m256d c1Negative = _mm256_cmp_pd(c1, zero, _CMP_LT_OQ);
-  const __m256d signedRoot = _mm256_blendv_pd(root, _mm256_sub_pd(zero, root), c1Negative);
-  const __m256d q = _mm256_mul_pd(_mm256_set1_pd(-0.5), _mm256_add_pd(c1, signedRoot));
-  const __m256d r0 = _mm256_div_pd(q, c2);
-  const __m256d r1 = _mm256_div_pd(c0, q);
-  const __m256d lo = _mm256_blendv_pd(r1, r0, _mm256_cmp_pd(r0, r1, _CMP_LT_OQ));
-  const __m256d ylo1 = _mm256_fmadd_pd(l4, lo, l3);
-  const __m256d ylo2 = _mm256_fmadd_pd(_mm256_fmadd_pd(l8, lo, l7), lo, l6);
-  const __m256d kernelAtLo = _mm256_fmadd_pd(
-    _mm256_mul_pd(ylo2, ylo2), d2, _mm256_fmadd_pd(_mm256_mul_pd(ylo1, ylo1), d1, d0));
-  const __m256d between = _mm256_fmadd_pd(beta, wz, _mm256_div_pd(one, kernelAtLo));
   const __m256d c2Positive = _mm256_cmp_pd(c2, zero, _CMP_GT_OQ);
-  const __m256d absorbanceInFront = _mm256_blendv_pd(between, outside, c2Positive);
   const __m256d largest = _mm256_set1_pd(1.7976931348623157e308);
   const __m256d absMask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFF));
-  const __m256d loFinite = _mm256_and_pd(_mm256_cmp_pd(q, zero, _CMP_NEQ_UQ),
-    _mm256_cmp_pd(_mm256_and_pd(lo, absMask), largest, _CMP_LE_OQ));
+  __m256d absorbanceInFront = outside;
   __m256d usual = _mm256_and_pd(_mm256_cmp_pd(c2, zero, _CMP_NEQ_UQ), discPositive);
-  usual = _mm256_and_pd(usual, _mm256_or_pd(c2Positive, loFinite));
+  if (_mm256_movemask_pd(_mm256_andnot_pd(c2Positive, visible)) != 0)
+  {
+    const __m256d root = _mm256_sqrt_pd(_mm256_and_pd(disc, discPositive));
+    const __m256d c1Negative = _mm256_cmp_pd(c1, zero, _CMP_LT_OQ);
+    const __m256d signedRoot = _mm256_blendv_pd(root, _mm256_sub_pd(zero, root), c1Negative);
+    const __m256d q = _mm256_mul_pd(_mm256_set1_pd(-0.5), _mm256_add_pd(c1, signedRoot));
+    const __m256d r0 = _mm256_div_pd(q, c2);
+    const __m256d r1 = _mm256_div_pd(c0, q);
+    const __m256d lo = _mm256_blendv_pd(r1, r0, _mm256_cmp_pd(r0, r1, _CMP_LT_OQ));
+    const __m256d ylo1 = _mm256_fmadd_pd(l4, lo, l3);
+    const __m256d ylo2 = _mm256_fmadd_pd(_mm256_fmadd_pd(l8, lo, l7), lo, l6);
+    const __m256d kernelAtLo = _mm256_fmadd_pd(
+      _mm256_mul_pd(ylo2, ylo2), d2, _mm256_fmadd_pd(_mm256_mul_pd(ylo1, ylo1), d1, d0));
+    const __m256d between = _mm256_fmadd_pd(beta, wz, _mm256_div_pd(one, kernelAtLo));
+    absorbanceInFront = _mm256_blendv_pd(between, outside, c2Positive);
+    const __m256d loFinite = _mm256_and_pd(_mm256_cmp_pd(q, zero, _CMP_NEQ_UQ),
+      _mm256_cmp_pd(_mm256_and_pd(lo, absMask), largest, _CMP_LE_OQ));
+    usual = _mm256_and_pd(usual, _mm256_or_pd(c2Positive, loFinite));
+  }
   usual = _mm256_and_pd(
     usual, _mm256_cmp_pd(_mm256_and_pd(absorbanceInFront, absMask), largest, _CMP_LE_OQ));
   const __m256d b0 = px.B0;
@@ -303,7 +310,7 @@ APC_AVX2_INLINE Group Load(const CachedSample* samples, int lanes, __m256d hidde
 APC_AVX2_INLINE __m256d Weigh(
   const MomentTransmittance<4>& t, const Pixel4& px, const Group& g, const Looked& s)
 {
-  Lanes l = Weights4(px, g.Z, s.Absorbance);
+  Lanes l = Weights4(px, g.Z, s.Absorbance, g.Visible);
   const int fallback = _mm256_movemask_pd(_mm256_and_pd(l.Fallback, g.Visible));
   if (fallback != 0)
   {
