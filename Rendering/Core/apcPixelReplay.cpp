@@ -189,10 +189,18 @@ APC_AVX2_INLINE Lanes Weights4(const Pixel4& px, __m256d raw, __m256d absorbance
     _mm256_andnot_pd(usual, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))) };
 }
 
-// TransferTable::Lookup of 4 scalars: colours (r, g, b) and absorbances, widened to double.
+// TransferTable::Lookup of 4 scalars: the absorbances widened to double, the colours kept as
+// floats (r and g in one vector, b) until they are summed, so that they hold two registers
+// instead of three while the weights are formed.
 struct Looked
 {
-  __m256d R, G, B, Absorbance;
+  __m256 RG;
+  __m128 B;
+  __m256d Absorbance;
+
+  APC_AVX2_INLINE __m256d R() const { return _mm256_cvtps_pd(_mm256_castps256_ps128(this->RG)); }
+  APC_AVX2_INLINE __m256d G() const { return _mm256_cvtps_pd(_mm256_extractf128_ps(this->RG, 1)); }
+  APC_AVX2_INLINE __m256d Blue() const { return _mm256_cvtps_pd(this->B); }
 };
 
 APC_AVX2_INLINE __m256 EntryAt(const char* pairs, uint32_t offset)
@@ -247,18 +255,16 @@ APC_AVX2_INLINE Looked Lookup4(
   const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
   const __m256 rg = _mm256_permutevar8x32_ps(_mm256_unpacklo_ps(e01, e23), order);
   const __m256 ba = _mm256_permutevar8x32_ps(_mm256_unpackhi_ps(e01, e23), order);
-  __m128 e[4] = { _mm256_castps256_ps128(rg), _mm256_extractf128_ps(rg, 1),
-    _mm256_castps256_ps128(ba), _mm256_extractf128_ps(ba, 1) };
+  __m128 absorbance = _mm256_extractf128_ps(ba, 1);
   if (Weighted)
   {
     const __m128 w = lanes >= 4
       ? _mm_loadu_ps(weights)
       : _mm_maskload_ps(
           weights, _mm_cmpgt_epi32(_mm_set1_epi32(lanes), _mm_setr_epi32(0, 1, 2, 3)));
-    e[3] = _mm_mul_ps(e[3], w);
+    absorbance = _mm_mul_ps(absorbance, w);
   }
-  return { _mm256_cvtps_pd(e[0]), _mm256_cvtps_pd(e[1]), _mm256_cvtps_pd(e[2]),
-    _mm256_and_pd(_mm256_cvtps_pd(e[3]), finite) };
+  return { rg, _mm256_castps256_ps128(ba), _mm256_and_pd(_mm256_cvtps_pd(absorbance), finite) };
 }
 
 APC_AVX2_INLINE double Total(__m256d v)
@@ -304,6 +310,19 @@ APC_AVX2_INLINE Group Load(const CachedSample* samples, int lanes, __m256d hidde
   return g;
 }
 
+// Load of 4 records, none past the run.
+APC_AVX2_INLINE Group LoadFour(const CachedSample* samples, __m256d hiddenFrom)
+{
+  const __m256 raw = _mm256_loadu_ps(reinterpret_cast<const float*>(samples));
+  const __m256 split = _mm256_permutevar8x32_ps(raw, _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
+  Group g;
+  g.Z = _mm256_cvtps_pd(_mm256_castps256_ps128(split));
+  g.Scalar = _mm256_cvtps_pd(_mm256_extractf128_ps(split, 1));
+  g.Visible = _mm256_cmp_pd(g.Z, hiddenFrom, _CMP_NGE_UQ);
+  g.Hidden = 4 - __builtin_popcount(_mm256_movemask_pd(g.Visible));
+  return g;
+}
+
 // The group's weights alpha T(z), 0 where a lane is hidden, past the run or (as
 // ColourSums::Add skips them) NaN or not positive; what the vector arithmetic cannot answer
 // comes from the pixel's query.
@@ -340,9 +359,9 @@ struct Sums4
 
   APC_AVX2_INLINE void Add(__m256d weight, const Looked& s)
   {
-    this->R = _mm256_fmadd_pd(weight, s.R, this->R);
-    this->G = _mm256_fmadd_pd(weight, s.G, this->G);
-    this->B = _mm256_fmadd_pd(weight, s.B, this->B);
+    this->R = _mm256_fmadd_pd(weight, s.R(), this->R);
+    this->G = _mm256_fmadd_pd(weight, s.G(), this->G);
+    this->B = _mm256_fmadd_pd(weight, s.Blue(), this->B);
     this->W = _mm256_add_pd(this->W, weight);
   }
 };
@@ -362,31 +381,51 @@ APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& 
   Sums4 a{ zero, zero, zero, zero };
   Sums4 b = a;
   int skipped = 0;
-  for (int at = 0; at < n; at += 8)
+  int at = 0;
+  // Whole steps: no masks. Each group looked up, weighed and summed before the next is looked
+  // up, so that one group's temporaries are live at a time (the processor still overlaps the
+  // two chains).
+  for (; n - at > 8; at += 8)
   {
-    const Group first = Load(samples + at, n - at, hidden);
-    skipped += first.Hidden;
-    if (n - at <= 4)
-    {
-      if (_mm256_movemask_pd(first.Visible) != 0)
-      {
-        const Looked s =
-          Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, n - at);
-        a.Add(Weigh(t, pixel, first, s), s);
-      }
-      break;
-    }
-    const Group second = Load(samples + at + 4, n - at - 4, hidden);
-    skipped += second.Hidden;
+    const Group first = LoadFour(samples + at, hidden);
+    const Group second = LoadFour(samples + at + 4, hidden);
+    skipped += first.Hidden + second.Hidden;
     if ((_mm256_movemask_pd(first.Visible) | _mm256_movemask_pd(second.Visible)) == 0)
     {
       continue;
     }
     const Looked s1 = Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, 4);
-    const Looked s2 =
-      Lookup4<Weighted>(table, second.Scalar, Weighted ? weights + at + 4 : nullptr, n - at - 4);
     a.Add(Weigh(t, pixel, first, s1), s1);
+    const Looked s2 =
+      Lookup4<Weighted>(table, second.Scalar, Weighted ? weights + at + 4 : nullptr, 4);
     b.Add(Weigh(t, pixel, second, s2), s2);
+  }
+  // The last step's 1-8 samples: one group (masked) up to 4, else a whole one and a masked one.
+  const int rest = n - at;
+  if (rest > 4)
+  {
+    const Group first = LoadFour(samples + at, hidden);
+    const Group second = Load(samples + at + 4, rest - 4, hidden);
+    skipped += first.Hidden + second.Hidden;
+    if ((_mm256_movemask_pd(first.Visible) | _mm256_movemask_pd(second.Visible)) != 0)
+    {
+      const Looked s1 =
+        Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, 4);
+      a.Add(Weigh(t, pixel, first, s1), s1);
+      const Looked s2 =
+        Lookup4<Weighted>(table, second.Scalar, Weighted ? weights + at + 4 : nullptr, rest - 4);
+      b.Add(Weigh(t, pixel, second, s2), s2);
+    }
+  }
+  else if (rest > 0)
+  {
+    const Group first = Load(samples + at, rest, hidden);
+    skipped += first.Hidden;
+    if (_mm256_movemask_pd(first.Visible) != 0)
+    {
+      const Looked s = Lookup4<Weighted>(table, first.Scalar, Weighted ? weights + at : nullptr, rest);
+      a.Add(Weigh(t, pixel, first, s), s);
+    }
   }
   sums[0] += Total(_mm256_add_pd(a.R, b.R));
   sums[1] += Total(_mm256_add_pd(a.G, b.G));
@@ -400,9 +439,9 @@ APC_AVX2 void LookupFour(const TransferTable::Layout& table, const double scalar
   const float* weights, int lanes, double out[16])
 {
   const Looked s = Lookup4<Weighted>(table, _mm256_loadu_pd(scalars), weights, lanes);
-  _mm256_storeu_pd(out, s.R);
-  _mm256_storeu_pd(out + 4, s.G);
-  _mm256_storeu_pd(out + 8, s.B);
+  _mm256_storeu_pd(out, s.R());
+  _mm256_storeu_pd(out + 4, s.G());
+  _mm256_storeu_pd(out + 8, s.Blue());
   _mm256_storeu_pd(out + 12, s.Absorbance);
 }
 
