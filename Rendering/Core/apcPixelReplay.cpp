@@ -20,7 +20,8 @@ namespace
 {
 
 // The arithmetic of apcMomentTransmittance.cpp's batched weights (ExpNonPositive,
-// OpacityOfAbsorbance, FourMomentWeightsBody), written for 4 lanes.
+// OpacityOfAbsorbance, FourMomentWeightsBody), written for 4 lanes: for one group (__m256d) or
+// two (Two), each lane rounding the same either way.
 
 // Two groups of 4 lanes, every operation done on both, one after the other: the two groups'
 // chains of dependent operations (divisions, a square root, two polynomials) interleaved in
@@ -494,10 +495,11 @@ struct Sums4
   }
 };
 
-// 8 samples a step, as two independent groups of 4: a group's arithmetic is one long chain
-// of dependent operations (divisions, a square root, two polynomials), and two of them in
-// flight keep the units busy where one leaves them waiting. Weighted: with end weights (a
-// loop of its own: a test of weights per step cost the unweighted replay 3 %).
+// 8 samples a step, as two independent groups of 4 weighed together (Two): a group's
+// arithmetic is one long chain of dependent operations (divisions, a square root, two
+// polynomials), and two of them in flight keep the units busy where one leaves them waiting.
+// Weighted: with end weights (a loop of its own: a test of weights per step cost the
+// unweighted replay 3 %). Shortcut false: the tests' reference (ReplayKernel::Avx2Full).
 template <bool Weighted, bool Shortcut = true>
 APC_AVX2 int ReplayAvx2(const MomentTransmittance<4>& t, const FourMomentPixel& px,
   double hiddenFrom, const TransferTable::Layout& table, const CachedSample* samples, int n,
