@@ -24,7 +24,8 @@ enum class ReplayKernel
 {
   Best,
   Avx2,
-  Avx512
+  Avx512,
+  Avx2Full // the AVX2 kernel without its shortcuts (every group's full arithmetic), for tests
 };
 
 // True if this build has the kernel and the CPU runs it (Best: any vector kernel).

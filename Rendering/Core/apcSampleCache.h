@@ -656,6 +656,11 @@ struct SampleCache
   }
 };
 
+// Expand's samples and end weights (if kept) without the lattice bits, eight at a time
+// (apcSampleCacheExpand.cpp); false, and nothing done, where the CPU lacks AVX2.
+bool ExpandSamplesAvx2(
+  const CompactSpan& compact, const float* table, CachedSample* samples, float* weights);
+
 // A compact tile expanded into the full form (SampleCache::Expand): the samples, lattice bits
 // and weights in this thread's scratch, which stays in the processor's cache from tile to tile.
 struct ExpandedTile
@@ -732,7 +737,7 @@ inline const CachedTile& Expand(const CachedTile& tile, const std::vector<float>
   {
     expand(std::true_type());
   }
-  else
+  else if (!ExpandSamplesAvx2(compact, z, samples, weights))
   {
     expand(std::false_type());
   }

@@ -233,7 +233,7 @@ TEST(SampleCache, CompactTilesExpandToTheFullForm)
   std::vector<int> escaped;
   uint32_t random = 12345;
   auto next = [&random]() { return random = random * 1664525u + 1013904223u; };
-  for (int i = 0; i < 3000; ++i)
+  for (int i = 0; i < 3005; ++i) // not a whole number of the expansion's 8-sample steps
   {
     const uint16_t pixel = static_cast<uint16_t>(next() % kPixels);
     int64_t k = base + static_cast<int64_t>(next() % 4000) + (i % 2 ? 0 : 990);
@@ -311,6 +311,24 @@ TEST(SampleCache, CompactTilesExpandToTheFullForm)
         if (withWeights)
         {
           EXPECT_EQ(std::memcmp(&e.Weights[i], &f.Weights[i], sizeof(float)), 0) << i;
+        }
+      }
+      // Without the lattice bits (pass 2's colour: eight samples a step where the CPU has
+      // AVX2), the same samples and weights, none of the bits.
+      apc::ExpandedTile bare;
+      const apc::CachedTile& b =
+        apc::Expand(c, compact.DepthTable, compact.DepthBase, bare, /*withOrder=*/false);
+      ASSERT_TRUE(std::equal(f.Starts.begin(), f.Starts.end(), b.Starts.begin(), b.Starts.end()));
+      ASSERT_EQ(b.Samples.size(), f.Samples.size());
+      EXPECT_EQ(b.K16.size(), size_t(0));
+      ASSERT_EQ(b.Weights.size(), f.Weights.size());
+      for (size_t i = 0; i < f.Samples.size(); ++i)
+      {
+        EXPECT_EQ(std::memcmp(&b.Samples[i], &f.Samples[i], sizeof(apc::CachedSample)), 0)
+          << i << " without lattice bits" << (withWeights ? ", weights" : "");
+        if (withWeights)
+        {
+          EXPECT_EQ(std::memcmp(&b.Weights[i], &f.Weights[i], sizeof(float)), 0) << i;
         }
       }
       // A full-form tile expands to itself.
