@@ -1,3 +1,7 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The compact cache's expansion for pass 2's colour, eight samples a step on AVX2 (the scalar
+// form in apcSampleCache.h is the reference and serves other processors): its own file so that
+// only this function is compiled for AVX2, and called only where the CPU has it.
 #include "apcSampleCache.h"
 
 #if defined(__GNUC__) && defined(__x86_64__)
