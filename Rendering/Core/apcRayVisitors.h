@@ -334,32 +334,10 @@ struct Moments : NoSegments
   // LaneRunEnd.
   static constexpr bool TakesLaneMoments = N == 4;
   const double* PixelSums(int pixel) const { return this->Sums.data() + pixel * (N + 1); }
-  // Room for the records of lanes lanes of one call of taken steps (weighted: and their
-  // weights), taken once before the call's LaneRunEnd, each of which writes taken records
-  // past the Used ones and keeps at most taken of them: asked per lane, the buffer's size
-  // (a division by the record's size) was computed again for every lane. Samples recorded
-  // one at a time between them (Sample) take their own room; the buffer only grows.
-  template <bool Weighted = false>
-  [[gnu::always_inline]] void LaneRoom(int lanes, int taken)
-  {
-    if (this->Recording)
-    {
-      RecordBuffer& buffer = *this->Buffer;
-      const size_t n = static_cast<size_t>(lanes) * static_cast<size_t>(taken);
-      buffer.Room(n);
-      if constexpr (Weighted)
-      {
-        // The weights' room follows the records' (RunBegin's); past the kept records the
-        // weights stay 1 (an invisible step's record weight is 1).
-        buffer.WeighUpTo(buffer.Recorded.size());
-        buffer.WeighedEnd = std::max(buffer.WeighedEnd, buffer.Used + n);
-      }
-    }
-  }
   // Keeps lane's run of m (steps from lattice index k, pixel's; the call took taken steps): its
   // sums, and the records of its visible steps in order, as RunBegin, RunAdd per step and
   // RunEnd would. Weighted (walk::LaneWeightedMomentsAvx2's m): with each record's weight, as
-  // RunBegin(weighted) and RunAddWeighted per step would. The room is the call's LaneRoom.
+  // RunBegin(weighted) and RunAddWeighted per step would.
   template <bool Weighted = false>
   [[gnu::always_inline]] void LaneRunEnd(int pixel, const walk::LaneMoments& m, int lane, int64_t k,
     const walk::LaneSteps& steps, int taken)
@@ -381,11 +359,16 @@ struct Moments : NoSegments
       // Every step of the call written, the next record's place advanced only past a visible
       // one (as RunAdd does): the call's step count is the same in its four lanes, where a
       // loop over each lane's visible steps ended at a count the processor could not predict.
-      RecordedSample* record = this->Buffer->Recorded.data() + this->Buffer->Used;
+      RecordedSample* record = this->Buffer->Room(static_cast<size_t>(taken));
       float* weight = nullptr;
       if constexpr (Weighted)
       {
-        weight = this->Buffer->Weights.data() + this->Buffer->Used;
+        // The weights' room follows the records' (RunBegin's); past the kept records the
+        // weights stay 1 (an invisible step's record weight is 1).
+        RecordBuffer& buffer = *this->Buffer;
+        buffer.WeighUpTo(buffer.Recorded.size());
+        buffer.WeighedEnd = std::max(buffer.WeighedEnd, buffer.Used + static_cast<size_t>(taken));
+        weight = buffer.Weights.data() + buffer.Used;
       }
       uint32_t kept = 0;
       for (int s = 0; s < taken; ++s)

@@ -847,10 +847,6 @@ struct VolumeRayMarcher::Walker
               }
             }
           }
-          if constexpr (acrossLanes)
-          {
-            visitor.template LaneRoom<Weighted>(g.N, taken);
-          }
           bool live = false; // some lane's chunk ended at kLaneSteps: it goes on
           for (int i = 0; i < g.N; ++i)
           {
