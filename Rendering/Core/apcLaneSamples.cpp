@@ -62,8 +62,8 @@ namespace
 
 // The cell's own part of SetUpLaneCell.
 __attribute__((target("avx2"), always_inline)) inline void SetUpCellPart(
-  const double (&inverse)[3][3], const double* p0, const double* sc, const double* g,
-  bool pyramid, bool twisted, double lo, double hi, LaneCellVectors& vectors)
+  const double (&inverse)[3][3], const double* p0, const double* sc, const double* g, bool pyramid,
+  bool twisted, double lo, double hi, LaneCellVectors& vectors)
 {
   for (int i = 0; i < 3; ++i)
   {
@@ -128,8 +128,8 @@ __attribute__((target("avx2"))) void SetUpLaneCellOf(const CellInterpolator& int
 
 __attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors)
 {
-  SetUpCellPart(cell.Inverse, cell.P0, cell.SC, cell.G, cell.Pyramid, cell.Twisted, cell.Lo,
-    cell.Hi, vectors);
+  SetUpCellPart(
+    cell.Inverse, cell.P0, cell.SC, cell.G, cell.Pyramid, cell.Twisted, cell.Lo, cell.Hi, vectors);
   SetUpLaneTile(cell, vectors);
 }
 
