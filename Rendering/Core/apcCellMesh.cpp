@@ -706,7 +706,7 @@ CellMesh::CellFate CellMesh::DeriveCell(int64_t cell, Summary& summary)
     const double side = static_cast<double>(n[0]) * centroid[0] +
       static_cast<double>(n[1]) * centroid[1] + static_cast<double>(n[2]) * centroid[2] - offset;
     const float sign = side > 0 ? -1.0f : 1.0f;
-    planes[count++] = { { sign * n[0], sign * n[1], sign * n[2] }, sign * offset };
+    planes[count++] = FacePlane::Make({ sign * n[0], sign * n[1], sign * n[2] }, sign * offset);
     this->PlaneFaces[cell] |= static_cast<uint8_t>(1u << f);
   }
   // A cell needs at least four faces with area to enclose anything; with fewer (collapsed

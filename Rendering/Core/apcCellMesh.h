@@ -26,6 +26,12 @@
 namespace apc
 {
 
+// True for exactly one of n and -n (n non-zero): the first non-zero component is positive.
+inline bool InPositiveHalf(const std::array<float, 3>& n)
+{
+  return n[0] != 0 ? n[0] > 0 : (n[1] != 0 ? n[1] > 0 : n[2] > 0);
+}
+
 struct FacePlane
 {
   // Inside the cell: Normal . x - Offset <= 0 (Normal points out, unit length to float
@@ -34,7 +40,18 @@ struct FacePlane
   // 1e7), which moves faces far from the origin by more than a cell's width, while the
   // double one keeps the plane within rounding of the face wherever the mesh sits.
   std::array<float, 3> Normal;
+  // 1 where the normal lies in the positive half (InPositiveHalf), else 0: of the two cells
+  // sharing the face, the one that keeps a ray running inside the plane
+  // (walk::CellPlanes::Clip). Stored with the plane (in what was its padding) because the
+  // marcher reads it once per plane and (cell, tile): found there, its branch on the
+  // normal's sign was a coin toss per plane.
+  float KeepsParallelRays;
   double Offset;
+
+  static FacePlane Make(const std::array<float, 3>& normal, double offset)
+  {
+    return { normal, InPositiveHalf(normal) ? 1.0f : 0.0f, offset };
+  }
 };
 
 class CellMesh

@@ -57,29 +57,34 @@ __attribute__((target("avx2"))) int LaneSamplesAvx2(
                       : kernel::Lanes<Form::ScalarAt, Ops4>(cell, rays, steps);
 }
 
-__attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors)
+namespace
+{
+
+// The cell's own part of SetUpLaneCell.
+__attribute__((target("avx2"), always_inline)) inline void SetUpCellPart(
+  const double (&inverse)[3][3], const double* p0, const double* sc, const double* g, bool pyramid,
+  bool twisted, double lo, double hi, LaneCellVectors& vectors)
 {
   for (int i = 0; i < 3; ++i)
   {
     for (int j = 0; j < 3; ++j)
     {
-      Broadcast(cell.Inverse[i][j], vectors.Inverse[i][j]);
+      Broadcast(inverse[i][j], vectors.Inverse[i][j]);
     }
-    Broadcast(cell.P0[i], vectors.P0[i]);
+    Broadcast(p0[i], vectors.P0[i]);
   }
   // Twisted or not, only the coefficients the cell's form reads.
-  const int coefficients = cell.Pyramid || cell.Twisted ? 5 : 8;
+  const int coefficients = pyramid || twisted ? 5 : 8;
   for (int i = 0; i < coefficients; ++i)
   {
-    Broadcast(cell.SC[i], vectors.SC[i]);
+    Broadcast(sc[i], vectors.SC[i]);
   }
-  vectors.Twisted = cell.Twisted;
-  vectors.Pyramid = cell.Pyramid;
+  vectors.Twisted = twisted;
+  vectors.Pyramid = pyramid;
   vectors.Other = false;
-  if (cell.Twisted)
+  if (twisted)
   {
     // CellInterpolator::PyramidCoordinates' constants.
-    const double* g = cell.G;
     const double A = g[2] - g[0] * g[1];
     for (int i = 0; i < 3; ++i)
     {
@@ -89,8 +94,14 @@ __attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCel
     Broadcast(2.0 * A, vectors.TwoA);
     vectors.Other = A != 0;
   }
-  Broadcast(cell.Lo, vectors.Lo);
-  Broadcast(cell.Hi, vectors.Hi);
+  Broadcast(lo, vectors.Lo);
+  Broadcast(hi, vectors.Hi);
+}
+
+} // namespace
+
+__attribute__((target("avx2"))) void SetUpLaneTile(const LaneCell& cell, LaneCellVectors& vectors)
+{
   Broadcast(cell.Spacing, vectors.Spacing);
   Broadcast(cell.Table.Min, vectors.Min);
   Broadcast(cell.Table.Scale, vectors.Scale);
@@ -105,6 +116,21 @@ __attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCel
     Broadcast(width, vectors.BinWidth);
     Broadcast(1.0 / width, vectors.BinInverse);
   }
+}
+
+__attribute__((target("avx2"))) void SetUpLaneCellOf(const CellInterpolator& interpolator,
+  bool twisted, const double p0[3], double lo, double hi, LaneCellVectors& vectors)
+{
+  SetUpCellPart(interpolator.GetLinearInverse(), p0, interpolator.GetScalarCoefficients(),
+    interpolator.GetPyramidG(), interpolator.Shape() == CellShape::Pyramid, twisted, lo, hi,
+    vectors);
+}
+
+__attribute__((target("avx2"))) void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors)
+{
+  SetUpCellPart(
+    cell.Inverse, cell.P0, cell.SC, cell.G, cell.Pyramid, cell.Twisted, cell.Lo, cell.Hi, vectors);
+  SetUpLaneTile(cell, vectors);
 }
 
 } // namespace walk

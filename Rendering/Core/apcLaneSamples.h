@@ -12,6 +12,8 @@
 
 namespace apc
 {
+class CellInterpolator;
+
 namespace walk
 {
 
@@ -96,6 +98,15 @@ struct LaneCellVectors
 
 // Forms vectors from cell. Only where HasAvx2() (apcRayClip.h).
 void SetUpLaneCell(const LaneCell& cell, LaneCellVectors& vectors);
+
+// SetUpLaneCell in two parts, for the walker: what every cell of a tile shares (cell.Table,
+// Spacing and BinEnds), formed once per tile, and each cell's own part, formed from the
+// interpolator it was set up with (its linear inverse, scalar coefficients, pyramid form and,
+// twisted, G), the shared origin's p0 and its scalar range, with no LaneCell copied between.
+// Together the same vectors as SetUpLaneCell's. Only where HasAvx2().
+void SetUpLaneTile(const LaneCell& cell, LaneCellVectors& vectors);
+void SetUpLaneCellOf(const CellInterpolator& interpolator, bool twisted, const double p0[3],
+  double lo, double hi, LaneCellVectors& vectors);
 
 // Fills steps 0 .. n - 1 for the four lanes of the cell set up in vectors and returns n:
 // kLaneSteps, or fewer where no lane has a sample at step n (t >= Tout in every lane). Each

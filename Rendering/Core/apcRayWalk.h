@@ -33,12 +33,6 @@ struct RaySetup
   double Offset; // the ray's lattice offset, in units of the spacing: 0, or apcLatticeJitter
 };
 
-// True for exactly one of n and -n (n non-zero): the first non-zero component is positive.
-inline bool InPositiveHalf(const std::array<float, 3>& n)
-{
-  return n[0] != 0 ? n[0] > 0 : (n[1] != 0 ? n[1] > 0 : n[2] > 0);
-}
-
 // A cell's face planes, set up once per cell and tile. Every ray of a perspective camera
 // starts at the eye, so each plane's distance from it is computed here once, not per ray
 // (with the same expression, so the numbers are the ones a per-ray evaluation gives).
@@ -54,7 +48,8 @@ struct CellPlanes
   double Nz[kMaxPlanes];
   double Offset[kMaxPlanes];
   double Num[kMaxPlanes];
-  // 1 where a ray running inside the plane is kept (see Clip), else 0.
+  // 1 where a ray running inside the plane is kept (see Clip), else 0: the face plane's
+  // FacePlane::KeepsParallelRays.
   double KeepsParallelRays[kMaxPlanes];
   // Bit p: plane p lies on the mesh's boundary (CellMesh::GetBoundaryPlanes); set by the
   // caller after Set where the end weights ask for it (ClipEnds), else 0.
@@ -72,7 +67,7 @@ struct CellPlanes
         this->Ny[p] = planes[p].Normal[1];
         this->Nz[p] = planes[p].Normal[2];
         this->Offset[p] = planes[p].Offset;
-        this->KeepsParallelRays[p] = InPositiveHalf(planes[p].Normal) ? 1 : 0;
+        this->KeepsParallelRays[p] = planes[p].KeepsParallelRays;
       }
       else
       {

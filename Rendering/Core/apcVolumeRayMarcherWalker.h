@@ -157,7 +157,8 @@ struct VolumeRayMarcher::Walker
     // With end weights where the lanes are on: each kept pair's weights, found by the
     // clipping (walk::ClipRaysWeighted).
     walk::ClippedWeights Ends;
-    // With the lanes: the cell's constants as they read them.
+    // With the lanes: the cell's constants as they read them (the part the tile's cells
+    // share set once per tile by Tile, the cell's own by LaneSamples).
     walk::LaneCellVectors Vectors;
   };
 
@@ -706,41 +707,13 @@ struct VolumeRayMarcher::Walker
     int hits, Visitor& visitor, CellState& state, RayProgress& progress) const
   {
     const walk::ClippedRays& c = state.Clipped;
-    walk::LaneCell cell;
-    cell.Pyramid = state.Interpolator.Shape() == CellShape::Pyramid;
-    // Cell takes a pyramid's linear inverse where it is close enough, else its closed form.
-    cell.Twisted = !state.Linear;
-    if (cell.Twisted)
-    {
-      const auto& g = state.Interpolator.GetPyramidG();
-      cell.G[0] = g[0];
-      cell.G[1] = g[1];
-      cell.G[2] = g[2];
-    }
-    const auto& inverse = state.Interpolator.GetLinearInverse();
-    for (int i = 0; i < 3; ++i)
-    {
-      for (int j = 0; j < 3; ++j)
-      {
-        cell.Inverse[i][j] = inverse[i][j];
-      }
-      cell.P0[i] = state.LinearOrigin[i];
-    }
-    const auto& coefficients = state.Interpolator.GetScalarCoefficients();
-    for (int i = 0; i < 8; ++i)
-    {
-      cell.SC[i] = coefficients[i];
-    }
-    cell.Lo = state.Lo;
-    cell.Hi = state.Hi;
-    cell.Table = this->Table.GetLayout();
-    cell.Spacing = this->Grid.Spacing;
     const bool own = Visitor::StopsWhenOpaque && progress.Bins;
-    static_assert(walk::kBinEnds == RayProgress::kBins - 1, "the lanes compare every bin end");
-    cell.BinEnds = own ? progress.BinEnds : nullptr;
-    // Broadcast once here for all the cell's calls.
+    // The tile's part of the lanes' constants is Tile's (SetUpLaneTile); the cell's own part
+    // is broadcast here once for all the cell's calls, straight from its interpolator (a
+    // twisted pyramid: one whose linear inverse is not close enough takes its closed form).
     walk::LaneCellVectors& vectors = state.Vectors;
-    walk::SetUpLaneCell(cell, vectors);
+    walk::SetUpLaneCellOf(
+      state.Interpolator, !state.Linear, state.LinearOrigin, state.Lo, state.Hi, vectors);
     // One group of four lanes: its rays, its steps and each lane's own state. With AVX-512 the
     // kernel takes two groups at once (LaneSamplesAvx512: each group's steps bit for bit the
     // four-wide kernel's), and each group's hand-over is the four-wide one.
@@ -750,18 +723,20 @@ struct VolumeRayMarcher::Walker
       walk::LaneSteps Steps;
       // Weighted: as LaneWeightedMomentsAvx2 reads them (GatherWeightedLaneRays).
       walk::LaneWeights Weights;
-      int N = 0; // lanes used
-      int Local[4] = { 0, 0, 0, 0 };
-      int64_t K[4] = { 0, 0, 0, 0 }; // Weighted: each lane's next index (plain: Lanes.K)
+      // Set where a group is filled, each field for all four lanes, and read only after
+      // (initialised here, they were stored again on every call).
+      int N; // lanes used
+      int Local[4];
+      int64_t K[4]; // Weighted: each lane's next index (plain: Lanes.K)
       // Weighted: each ray's pair's first and last index and their float weights (as
       // EndWeights::Of gives them, then cast as the scalar loop does).
-      int64_t FirstK[4] = { 0, 0, 0, 0 };
-      int64_t LastK[4] = { 0, 0, 0, 0 };
-      float FirstWeight[4] = { 1, 1, 1, 1 };
-      float LastWeight[4] = { 1, 1, 1, 1 };
-      bool Live = false;          // some lane has steps left (its Tout is not -inf)
-      walk::LaneMoments Across;   // its four pixels' hand-over (LaneMomentsAvx2's)
-      const double* Sums[4] = {}; // with acrossLanes: its pixels' sums (Moments::PixelSums)
+      int64_t FirstK[4];
+      int64_t LastK[4];
+      float FirstWeight[4];
+      float LastWeight[4];
+      bool Live;                // some lane has steps left (its Tout is not -inf)
+      walk::LaneMoments Across; // its four pixels' hand-over (LaneMomentsAvx2's)
+      const double* Sums[4];    // with acrossLanes: its pixels' sums (Moments::PixelSums)
     };
     Group groups[2];
     // Four pixels' sums at once: each step's warp, moments and quanta across the lanes
@@ -1184,6 +1159,16 @@ struct VolumeRayMarcher::Walker
       [](const RaySetup& a, const RaySetup& b) {
         return a.End < b.End;
       })->End;
+    if (this->Lanes)
+    {
+      // What the lanes' constants share over the tile's cells (LaneSamples sets the rest).
+      walk::LaneCell shared;
+      shared.Table = this->Table.GetLayout();
+      shared.Spacing = this->Grid.Spacing;
+      static_assert(walk::kBinEnds == RayProgress::kBins - 1, "the lanes compare every bin end");
+      shared.BinEnds = Visitor::StopsWhenOpaque && progress.Bins ? progress.BinEnds : nullptr;
+      walk::SetUpLaneTile(shared, state.Vectors);
+    }
     visitor.BeginTile(inBand);
     const int64_t end = this->Bins.Start[tile.Index + 1];
     for (int64_t b = this->Bins.Start[tile.Index]; b < end; ++b)

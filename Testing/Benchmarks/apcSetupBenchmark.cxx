@@ -102,7 +102,9 @@ unsigned long long Checksum(const apc::CellMesh& mesh)
     Mix(hash, mesh.GetCellPoints(c), apc::NumberOfCorners(shape) * sizeof(int64_t));
     int count = 0;
     const apc::FacePlane* planes = mesh.GetPlanes(c, count);
-    for (int f = 0; f < count; ++f) // field by field: a plane's padding holds anything
+    // The normal and offset (KeepsParallelRays follows from the normal: left out, so that the
+    // checksum stays comparable with builds before it was stored).
+    for (int f = 0; f < count; ++f)
     {
       Mix(hash, planes[f].Normal.data(), 3 * sizeof(float));
       Mix(hash, &planes[f].Offset, sizeof(double));

@@ -41,7 +41,7 @@ void ReferenceClip(
     {
       tout = std::min(tout, num / denom);
     }
-    else if (num < 0 || (num == 0 && !apc::walk::InPositiveHalf(planes[p].Normal)))
+    else if (num < 0 || (num == 0 && !apc::InPositiveHalf(planes[p].Normal)))
     {
       tout = -std::numeric_limits<double>::infinity();
     }
@@ -82,6 +82,8 @@ TEST(CellPlanes, ClipMatchesPerPlaneDivision)
         planes[p].Normal[d] = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
       }
       planes[p].Offset = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
+      // The mesh's conversion stores which copy of a plane keeps a parallel ray.
+      planes[p] = FacePlane::Make(planes[p].Normal, planes[p].Offset);
       parallel += planes[p].Normal[0] * ray.D[0] + planes[p].Normal[1] * ray.D[1] +
           planes[p].Normal[2] * ray.D[2] ==
         0;
@@ -176,6 +178,8 @@ void CheckClipRays(ClipRaysForm form)
         planes[p].Normal[d] = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
       }
       planes[p].Offset = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
+      // The mesh's conversion stores which copy of a plane keeps a parallel ray.
+      planes[p] = FacePlane::Make(planes[p].Normal, planes[p].Offset);
     }
     CellPlanes cell;
     cell.Set(planes, count, rays[0], shared);
@@ -347,6 +351,8 @@ TEST(CellPlanes, BoundaryEndsFourAtATimeMatchRayByRay)
         planes[p].Normal[d] = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
       }
       planes[p].Offset = axis ? static_cast<float>(small(rng)) : static_cast<float>(u(rng));
+      // The mesh's conversion stores which copy of a plane keeps a parallel ray.
+      planes[p] = FacePlane::Make(planes[p].Normal, planes[p].Offset);
     }
     CellPlanes cell;
     cell.Set(planes, count, rays[0], shared);
@@ -412,10 +418,8 @@ TEST(CellPlanes, ClipRaysFindTheFirstLatticeIndexOnALatticePoint)
     guessLow += guess < static_cast<double>(first) ? 1 : 0;
     // Enter through z = tin (normal -z), leave far behind it.
     FacePlane planes[2];
-    planes[0].Normal = { 0.0f, 0.0f, -1.0f };
-    planes[0].Offset = -tin;
-    planes[1].Normal = { 0.0f, 0.0f, 1.0f };
-    planes[1].Offset = 4000.0;
+    planes[0] = FacePlane::Make({ 0.0f, 0.0f, -1.0f }, -tin);
+    planes[1] = FacePlane::Make({ 0.0f, 0.0f, 1.0f }, 4000.0);
     std::vector<RaySetup> rays(4, RaySetup{ { 0, 0, 0 }, { 0, 0, 1 }, 5000.0, offset });
     CellPlanes cell;
     cell.Set(planes, 2, rays[0], trial % 8 < 4);

@@ -77,6 +77,8 @@ void CheckForm(WeightedForm form, Counts& counts)
         planes[p].Normal[d] = static_cast<float>(u(rng));
       }
       planes[p].Offset = static_cast<float>(u(rng));
+      // The mesh's conversion stores which copy of a plane keeps a parallel ray.
+      planes[p] = FacePlane::Make(planes[p].Normal, planes[p].Offset);
     }
     CellPlanes cell;
     cell.Set(planes, count, rays[0], shared);

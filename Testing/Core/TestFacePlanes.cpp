@@ -105,6 +105,11 @@ TEST(FacePlanes, SharedFaceIsBitIdenticalWhateverTheNumbering)
           ASSERT_EQ(p->Normal[d], -q->Normal[d]) << "trial " << trial;
         }
         ASSERT_EQ(p->Offset, -q->Offset) << "trial " << trial;
+        // Exactly one of the two cells keeps a ray running inside the face, as its normal
+        // says (the flag is stored at conversion and read by the clip).
+        ASSERT_EQ(p->KeepsParallelRays, apc::InPositiveHalf(p->Normal) ? 1.0f : 0.0f);
+        ASSERT_EQ(q->KeepsParallelRays, apc::InPositiveHalf(q->Normal) ? 1.0f : 0.0f);
+        ASSERT_EQ(p->KeepsParallelRays + q->KeepsParallelRays, 1.0f) << "trial " << trial;
         ++compared;
       }
     }
