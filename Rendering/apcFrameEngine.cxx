@@ -186,13 +186,16 @@ bool FrameEngine::UpdateInput(vtkUnstructuredGridBase* input, vtkObject* reporte
   const bool modified = input == this->MeshData && input->GetMTime() > this->MeshDataTime;
   this->MeshData = input;
   this->MeshDataTime = input->GetMTime();
-  if (this->MeshValid && this->MeshKey == key.str() && !modified)
+  // A mesh that borrows its input's cells (apcGridCells.h) is made again once they moved or
+  // changed, whatever the keys say.
+  const bool cellsIntact = this->Mesh.CellsIntact();
+  if (this->MeshValid && this->MeshKey == key.str() && !modified && cellsIntact)
   {
     return true;
   }
   const unsigned long long geometry = GeometryKey(input);
   std::string error;
-  if (this->MeshValid && geometry != 0 && geometry == this->MeshGeometryKey &&
+  if (this->MeshValid && cellsIntact && geometry != 0 && geometry == this->MeshGeometryKey &&
     this->MeshSelectionKey == selectionKey.str() && this->Mesh.GetNumberOfCells() > 0)
   {
     // Only the values changed: the cells, their checks and planes stay.
