@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <array>
 #include <memory>
-#include <type_traits>
 
 namespace apc
 {
