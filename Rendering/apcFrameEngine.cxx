@@ -186,13 +186,16 @@ bool FrameEngine::UpdateInput(vtkUnstructuredGridBase* input, vtkObject* reporte
   const bool modified = input == this->MeshData && input->GetMTime() > this->MeshDataTime;
   this->MeshData = input;
   this->MeshDataTime = input->GetMTime();
-  if (this->MeshValid && this->MeshKey == key.str() && !modified)
+  // A mesh that borrows its input's cells (apcGridCells.h) is made again once they moved or
+  // changed, whatever the keys say.
+  const bool cellsIntact = this->Mesh.CellsIntact();
+  if (this->MeshValid && this->MeshKey == key.str() && !modified && cellsIntact)
   {
     return true;
   }
   const unsigned long long geometry = GeometryKey(input);
   std::string error;
-  if (this->MeshValid && geometry != 0 && geometry == this->MeshGeometryKey &&
+  if (this->MeshValid && cellsIntact && geometry != 0 && geometry == this->MeshGeometryKey &&
     this->MeshSelectionKey == selectionKey.str() && this->Mesh.GetNumberOfCells() > 0)
   {
     // Only the values changed: the cells, their checks and planes stay.
@@ -308,23 +311,26 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
   this->Camera->DistanceRange(bounds, tmin, tmax);
   this->Warp.reset(new LogDepthWarp(std::max(tmin, clip[0]), tmax));
 
-  // Rays end at the opaque geometry: the given depth buffer, or this window's.
-  std::vector<float> depth;
-  if (!depthBuffer)
+  // Rays end at the opaque geometry: the given depth buffer, or this window's, read into the
+  // ends' own buffer and turned into distances in place (one image-sized buffer written, not two).
+  std::vector<float> rayEnds;
+  if (depthBuffer)
   {
-    depth.assign(this->GetPixels(), 1.0f);
+    rayEnds.assign(depthBuffer, depthBuffer + this->GetPixels());
+  }
+  else
+  {
+    rayEnds.assign(this->GetPixels(), 1.0f);
     const int x0 = this->X0 + this->Crop.I0;
     const int y0 = this->Y0 + this->Crop.J0;
-    ren->GetRenderWindow()->GetZbufferData(x0, y0, x0 + width - 1, y0 + height - 1, depth.data());
-    depthBuffer = depth.data();
+    ren->GetRenderWindow()->GetZbufferData(x0, y0, x0 + width - 1, y0 + height - 1, rayEnds.data());
   }
-  std::vector<float> rayEnds(this->GetPixels());
   for (int j = 0; j < height; ++j)
   {
     for (int i = 0; i < width; ++i)
     {
       const size_t p = static_cast<size_t>(j) * width + i;
-      rayEnds[p] = static_cast<float>(this->Camera->DistanceFromDepth(i, j, depthBuffer[p]));
+      rayEnds[p] = static_cast<float>(this->Camera->DistanceFromDepth(i, j, rayEnds[p]));
     }
   }
   this->Marcher.SetNumberOfThreads(this->Settings.NumberOfThreads);
@@ -337,7 +343,6 @@ bool FrameEngine::Prepare(vtkRenderer* ren, vtkVolumeProperty* property, const d
     this->Mesh.FindBoundaryPlanes();
   }
   this->Marcher.SetMesh(&this->Mesh);
-  depth = std::vector<float>();
   this->Marcher.SetView(*this->Camera, std::move(rayEnds));
   this->Samples = 0;
   this->ColourSamples = 0;

@@ -10,11 +10,14 @@
 #include "vtkCellType.h"
 #include "vtkDataSetAttributes.h"
 #include "vtkPoints.h"
+#include "vtkSmartPointer.h"
+#include "vtkTypeInt64Array.h"
 #include "vtkUnsignedCharArray.h"
 #include "vtkUnstructuredGrid.h"
 
 #include <algorithm>
 #include <array>
+#include <memory>
 
 namespace apc
 {
@@ -72,6 +75,9 @@ struct Block
   int64_t Cells = 0;   // rendered as they are
   int64_t Corners = 0; // their corner ids
   bool Polyhedra = false;
+  // Every cell rendered as it is, with VTK's corner order and exactly its shape's ids: the
+  // grid's own offsets and connectivity are then the mesh's.
+  bool AsTheGrid = true;
   std::vector<vtkIdType> ForTheFilter;
   std::vector<unsigned char> Unsupported;
 };
@@ -101,6 +107,7 @@ void CountBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, Block& b
   {
     if (cells.Skipped(c))
     {
+      block.AsTheGrid = false;
       continue;
     }
     const unsigned char type = cells.Types[c];
@@ -108,8 +115,12 @@ void CountBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, Block& b
     {
       ++block.Cells;
       block.Corners += corners;
+      block.AsTheGrid = block.AsTheGrid && type != VTK_VOXEL &&
+        cells.Offsets[c + 1] - cells.Offsets[c] == static_cast<Id>(corners);
+      continue;
     }
-    else if (type == VTK_POLYHEDRON)
+    block.AsTheGrid = false;
+    if (type == VTK_POLYHEDRON)
     {
       block.Polyhedra = true;
     }
@@ -134,10 +145,11 @@ struct Output
   std::vector<long long> Origin;
 };
 
-// Pass 2 over a block: its cells written from output cell `cell` and corner `corner` on.
+// Pass 2 over a block: its cells written from output cell `cell` and corner `corner` on (their
+// ids only if ids: not when the mesh borrows the grid's).
 template <class Id>
 void FillBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, bool cellData,
-  const ScalarReader& value, int64_t cell, int64_t corner, Output& out)
+  const ScalarReader& value, int64_t cell, int64_t corner, bool ids, Output& out)
 {
   for (vtkIdType c = begin; c < end; ++c)
   {
@@ -146,11 +158,14 @@ void FillBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, bool cell
     {
       continue;
     }
-    const Id* ids = cells.Connectivity + cells.Offsets[c];
-    const bool voxel = cells.Types[c] == VTK_VOXEL;
-    for (int i = 0; i < corners; ++i)
+    if (ids)
     {
-      out.Connectivity[corner + i] = ids[voxel ? kVoxelToHexahedron[i] : i];
+      const Id* from = cells.Connectivity + cells.Offsets[c];
+      const bool voxel = cells.Types[c] == VTK_VOXEL;
+      for (int i = 0; i < corners; ++i)
+      {
+        out.Connectivity[corner + i] = from[voxel ? kVoxelToHexahedron[i] : i];
+      }
     }
     out.Shapes[cell] = static_cast<CellShape>(corners);
     out.Origin[cell] = c;
@@ -159,14 +174,65 @@ void FillBlock(const Cells<Id>& cells, vtkIdType begin, vtkIdType end, bool cell
       out.Scalars[cell] = value(c);
     }
     corner += corners;
-    out.Offsets[++cell] = corner;
+    ++cell;
+    if (ids)
+    {
+      out.Offsets[cell] = corner;
+    }
   }
 }
 
+// A grid's 64-bit offsets and connectivity lent to a mesh: held, and compared with what they were
+// when lent (where their values are, how many, their modification times) before each use.
+class LentGridCells : public CellMesh::CellsOwner
+{
+public:
+  LentGridCells(vtkTypeInt64Array* offsets, vtkTypeInt64Array* connectivity)
+    : Offsets(offsets)
+    , Connectivity(connectivity)
+    , OffsetsData(offsets->GetPointer(0))
+    , ConnectivityData(connectivity->GetPointer(0))
+    , OffsetsCount(offsets->GetNumberOfValues())
+    , ConnectivityCount(connectivity->GetNumberOfValues())
+    , OffsetsTime(offsets->GetMTime())
+    , ConnectivityTime(connectivity->GetMTime())
+  {
+  }
+  bool Intact() const override
+  {
+    return this->Offsets->GetPointer(0) == this->OffsetsData &&
+      this->Connectivity->GetPointer(0) == this->ConnectivityData &&
+      this->Offsets->GetNumberOfValues() == this->OffsetsCount &&
+      this->Connectivity->GetNumberOfValues() == this->ConnectivityCount &&
+      this->Offsets->GetMTime() == this->OffsetsTime &&
+      this->Connectivity->GetMTime() == this->ConnectivityTime;
+  }
+  // vtkTypeInt64 and int64_t are both 64-bit two's complement integers (long long and long
+  // here), read only.
+  const int64_t* OffsetIds() const { return reinterpret_cast<const int64_t*>(this->OffsetsData); }
+  const int64_t* CornerIds() const
+  {
+    return reinterpret_cast<const int64_t*>(this->ConnectivityData);
+  }
+
+private:
+  vtkSmartPointer<vtkTypeInt64Array> Offsets;
+  vtkSmartPointer<vtkTypeInt64Array> Connectivity;
+  const vtkTypeInt64* OffsetsData;
+  const vtkTypeInt64* ConnectivityData;
+  vtkIdType OffsetsCount;
+  vtkIdType ConnectivityCount;
+  vtkMTimeType OffsetsTime;
+  vtkMTimeType ConnectivityTime;
+};
+static_assert(sizeof(vtkTypeInt64) == sizeof(int64_t), "the lent ids are read as int64_t");
+
+// lender: the grid's cell arrays, to be lent to the mesh if it takes every cell as it is (null:
+// the ids are copied).
 template <class Id>
 bool Convert(const Cells<Id>& cells, vtkIdType numCells, bool cellData, const ScalarReader& value,
   CellMesh& mesh, InputReport& report, std::vector<long long>& origin,
-  std::vector<vtkIdType>& forTheFilter)
+  std::vector<vtkIdType>& forTheFilter, std::shared_ptr<const LentGridCells> lender)
 {
   const int64_t blocks = (numCells + kBlock - 1) / kBlock;
   std::vector<Block> counts(static_cast<size_t>(blocks));
@@ -181,20 +247,28 @@ bool Convert(const Cells<Id>& cells, vtkIdType numCells, bool cellData, const Sc
     });
   std::vector<int64_t> cellStart(blocks + 1, 0);
   std::vector<int64_t> cornerStart(blocks + 1, 0);
+  bool asTheGrid = lender != nullptr && numCells > 0;
   for (int64_t b = 0; b < blocks; ++b)
   {
     if (counts[b].Polyhedra)
     {
       return false;
     }
+    asTheGrid = asTheGrid && counts[b].AsTheGrid;
     cellStart[b + 1] = cellStart[b] + counts[b].Cells;
     cornerStart[b + 1] = cornerStart[b] + counts[b].Corners;
   }
+  // Borrowing the grid's ids spares writing as many (17 MB on the wind data), memory a first
+  // frame would touch afresh, and their copy.
+  const bool ids = !asTheGrid;
   Output out;
   out.Shapes.resize(cellStart[blocks]);
-  out.Offsets.resize(cellStart[blocks] + 1);
-  out.Offsets[0] = 0;
-  out.Connectivity.resize(cornerStart[blocks]);
+  if (ids)
+  {
+    out.Offsets.resize(cellStart[blocks] + 1);
+    out.Offsets[0] = 0;
+    out.Connectivity.resize(cornerStart[blocks]);
+  }
   out.Origin.resize(cellStart[blocks]);
   out.Scalars.resize(cellData ? cellStart[blocks] : 0);
   // Scalars read through vtkDataArray are read by one thread.
@@ -203,7 +277,8 @@ bool Convert(const Cells<Id>& cells, vtkIdType numCells, bool cellData, const Sc
     {
       for (int64_t b = first; b < last; ++b)
       {
-        FillBlock(cells, b * kBlock, range(b), cellData, value, cellStart[b], cornerStart[b], out);
+        FillBlock(
+          cells, b * kBlock, range(b), cellData, value, cellStart[b], cornerStart[b], ids, out);
       }
     });
   for (const Block& block : counts)
@@ -214,7 +289,16 @@ bool Convert(const Cells<Id>& cells, vtkIdType numCells, bool cellData, const Sc
       report.AddUnsupported(type);
     }
   }
-  mesh.SetCells(std::move(out.Shapes), std::move(out.Offsets), std::move(out.Connectivity));
+  if (ids)
+  {
+    mesh.SetCells(std::move(out.Shapes), std::move(out.Offsets), std::move(out.Connectivity));
+  }
+  else
+  {
+    const int64_t* offsets = lender->OffsetIds();
+    const int64_t* corners = lender->CornerIds();
+    mesh.SetCells(std::move(out.Shapes), offsets, corners, std::move(lender));
+  }
   mesh.CellScalars = std::move(out.Scalars);
   origin = std::move(out.Origin);
   return true;
@@ -286,15 +370,17 @@ bool ConvertGridCells(vtkUnstructuredGrid* grid, bool cellData, const ScalarRead
   const unsigned char* ghostFlags = ghosts ? ghosts->GetPointer(0) : nullptr;
   if (cellArray->IsStorage64Bit())
   {
-    const Cells<vtkTypeInt64> cells{ types->GetPointer(0), ghostFlags,
-      cellArray->GetOffsetsArray64()->GetPointer(0),
-      cellArray->GetConnectivityArray64()->GetPointer(0) };
-    return Convert(cells, numCells, cellData, value, mesh, report, origin, forTheFilter);
+    vtkTypeInt64Array* offsets = cellArray->GetOffsetsArray64();
+    vtkTypeInt64Array* connectivity = cellArray->GetConnectivityArray64();
+    const Cells<vtkTypeInt64> cells{ types->GetPointer(0), ghostFlags, offsets->GetPointer(0),
+      connectivity->GetPointer(0) };
+    return Convert(cells, numCells, cellData, value, mesh, report, origin, forTheFilter,
+      std::make_shared<const LentGridCells>(offsets, connectivity));
   }
   const Cells<vtkTypeInt32> cells{ types->GetPointer(0), ghostFlags,
     cellArray->GetOffsetsArray32()->GetPointer(0),
     cellArray->GetConnectivityArray32()->GetPointer(0) };
-  return Convert(cells, numCells, cellData, value, mesh, report, origin, forTheFilter);
+  return Convert(cells, numCells, cellData, value, mesh, report, origin, forTheFilter, nullptr);
 }
 
 }

@@ -33,7 +33,10 @@ void CopyPointsAndScalars(
  * The cells APC takes as they are into mesh (SetCells), with their scalars if cellData and
  * each one's input cell in origin; the cells vtkDataSetTriangleFilter must cut go to
  * forTheFilter (ascending), other types to the report. Returns false, having changed nothing,
- * if grid holds polyhedra (they take the cell-by-cell path).
+ * if grid holds polyhedra (they take the cell-by-cell path). A grid whose cells are all taken
+ * as they are (no ghosts left out, no voxels, nothing cut or skipped) in 64-bit cell arrays
+ * lends the mesh those arrays instead of a copy (CellMesh::SetCells with an owner, which
+ * holds them and tells whether they were reallocated or modified since: CellsIntact).
  */
 bool ConvertGridCells(vtkUnstructuredGrid* grid, bool cellData, const ScalarReader& value,
   CellMesh& mesh, InputReport& report, std::vector<long long>& origin,

@@ -97,12 +97,80 @@ bool CanonicalPlane(const std::vector<std::array<double, 3>>& points, const int6
 }
 
 //------------------------------------------------------------------------------
+CellMesh::CellIds::CellIds(const CellIds& other)
+  : Offsets(other.Offsets)
+  , Connectivity(other.Connectivity)
+  , Owner(other.Owner)
+  , OffsetsData(other.OffsetsData)
+  , ConnectivityData(other.ConnectivityData)
+  , ConnectivitySize(other.ConnectivitySize)
+{
+  if (!this->Owner)
+  {
+    this->PointAtOwn();
+  }
+}
+
+CellMesh::CellIds::CellIds(CellIds&& other) noexcept
+  : Offsets(std::move(other.Offsets))
+  , Connectivity(std::move(other.Connectivity))
+  , Owner(std::move(other.Owner))
+  , OffsetsData(other.OffsetsData)
+  , ConnectivityData(other.ConnectivityData)
+  , ConnectivitySize(other.ConnectivitySize)
+{
+  if (!this->Owner)
+  {
+    this->PointAtOwn();
+  }
+  other.Owner.reset();
+  other.PointAtOwn();
+}
+
+CellMesh::CellIds& CellMesh::CellIds::operator=(CellIds other) noexcept
+{
+  this->Offsets.swap(other.Offsets);
+  this->Connectivity.swap(other.Connectivity);
+  this->Owner.swap(other.Owner);
+  this->OffsetsData = other.OffsetsData;
+  this->ConnectivityData = other.ConnectivityData;
+  this->ConnectivitySize = other.ConnectivitySize;
+  if (!this->Owner)
+  {
+    this->PointAtOwn();
+  }
+  return *this;
+}
+
+void CellMesh::CellIds::PointAtOwn()
+{
+  this->OffsetsData = this->Offsets.data();
+  this->ConnectivityData = this->Connectivity.data();
+  this->ConnectivitySize = static_cast<int64_t>(this->Connectivity.size());
+}
+
+void CellMesh::CellIds::TakeOwnership(int64_t numCells)
+{
+  if (!this->Owner)
+  {
+    return;
+  }
+  this->Offsets.assign(this->OffsetsData, this->OffsetsData + numCells + 1);
+  this->Connectivity.assign(
+    this->ConnectivityData, this->ConnectivityData + this->ConnectivitySize);
+  this->Owner.reset();
+  this->PointAtOwn();
+}
+
+//------------------------------------------------------------------------------
 int64_t CellMesh::AddCell(CellShape shape, const int64_t* pointIds)
 {
   const int corners = static_cast<int>(shape);
+  this->Ids.TakeOwnership(this->GetNumberOfCells());
   this->Shapes.push_back(shape);
-  this->Connectivity.insert(this->Connectivity.end(), pointIds, pointIds + corners);
-  this->Offsets.push_back(static_cast<int64_t>(this->Connectivity.size()));
+  this->Ids.Connectivity.insert(this->Ids.Connectivity.end(), pointIds, pointIds + corners);
+  this->Ids.Offsets.push_back(static_cast<int64_t>(this->Ids.Connectivity.size()));
+  this->Ids.PointAtOwn();
   return static_cast<int64_t>(this->Shapes.size()) - 1;
 }
 
@@ -111,8 +179,33 @@ void CellMesh::SetCells(UninitializedVector<CellShape> shapes, UninitializedVect
   UninitializedVector<int64_t> connectivity)
 {
   this->Shapes = std::move(shapes);
-  this->Offsets = std::move(offsets);
-  this->Connectivity = std::move(connectivity);
+  this->Ids.Owner.reset();
+  this->Ids.Offsets = std::move(offsets);
+  this->Ids.Connectivity = std::move(connectivity);
+  this->Ids.PointAtOwn();
+}
+
+//------------------------------------------------------------------------------
+void CellMesh::SetCells(UninitializedVector<CellShape> shapes, const int64_t* offsets,
+  const int64_t* connectivity, std::shared_ptr<const CellsOwner> owner)
+{
+  this->Shapes = std::move(shapes);
+  this->Ids.Offsets = UninitializedVector<int64_t>{ 0 };
+  this->Ids.Connectivity = UninitializedVector<int64_t>();
+  if (!owner)
+  {
+    // Nothing keeps them: copied.
+    const int64_t numCells = this->GetNumberOfCells();
+    this->Ids.Offsets.assign(offsets, offsets + numCells + 1);
+    this->Ids.Connectivity.assign(connectivity, connectivity + offsets[numCells]);
+    this->Ids.Owner.reset();
+    this->Ids.PointAtOwn();
+    return;
+  }
+  this->Ids.Owner = std::move(owner);
+  this->Ids.OffsetsData = offsets;
+  this->Ids.ConnectivityData = connectivity;
+  this->Ids.ConnectivitySize = offsets[this->GetNumberOfCells()];
 }
 
 //------------------------------------------------------------------------------
@@ -160,8 +253,9 @@ bool CellMesh::Finalize(std::string* error)
   {
     return fail("point scalars do not match the number of points");
   }
-  for (int64_t id : this->Connectivity)
+  for (int64_t i = 0; i < this->Ids.ConnectivitySize; ++i)
   {
+    const int64_t id = this->Ids.ConnectivityData[i];
     if (id < 0 || id >= numPoints)
     {
       return fail("a cell refers to a point that does not exist");

@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,23 @@ public:
   // connectivity[offsets[c] .. offsets[c + 1]), as many as its shape has) and connectivity.
   void SetCells(UninitializedVector<CellShape> shapes, UninitializedVector<int64_t> offsets,
     UninitializedVector<int64_t> connectivity);
+  // The same cells without a copy of their ids: offsets (one per cell and one more, from 0) and
+  // connectivity (offsets[numCells] ids) are another's arrays, which owner keeps alive and
+  // unchanged for as long as this mesh (or a copy of it) keeps them. A converter whose input
+  // holds its cells in this very layout lends them (apcGridCells.h), instead of writing
+  // memory as large as the input's cells afresh.
+  struct CellsOwner
+  {
+    virtual ~CellsOwner() = default;
+    // Whether the lent arrays are still where, and what, they were when lent (a lender whose
+    // arrays may be reallocated or changed says so here; the mesh must then be made again
+    // before it is used).
+    virtual bool Intact() const = 0;
+  };
+  void SetCells(UninitializedVector<CellShape> shapes, const int64_t* offsets,
+    const int64_t* connectivity, std::shared_ptr<const CellsOwner> owner);
+  bool BorrowsCells() const { return this->Ids.Owner != nullptr; }
+  bool CellsIntact() const { return !this->Ids.Owner || this->Ids.Owner->Intact(); }
 
   // Derives bounds and face planes; call after the last AddCell and before rendering.
   // Returns false, with a message, if the mesh is unusable (ids out of range, scalars missing).
@@ -88,7 +106,7 @@ public:
   CellShape GetShape(int64_t cell) const { return this->Shapes[cell]; }
   const int64_t* GetCellPoints(int64_t cell) const
   {
-    return this->Connectivity.data() + this->Offsets[cell];
+    return this->Ids.ConnectivityData + this->Ids.OffsetsData[cell];
   }
   // Brings a cell's corners towards the cache ahead of GetCorners, in two steps a few cells
   // apart: its shape and where its corner ids are (Ids), then, once those have arrived, the
@@ -96,7 +114,7 @@ public:
   void PrefetchIds(int64_t cell) const
   {
     __builtin_prefetch(this->Shapes.data() + cell);
-    __builtin_prefetch(this->Offsets.data() + cell);
+    __builtin_prefetch(this->Ids.OffsetsData + cell);
   }
   void PrefetchCorners(int64_t cell) const
   {
@@ -201,9 +219,30 @@ private:
   // The face behind plane n of cell: its distinct corners sorted, padded with +inf.
   FaceCorners CornersOfPlane(int64_t cell, int n) const;
 
+  // The cells' ids: this mesh's own arrays (AddCell, SetCells) or lent ones (Owner set), read
+  // through the two pointers either way. A copy of a mesh points at its own copy of its own
+  // arrays, or at the same lent ones.
+  struct CellIds
+  {
+    UninitializedVector<int64_t> Offsets{ 0 };
+    UninitializedVector<int64_t> Connectivity;
+    std::shared_ptr<const CellsOwner> Owner;
+    const int64_t* OffsetsData = nullptr;
+    const int64_t* ConnectivityData = nullptr;
+    int64_t ConnectivitySize = 0;
+
+    CellIds() { this->PointAtOwn(); }
+    CellIds(const CellIds& other);
+    CellIds(CellIds&& other) noexcept;
+    CellIds& operator=(CellIds other) noexcept;
+    // After a change to the own arrays (or to none: Owner null).
+    void PointAtOwn();
+    // The lent ids copied into the own arrays, for AddCell after SetCells with an owner.
+    void TakeOwnership(int64_t numCells);
+  };
+
   UninitializedVector<CellShape> Shapes;
-  UninitializedVector<int64_t> Offsets{ 0 };
-  UninitializedVector<int64_t> Connectivity;
+  CellIds Ids;
 
   // Cell c's planes are Planes[PlaneOffsets[c] ..] (a slot for every face of its shape), the
   // first PlaneCounts[c] of them used (faces without area constrain nothing; 0: left out).

@@ -1,6 +1,8 @@
 #include "apcHugePages.h"
 
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <new>
 
 #if defined(__unix__) || defined(__APPLE__)
@@ -10,6 +12,16 @@
 
 namespace apc
 {
+
+bool HugePagesWanted()
+{
+  static const bool wanted = []
+  {
+    const char* value = std::getenv("APC_HUGE_PAGES");
+    return !(value && std::strcmp(value, "0") == 0);
+  }();
+  return wanted;
+}
 
 void* AllocateHugeBlock(size_t bytes)
 {
@@ -39,7 +51,10 @@ void* AllocateHugeBlock(size_t bytes)
   }
   void* block = reinterpret_cast<void*>(aligned);
 #ifdef MADV_HUGEPAGE
-  madvise(block, size, MADV_HUGEPAGE); // a hint: without it, 4 KiB pages
+  if (HugePagesWanted())
+  {
+    madvise(block, size, MADV_HUGEPAGE); // a hint: without it, 4 KiB pages
+  }
 #endif
   return block;
 #else
@@ -53,7 +68,7 @@ void AdviseHugePages(void* memory, size_t bytes)
   const uintptr_t start = reinterpret_cast<uintptr_t>(memory);
   const uintptr_t first = (start + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
   const uintptr_t last = (start + bytes) / kHugePageBytes * kHugePageBytes;
-  if (memory && last > first)
+  if (memory && last > first && HugePagesWanted())
   {
     madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
   }

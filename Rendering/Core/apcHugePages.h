@@ -17,6 +17,9 @@ namespace apc
 constexpr size_t kHugePageBytes = size_t(2) << 20;
 constexpr size_t kMinHugeBlockBytes = 2 * kHugePageBytes;
 
+// False if the environment sets APC_HUGE_PAGES=0: every block then in 4 KiB pages.
+bool HugePagesWanted();
+
 // bytes of address space (committed page by page as it is first written), or null if the
 // system refuses them. Free with FreeHugeBlock and the same bytes.
 void* AllocateHugeBlock(size_t bytes);

@@ -7,8 +7,12 @@
 
 #include "apcCellMesh.h"
 #include "apcCellMeshFromVTK.h"
+#include "apcFrameEngine.h"
 #include "apcInputReport.h"
 #include "apcTestGrids.h"
+
+#include "vtkAPCVolumeMapper.h"
+#include "vtkTypeInt64Array.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellData.h"
@@ -24,6 +28,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -201,4 +206,132 @@ TEST(CellMeshConversion, EveryCellAsVTKGivesIt)
       Check(grid, true, 0);
     }
   }
+}
+
+namespace
+{
+// Everything a mesh holds of its cells after Finalize, compared bit for bit.
+void ExpectSameMesh(const apc::CellMesh& a, const apc::CellMesh& b)
+{
+  ASSERT_EQ(a.GetNumberOfCells(), b.GetNumberOfCells());
+  for (int64_t c = 0; c < a.GetNumberOfCells(); ++c)
+  {
+    ASSERT_EQ(a.GetShape(c), b.GetShape(c)) << "cell " << c;
+    for (int k = 0; k < apc::NumberOfCorners(a.GetShape(c)); ++k)
+    {
+      ASSERT_EQ(a.GetCellPoints(c)[k], b.GetCellPoints(c)[k]) << "cell " << c;
+    }
+    int na = 0;
+    int nb = 0;
+    const apc::FacePlane* pa = a.GetPlanes(c, na);
+    const apc::FacePlane* pb = b.GetPlanes(c, nb);
+    ASSERT_EQ(na, nb) << "cell " << c;
+    for (int f = 0; f < na; ++f)
+    {
+      ASSERT_EQ(0, std::memcmp(pa[f].Normal.data(), pb[f].Normal.data(), sizeof(pa[f].Normal)));
+      ASSERT_EQ(0, std::memcmp(&pa[f].Offset, &pb[f].Offset, sizeof(double)));
+    }
+    ASSERT_EQ(a.GetScalarRange(c), b.GetScalarRange(c)) << "cell " << c;
+  }
+}
+}
+
+TEST(CellMeshConversion, APlainGridLendsItsCellsAndTheMeshIsTheCopiedOne)
+{
+  auto grid = apctest::MixedBlock(12, [](double x, double y, double z) { return x - y * z; });
+  apc::ScalarSelection selection;
+  selection.Array = grid->GetPointData()->GetScalars();
+  apc::InputReport report;
+  std::string error;
+  grid->GetCells()->ConvertTo64BitStorage();
+  apc::CellMesh lent;
+  ASSERT_TRUE(apc::CellMeshFromVTK(grid, selection, lent, report, error)) << error;
+  ASSERT_TRUE(lent.BorrowsCells());
+  EXPECT_TRUE(lent.CellsIntact());
+  EXPECT_EQ(lent.GetCellPoints(0),
+    reinterpret_cast<const int64_t*>(grid->GetCells()->GetConnectivityArray64()->GetPointer(0)));
+  auto copy32 = vtkSmartPointer<vtkUnstructuredGrid>::New();
+  copy32->DeepCopy(grid);
+  ASSERT_TRUE(copy32->GetCells()->ConvertTo32BitStorage());
+  apc::CellMesh copied;
+  ASSERT_TRUE(apc::CellMeshFromVTK(copy32, selection, copied, report, error)) << error;
+  ASSERT_FALSE(copied.BorrowsCells());
+  ExpectSameMesh(lent, copied);
+  lent.FindBoundaryPlanes();
+  copied.FindBoundaryPlanes();
+  for (int64_t c = 0; c < lent.GetNumberOfCells(); ++c)
+  {
+    ASSERT_EQ(lent.GetBoundaryPlanes(c), copied.GetBoundaryPlanes(c)) << "cell " << c;
+  }
+
+  // A copy of a lent mesh reads the same arrays; one that then takes a cell of its own holds
+  // its own copy of them, the lent mesh unchanged.
+  apc::CellMesh grown = lent;
+  EXPECT_TRUE(grown.BorrowsCells());
+  ExpectSameMesh(grown, lent);
+  const int64_t extra[4] = { 0, 1, 2, 3 };
+  grown.AddCell(apc::CellShape::Tetra, extra);
+  EXPECT_FALSE(grown.BorrowsCells());
+  ASSERT_EQ(grown.GetNumberOfCells(), lent.GetNumberOfCells() + 1);
+  for (int64_t c = 0; c < lent.GetNumberOfCells(); ++c)
+  {
+    for (int k = 0; k < apc::NumberOfCorners(lent.GetShape(c)); ++k)
+    {
+      ASSERT_EQ(grown.GetCellPoints(c)[k], lent.GetCellPoints(c)[k]) << "cell " << c;
+    }
+  }
+  EXPECT_EQ(std::vector<int64_t>(grown.GetCellPoints(lent.GetNumberOfCells()),
+              grown.GetCellPoints(lent.GetNumberOfCells()) + 4),
+    std::vector<int64_t>(extra, extra + 4));
+
+  // The grid gone, the lent arrays stay as long as the mesh needs them.
+  apc::CellMesh moved = std::move(lent);
+  grid = nullptr;
+  EXPECT_TRUE(moved.CellsIntact());
+  ExpectSameMesh(moved, copied);
+
+  // Reallocated (the same values elsewhere) or modified: no longer intact.
+  auto other = apctest::MixedBlock(4, [](double x, double, double) { return x; });
+  other->GetCells()->ConvertTo64BitStorage();
+  selection.Array = other->GetPointData()->GetScalars();
+  apc::CellMesh mesh;
+  ASSERT_TRUE(apc::CellMeshFromVTK(other, selection, mesh, report, error)) << error;
+  ASSERT_TRUE(mesh.BorrowsCells());
+  vtkTypeInt64Array* connectivity = other->GetCells()->GetConnectivityArray64();
+  connectivity->Modified();
+  EXPECT_FALSE(mesh.CellsIntact());
+  ASSERT_TRUE(apc::CellMeshFromVTK(other, selection, mesh, report, error)) << error;
+  EXPECT_TRUE(mesh.CellsIntact());
+  const vtkIdType values = connectivity->GetNumberOfValues();
+  connectivity->Resize(4 * values);
+  connectivity->SetNumberOfValues(values);
+  EXPECT_FALSE(mesh.CellsIntact());
+}
+
+TEST(CellMeshConversion, TheEngineConvertsAgainOnceTheLentCellsMoved)
+{
+  auto grid = apctest::MixedBlock(4, [](double x, double, double) { return x; });
+  grid->GetCells()->ConvertTo64BitStorage();
+  vtkNew<vtkAPCVolumeMapper> mapper;
+  mapper->SetInputData(grid);
+  apc::FrameEngine engine;
+  auto update = [&]
+  {
+    engine.BeginFrame(mapper->GetVolumeSettings());
+    EXPECT_TRUE(engine.UpdateInput(mapper->GetInput(), mapper));
+    return engine.GetNumberOfMeshConversions();
+  };
+  EXPECT_EQ(update(), 1);
+  EXPECT_TRUE(engine.GetMeshForSharing().BorrowsCells());
+  EXPECT_EQ(update(), 1);
+  // The same values in a new block of memory: the mesh must not read the old one.
+  vtkTypeInt64Array* connectivity = grid->GetCells()->GetConnectivityArray64();
+  const vtkIdType values = connectivity->GetNumberOfValues();
+  const void* before = connectivity->GetPointer(0);
+  connectivity->Resize(4 * values);
+  connectivity->SetNumberOfValues(values);
+  ASSERT_NE(before, static_cast<const void*>(connectivity->GetPointer(0)));
+  EXPECT_EQ(update(), 2);
+  EXPECT_TRUE(engine.GetMeshForSharing().CellsIntact());
+  EXPECT_EQ(update(), 2);
 }
