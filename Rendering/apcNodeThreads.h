@@ -21,8 +21,9 @@ namespace apc
  * controller on the node once (MPI_Comm_split_type with MPI_COMM_TYPE_SHARED; without MPI, a
  * single process or another kind of controller, the process is alone on its node):
  * - the thread count (apc::SetDefaultThreads, used wherever a thread count of 0 reaches
- *   apc::ParallelFor) by apc::NodeShareOfThreads: an unbound process gets the node's cores
- *   divided by the node's processes, at least one; a bound process keeps its affinity mask.
+ *   apc::ParallelFor) by apc::NodeShareOfThreads: an unbound process gets twice its share of
+ *   the node's cores (cores / processes, at least one), at most the node's cores, so that ranks
+ *   still rendering take the cores of ranks that wait; a bound process keeps its affinity mask.
  *   A thread count set on the mapper still overrides it;
  * - the sample cache budget (DefaultSampleCacheBytes) by apc::NodeShareOfMemory: a quarter of
  *   the node's physical memory divided among the node's processes.

@@ -223,8 +223,9 @@ public:
   ///@{
   /**
    * TBB threads for ray marching; 0 (default): under vtkAPCCompositePass an unbound process
-   * takes its share of the node's cores (cores / processes on the node), a bound one its
-   * affinity mask; rendered alone, TBB decides (the affinity mask).
+   * takes twice its share of the node's cores (cores / processes on the node, at least one),
+   * at most the node's cores, so that ranks still rendering use the cores of ranks that wait; a
+   * bound one its affinity mask; rendered alone, TBB decides (the affinity mask).
    */
   void SetNumberOfThreads(int threads);
   int GetNumberOfThreads() const;

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 
@@ -44,15 +45,20 @@ inline int ConcurrencyFor(int requested)
 
 // The rule for the default (pure, so it is tested alone): a process bound to fewer cores than
 // the node has (affinityCores < nodeCores) keeps its mask, i.e. TBB's choice (0); an unbound
-// one takes its share of the node, nodeCores / processesOnNode, at least one.
+// one takes twice its share of the node, 2 * (nodeCores / processesOnNode, at least one), at
+// most nodeCores. Twice, because a view's work is rarely even over the ranks: a rank that
+// finished waits in a barrier that sleeps (apcCollectiveTimes.h), and the ranks still
+// rendering take the cores it left with their second share; one share each left those cores
+// idle (4 ranks on 2 cores, wind 1024²: later frames about 20 % faster, docs/performance.md).
+// Bounded, not every core per rank: 64 ranks on 64 cores run 128 threads, not 4,096.
 inline int NodeShareOfThreads(int nodeCores, int affinityCores, int processesOnNode)
 {
   if (nodeCores < 1 || processesOnNode < 1 || (affinityCores > 0 && affinityCores < nodeCores))
   {
     return 0;
   }
-  const int share = nodeCores / processesOnNode;
-  return share > 0 ? share : 1;
+  const int share = std::max(1, nodeCores / processesOnNode);
+  return std::min(nodeCores, 2 * share);
 }
 
 // Calls body(begin, end) on disjoint chunks of [0, count) of at least grain items, on up to

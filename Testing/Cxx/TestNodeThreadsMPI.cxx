@@ -84,7 +84,7 @@ int main(int argc, char* argv[])
   const int mask = CPU_COUNT(&set);
   const bool bound = mask < cores;
   // What this process should run by default, from the rule in the header's words.
-  const int expected = bound ? mask : std::max(1, cores / ranks);
+  const int expected = bound ? mask : std::min(cores, 2 * std::max(1, cores / ranks));
   Check(apc::GetDefaultThreads() == 0, rank, "no default before the first frame");
   {
     vtkNew<vtkAPCCompositePass> pass;
