@@ -16,6 +16,7 @@
 #include <iostream>
 #include <limits>
 #include <random>
+#include <utility>
 #include <vector>
 
 namespace
@@ -141,10 +142,87 @@ TEST_P(PixelReplayKernel, MatchesLookupAndQueryPerSample)
 INSTANTIATE_TEST_SUITE_P(Kernels, PixelReplayKernel,
   ::testing::Values(apc::ReplayKernel::Avx2, apc::ReplayKernel::Avx512));
 
+namespace
+{
+
+// Two replay kernels on the same random pixels: the same sums to the bit and the same hidden
+// count, with and without end weights, for runs of every length up to 40, hidden depths cutting
+// the runs, densities 10^logDensityFrom .. 10^(logDensityFrom + logDensitySpan), a NaN and an
+// infinite scalar now and then; with clustered, every other pixel's samples gather about one
+// depth. Returns the pixels compared (both kernels served them) and their hidden samples.
+std::pair<int, int64_t> CompareKernels(apc::ReplayKernel a, apc::ReplayKernel b, uint64_t seed,
+  int pixels, double logDensityFrom, double logDensitySpan, bool clustered)
+{
+  const apc::TransferTable table = Table();
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int compared = 0;
+  int64_t hiddenTotal = 0;
+  for (int pixel = 0; pixel < pixels; ++pixel)
+  {
+    const int n = pixel % 41;
+    std::vector<apc::CachedSample> samples(n);
+    std::vector<float> weights(n);
+    double moments[5] = { 0, 0, 0, 0, 0 };
+    const double density = std::exp(logDensityFrom + unit(rng) * logDensitySpan);
+    const double centre = clustered ? -1.0 + 2.0 * unit(rng) : 0.0;
+    const double spread = clustered ? 0.02 + unit(rng) : 0.0;
+    for (int i = 0; i < n + 6; ++i)
+    {
+      const double z =
+        !clustered || pixel % 2 ? -1.2 + 2.4 * unit(rng) : centre + spread * (unit(rng) - 0.5);
+      const double scalar = -2.5 + 6.0 * unit(rng);
+      apc::AccumulatePowerMoments<4>(
+        moments, std::min(1.0, std::max(-1.0, z)), table.Lookup(scalar).Absorbance * density);
+      if (i < n)
+      {
+        samples[i] = { static_cast<float>(z), static_cast<float>(scalar) };
+        weights[i] = static_cast<float>(unit(rng));
+      }
+    }
+    if (pixel % 89 == 0 && n > 2)
+    {
+      samples[1].Scalar = std::numeric_limits<float>::quiet_NaN();
+      samples[2].Scalar = std::numeric_limits<float>::infinity();
+    }
+    const apc::MomentTransmittance<4> t(moments);
+    const double hiddenFrom = pixel % 3 == 0 ? std::numeric_limits<double>::infinity()
+                                             : (pixel % 3 == 1 ? -1.2 + 2.4 * unit(rng) : -2.0);
+    for (const float* w :
+      { static_cast<const float*>(nullptr), static_cast<const float*>(weights.data()) })
+    {
+      double sumsA[4] = { 0.25, 0, 0, 1 };
+      double sumsB[4] = { 0.25, 0, 0, 1 };
+      int64_t hiddenA = 0;
+      int64_t hiddenB = 0;
+      const bool doneA = apc::ReplayFourMomentPixel(
+        t, hiddenFrom, table.GetLayout(), samples.data(), n, sumsA, hiddenA, w, a);
+      const bool doneB = apc::ReplayFourMomentPixel(
+        t, hiddenFrom, table.GetLayout(), samples.data(), n, sumsB, hiddenB, w, b);
+      EXPECT_EQ(doneA, doneB) << "pixel " << pixel;
+      if (!doneA || !doneB)
+      {
+        continue;
+      }
+      ++compared;
+      hiddenTotal += hiddenA;
+      EXPECT_EQ(hiddenA, hiddenB) << "pixel " << pixel;
+      for (int c = 0; c < 4; ++c)
+      {
+        EXPECT_EQ(std::memcmp(&sumsA[c], &sumsB[c], sizeof(double)), 0)
+          << "pixel " << pixel << " n " << n << " channel " << c << ": " << sumsA[c] << " against "
+          << sumsB[c];
+      }
+    }
+  }
+  return { compared, hiddenTotal };
+}
+
+} // namespace
+
 // The AVX-512 replay (8 lanes a group, 16 samples a step) against the AVX2 one (4 lanes, 8 a
-// step): the same sums to the bit and the same hidden count, with and without end weights, for
-// runs of every length up to 40 (every tail of both kernels' steps), hidden depths cutting the
-// runs, faint and dense pixels, and pixels whose samples need the query's full path.
+// step): every tail of both kernels' steps, faint and dense pixels, and pixels whose samples
+// need the query's full path.
 TEST(PixelReplay, WideKernelGivesTheSameBits)
 {
   if (!apc::HasReplayKernel(apc::ReplayKernel::Avx512) ||
@@ -152,144 +230,26 @@ TEST(PixelReplay, WideKernelGivesTheSameBits)
   {
     GTEST_SKIP() << "this CPU does not run both kernels";
   }
-  const apc::TransferTable table = Table();
-  std::mt19937_64 rng(49);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int compared = 0;
-  int64_t hiddenTotal = 0;
-  for (int pixel = 0; pixel < 8000; ++pixel)
-  {
-    const int n = pixel % 41;
-    std::vector<apc::CachedSample> samples(n);
-    std::vector<float> weights(n);
-    double moments[5] = { 0, 0, 0, 0, 0 };
-    const double density = std::exp(std::log(1e-4) + unit(rng) * std::log(1e6));
-    for (int i = 0; i < n + 6; ++i)
-    {
-      const double z = -1.2 + 2.4 * unit(rng);
-      const double scalar = -2.5 + 6.0 * unit(rng);
-      apc::AccumulatePowerMoments<4>(
-        moments, std::min(1.0, std::max(-1.0, z)), table.Lookup(scalar).Absorbance * density);
-      if (i < n)
-      {
-        samples[i] = { static_cast<float>(z), static_cast<float>(scalar) };
-        weights[i] = static_cast<float>(unit(rng));
-      }
-    }
-    if (pixel % 89 == 0 && n > 2)
-    {
-      samples[1].Scalar = std::numeric_limits<float>::quiet_NaN();
-      samples[2].Scalar = std::numeric_limits<float>::infinity();
-    }
-    const apc::MomentTransmittance<4> t(moments);
-    const double hiddenFrom = pixel % 3 == 0 ? std::numeric_limits<double>::infinity()
-                                             : (pixel % 3 == 1 ? -1.2 + 2.4 * unit(rng) : -2.0);
-    for (const float* w :
-      { static_cast<const float*>(nullptr), static_cast<const float*>(weights.data()) })
-    {
-      double narrow[4] = { 0.25, 0, 0, 1 };
-      double wide[4] = { 0.25, 0, 0, 1 };
-      int64_t narrowHidden = 0;
-      int64_t wideHidden = 0;
-      const bool narrowDone = apc::ReplayFourMomentPixel(t, hiddenFrom, table.GetLayout(),
-        samples.data(), n, narrow, narrowHidden, w, apc::ReplayKernel::Avx2);
-      const bool wideDone = apc::ReplayFourMomentPixel(t, hiddenFrom, table.GetLayout(),
-        samples.data(), n, wide, wideHidden, w, apc::ReplayKernel::Avx512);
-      ASSERT_EQ(narrowDone, wideDone) << "pixel " << pixel;
-      if (!narrowDone)
-      {
-        continue;
-      }
-      ++compared;
-      hiddenTotal += wideHidden;
-      ASSERT_EQ(wideHidden, narrowHidden) << "pixel " << pixel;
-      for (int c = 0; c < 4; ++c)
-      {
-        ASSERT_EQ(std::memcmp(&wide[c], &narrow[c], sizeof(double)), 0)
-          << "pixel " << pixel << " n " << n << " channel " << c << " wide " << wide[c]
-          << " narrow " << narrow[c];
-      }
-    }
-  }
-  EXPECT_GT(compared, 14000);
-  EXPECT_GT(hiddenTotal, 1000);
+  const auto result = CompareKernels(apc::ReplayKernel::Avx512, apc::ReplayKernel::Avx2, 49, 8000,
+    std::log(1e-4), std::log(1e6), false);
+  EXPECT_GT(result.first, 14000);
+  EXPECT_GT(result.second, 1000);
 }
 
 // The AVX2 replay's shortcut (a group whose visible lanes all lie outside their support
-// points, c2 > 0, skips the nearer root) against the same kernel without it: the same sums to
-// the bit and the same hidden count, with and without end weights, on pixels whose samples
-// gather about one depth (most groups all one side) or spread over the range (mixed groups),
-// runs of every length up to 40 (every tail of a step), hidden depths cutting the runs (so that
-// lanes past the hidden depth, whatever their c2, are left out of the test).
+// points, c2 > 0, skips the nearer root) against the same kernel without it, on pixels whose
+// samples gather about one depth (most groups all one side) or spread over the range (mixed
+// groups); lanes past the hidden depth, whatever their c2, are left out of the test.
 TEST(PixelReplay, ShortcutGivesTheFullKernelsBits)
 {
   if (!apc::HasReplayKernel(apc::ReplayKernel::Avx2))
   {
     GTEST_SKIP() << "this CPU does not run the AVX2 kernel";
   }
-  const apc::TransferTable table = Table();
-  std::mt19937_64 rng(2027);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  int compared = 0;
-  int64_t hiddenTotal = 0;
-  for (int pixel = 0; pixel < 12000; ++pixel)
-  {
-    const int n = pixel % 41;
-    std::vector<apc::CachedSample> samples(n);
-    std::vector<float> weights(n);
-    double moments[5] = { 0, 0, 0, 0, 0 };
-    const double density = std::exp(std::log(1e-5) + unit(rng) * std::log(1e7));
-    const double centre = -1.0 + 2.0 * unit(rng);
-    const double spread = 0.02 + unit(rng);
-    for (int i = 0; i < n + 6; ++i)
-    {
-      const double z = pixel % 2 ? -1.2 + 2.4 * unit(rng) : centre + spread * (unit(rng) - 0.5);
-      const double scalar = -2.5 + 6.0 * unit(rng);
-      apc::AccumulatePowerMoments<4>(
-        moments, std::min(1.0, std::max(-1.0, z)), table.Lookup(scalar).Absorbance * density);
-      if (i < n)
-      {
-        samples[i] = { static_cast<float>(z), static_cast<float>(scalar) };
-        weights[i] = static_cast<float>(unit(rng));
-      }
-    }
-    if (pixel % 89 == 0 && n > 2)
-    {
-      samples[1].Scalar = std::numeric_limits<float>::quiet_NaN();
-      samples[2].Scalar = std::numeric_limits<float>::infinity();
-    }
-    const apc::MomentTransmittance<4> t(moments);
-    const double hiddenFrom = pixel % 3 == 0 ? std::numeric_limits<double>::infinity()
-                                             : (pixel % 3 == 1 ? -1.2 + 2.4 * unit(rng) : -2.0);
-    for (const float* w :
-      { static_cast<const float*>(nullptr), static_cast<const float*>(weights.data()) })
-    {
-      double fast[4] = { 0.25, 0, 0, 1 };
-      double full[4] = { 0.25, 0, 0, 1 };
-      int64_t fastHidden = 0;
-      int64_t fullHidden = 0;
-      const bool fastDone = apc::ReplayFourMomentPixel(t, hiddenFrom, table.GetLayout(),
-        samples.data(), n, fast, fastHidden, w, apc::ReplayKernel::Avx2);
-      const bool fullDone = apc::ReplayFourMomentPixel(t, hiddenFrom, table.GetLayout(),
-        samples.data(), n, full, fullHidden, w, apc::ReplayKernel::Avx2Full);
-      ASSERT_EQ(fastDone, fullDone) << "pixel " << pixel;
-      if (!fastDone)
-      {
-        continue;
-      }
-      ++compared;
-      hiddenTotal += fastHidden;
-      ASSERT_EQ(fastHidden, fullHidden) << "pixel " << pixel;
-      for (int c = 0; c < 4; ++c)
-      {
-        ASSERT_EQ(std::memcmp(&fast[c], &full[c], sizeof(double)), 0)
-          << "pixel " << pixel << " n " << n << " channel " << c << " shortcut " << fast[c]
-          << " full " << full[c];
-      }
-    }
-  }
-  EXPECT_GT(compared, 20000);
-  EXPECT_GT(hiddenTotal, 1000);
+  const auto result = CompareKernels(apc::ReplayKernel::Avx2, apc::ReplayKernel::Avx2Full, 2027,
+    12000, std::log(1e-5), std::log(1e7), true);
+  EXPECT_GT(result.first, 20000);
+  EXPECT_GT(result.second, 1000);
 }
 
 // A pixel the vector arithmetic does not serve (empty: every sample at full weight) is left
