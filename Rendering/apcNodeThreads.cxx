@@ -13,6 +13,7 @@
 #include <sched.h>
 #include <thread>
 #include <unistd.h>
+#include <vector>
 
 namespace apc
 {
@@ -25,12 +26,22 @@ int CoresOfNode()
                     : static_cast<int>(std::thread::hardware_concurrency());
 }
 
-// The cores this process may run on (0 if unknown).
-int CoresInAffinityMask()
+// This process's affinity mask in CoreMask's words; every online core if it cannot be read
+// (as if unbound).
+CoreMask AffinityMask(int nodeCores)
 {
+  CoreMask mask(CPU_SETSIZE / 64, 0);
   cpu_set_t set;
   CPU_ZERO(&set);
-  return sched_getaffinity(0, sizeof set, &set) == 0 ? CPU_COUNT(&set) : 0;
+  const bool known = sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0;
+  for (int core = 0; core < CPU_SETSIZE; ++core)
+  {
+    if (known ? CPU_ISSET(core, &set) : core < nodeCores)
+    {
+      mask[core / 64] |= uint64_t(1) << (core % 64);
+    }
+  }
+  return mask;
 }
 
 // The node's physical memory in bytes (0 if unknown).
@@ -47,7 +58,11 @@ std::atomic<size_t> NodeCacheBytes{ 0 };
 }
 
 //------------------------------------------------------------------------------
-int ProcessesOnThisNode(vtkMultiProcessController* controller)
+namespace
+{
+// controller's processes on this process's node (MPI_COMM_TYPE_SHARED), or false without MPI
+// or another kind of controller (the process is then alone on its node). A collective.
+bool SplitNode(vtkMultiProcessController* controller, MPI_Comm* node)
 {
   auto* communicator =
     controller ? vtkMPICommunicator::SafeDownCast(controller->GetCommunicator()) : nullptr;
@@ -57,12 +72,16 @@ int ProcessesOnThisNode(vtkMultiProcessController* controller)
   int finalized = 0;
   MPI_Initialized(&initialized);
   MPI_Finalized(&finalized);
-  if (!comm || !initialized || finalized)
-  {
-    return 1;
-  }
+  return comm && initialized && !finalized &&
+    MPI_Comm_split_type(*comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, node) == MPI_SUCCESS;
+}
+}
+
+//------------------------------------------------------------------------------
+int ProcessesOnThisNode(vtkMultiProcessController* controller)
+{
   MPI_Comm node;
-  if (MPI_Comm_split_type(*comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node) != MPI_SUCCESS)
+  if (!SplitNode(controller, &node))
   {
     return 1;
   }
@@ -73,11 +92,46 @@ int ProcessesOnThisNode(vtkMultiProcessController* controller)
 }
 
 //------------------------------------------------------------------------------
+// The affinity masks of the processes on this node, and this process's index among them
+// (its own mask alone without MPI). A collective.
+static std::vector<CoreMask> AffinityMasksOnThisNode(
+  vtkMultiProcessController* controller, int* self)
+{
+  const CoreMask mine = AffinityMask(CoresOfNode());
+  *self = 0;
+  MPI_Comm node;
+  if (!SplitNode(controller, &node))
+  {
+    return { mine };
+  }
+  int processes = 1;
+  MPI_Comm_size(node, &processes);
+  MPI_Comm_rank(node, self);
+  const int words = static_cast<int>(mine.size());
+  std::vector<uint64_t> all(static_cast<size_t>(processes) * mine.size());
+  const bool gathered = MPI_Allgather(mine.data(), words, MPI_UINT64_T, all.data(), words,
+                          MPI_UINT64_T, node) == MPI_SUCCESS;
+  MPI_Comm_free(&node);
+  if (!gathered)
+  {
+    *self = 0;
+    return { mine };
+  }
+  std::vector<CoreMask> masks(static_cast<size_t>(processes));
+  for (int p = 0; p < processes; ++p)
+  {
+    masks[p].assign(all.begin() + p * words, all.begin() + (p + 1) * words);
+  }
+  return masks;
+}
+
+//------------------------------------------------------------------------------
 void ShareNode(vtkMultiProcessController* controller)
 {
-  const int processes = ProcessesOnThisNode(controller);
-  SetDefaultThreads(NodeShareOfThreads(CoresOfNode(), CoresInAffinityMask(), processes));
-  NodeCacheBytes.store(NodeShareOfMemory(MemoryOfNode(), processes));
+  int self = 0;
+  const std::vector<CoreMask> masks = AffinityMasksOnThisNode(controller, &self);
+  SetDefaultThreads(NodeShareOfThreads(masks, static_cast<size_t>(self)));
+  NodeCacheBytes.store(NodeShareOfMemory(MemoryOfNode(), static_cast<int>(masks.size())));
 }
 
 //------------------------------------------------------------------------------

@@ -222,10 +222,12 @@ public:
 
   ///@{
   /**
-   * TBB threads for ray marching; 0 (default): under vtkAPCCompositePass an unbound process
-   * takes twice its share of the node's cores (cores / processes on the node, at least one),
-   * at most the node's cores, so that ranks still rendering use the cores of ranks that wait; a
-   * bound one its affinity mask; rendered alone, TBB decides (the affinity mask).
+   * TBB threads for ray marching; 0 (default): under vtkAPCCompositePass a process takes twice
+   * its share of the cores of its affinity mask (each core divided among the node's processes
+   * that may run on it; cores / processes when nobody is bound), at least one, at most its
+   * mask, so that ranks still rendering use the cores of ranks that wait and ranks bound to a
+   * shared socket do not start a thread per core each; rendered alone, TBB decides (the
+   * affinity mask).
    */
   void SetNumberOfThreads(int threads);
   int GetNumberOfThreads() const;

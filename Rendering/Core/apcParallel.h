@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <vector>
 
 namespace apc
 {
@@ -43,22 +44,56 @@ inline int ConcurrencyFor(int requested)
   return threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
 }
 
-// The rule for the default (pure, so it is tested alone): a process bound to fewer cores than
-// the node has (affinityCores < nodeCores) keeps its mask, i.e. TBB's choice (0); an unbound
-// one takes twice its share of the node, 2 * (nodeCores / processesOnNode, at least one), at
-// most nodeCores. Twice, because a view's work is rarely even over the ranks: a rank that
-// finished waits in a barrier that sleeps (apcCollectiveTimes.h), and the ranks still
-// rendering take the cores it left with their second share; one share each left those cores
-// idle (4 ranks on 2 cores, wind 1024²: later frames about 20 % faster, docs/performance.md).
-// Bounded, not every core per rank: 64 ranks on 64 cores run 128 threads, not 4,096.
-inline int NodeShareOfThreads(int nodeCores, int affinityCores, int processesOnNode)
+// One process's affinity mask: bit c of word c / 64 set if it may run on core c.
+using CoreMask = std::vector<uint64_t>;
+
+// The rule for the default (pure, so it is tested alone). masks holds the affinity mask of
+// every process on the node, self is this process's index. Each core of this process's mask
+// is shared among the processes whose masks hold it; the sum over its cores of
+// 1 / (processes sharing the core) is its share of the node (cores / processes when nobody is
+// bound, 1 when bound alone to a core, 1 for each of 32 ranks bound to a 32-core socket). The
+// process takes twice its share, rounded down and at least one, at most its mask's cores.
+// Twice, because a view's work is rarely even over the ranks: a rank that finished waits in a
+// barrier that sleeps (apcCollectiveTimes.h), and the ranks still rendering take the cores it
+// left with their second share; one share each left those cores idle (4 ranks on 2 cores,
+// wind 1024²: later frames about 20 % faster, docs/performance.md). Bounded, not every core of
+// the mask: 64 ranks on 64 cores run 128 threads, not 4,096, whether they are unbound or bound
+// to a socket of 32 cores each (mpirun's default above 2 ranks). 0 (TBB's choice) if self has
+// no mask or no core.
+inline int NodeShareOfThreads(const std::vector<CoreMask>& masks, size_t self)
 {
-  if (nodeCores < 1 || processesOnNode < 1 || (affinityCores > 0 && affinityCores < nodeCores))
+  if (self >= masks.size())
   {
     return 0;
   }
-  const int share = std::max(1, nodeCores / processesOnNode);
-  return std::min(nodeCores, 2 * share);
+  const CoreMask& mine = masks[self];
+  int cores = 0;
+  double share = 0;
+  for (size_t word = 0; word < mine.size(); ++word)
+  {
+    for (int bit = 0; bit < 64; ++bit)
+    {
+      const uint64_t core = uint64_t(1) << bit;
+      if (!(mine[word] & core))
+      {
+        continue;
+      }
+      int sharing = 0;
+      for (const CoreMask& other : masks)
+      {
+        sharing += word < other.size() && (other[word] & core) ? 1 : 0;
+      }
+      ++cores;
+      share += 1.0 / sharing;
+    }
+  }
+  if (cores == 0)
+  {
+    return 0;
+  }
+  // The share is a sum of fractions: a little slack so that 3 x 1/3 counts as one core.
+  const int whole = std::max(1, static_cast<int>(share + 1e-9));
+  return std::min(cores, 2 * whole);
 }
 
 // Calls body(begin, end) on disjoint chunks of [0, count) of at least grain items, on up to
