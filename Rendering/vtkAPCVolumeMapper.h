@@ -193,9 +193,10 @@ public:
 
   ///@{
   /**
-   * MBOIT only: stop a ray once the absorbance of its samples along it reaches ln 10^4 (a
-   * transmittance of 1e-4), leaving out samples nobody can see; a pixel's opacity changes by
-   * less than 1e-4 against marching every sample. The processes agree on where each ray
+   * MBOIT only: stop a ray once the absorbance of its samples along it reaches ln 10^3 (a
+   * transmittance of 1e-3, a quarter of an 8-bit step; chosen by measurement, docs/sampler.md),
+   * leaving out samples nobody can see; a pixel's opacity changes by less than 1e-3 against
+   * marching every sample. The processes agree on where each ray
    * stops, so N processes render what one process renders (docs/sampler.md). On by default:
    * leaving the hidden samples out of the moments changes MBOIT's reconstruction of the
    * visible ones, closer to the exact blend on average and at worst, though a few pixels move

@@ -9,7 +9,7 @@
 //     [--time-cap S] [--spacing-scale F] [--moments 4|6|8] [--mappers bunyk,exact,mboit,zsweep,pt]
 //     [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]
 //     [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] [--end-weights]
-//     [--boundary-weights] [--no-end-weights] [--no-lanes]
+//     [--boundary-weights] [--no-end-weights] [--no-lanes] [--opaque-absorbance A[,B,...]]
 //
 // Mapper "sampler" times the core ray marcher alone (apcSamplerTiming.h): CPU nanoseconds per
 // pass-1 sample and per pass-2 cached sample, the share of samples skipped behind opaque, and
@@ -18,7 +18,12 @@
 // map, the opacity unit distance ParaView derives from the bounds (diagonal / cells^(1/3)) and
 // APC's default sample distance and Sample End Weights (Boundary; --no-end-weights: Off), as the
 // mapper takes them (apcDefaultSpacing.h; with --spacing-scale F, F times that distance); the
-// sampler takes the same distance.
+// sampler takes the same distance. --opaque-absorbance times the sampler with each of these
+// thresholds of the opaque stop instead of the marcher's recommended one (a benchmark-only
+// knob: the mapper always takes the recommended one), in turn within each repeat, one row each,
+// with the image's PSNR and SSIM against the exact blend and its change from the first
+// threshold's image (ln 10^4 = 9.21034, ln 10^3 = 6.90776, ln 10^2.5 = 5.75646,
+// ln 255 = 5.54126).
 //
 // Run under an X server (xvfb-run); Testing/Benchmarks/run-benchmark.sh does everything.
 #include "vtkAPCPuzzleSource.h"
@@ -165,6 +170,9 @@ struct Options
   std::string Setup = "benchmark"; // or "paraview": ParaView's default transfer function
   double Dolly = 1.0;              // times the data set's own dolly
   bool Compare = true; // the sampler's untimed exact and unstopped frames (errors, hidden share)
+  // sampler: the opaque stop's thresholds (absorbance, each > 0, inf: no stop); empty: the
+  // marcher's recommended one (or none with --no-stop)
+  std::vector<double> OpaqueAbsorbances;
 };
 
 // A shared scene (its Grid: the original cells, what APC renders) plus what VTK's mappers
@@ -612,11 +620,14 @@ public:
 
   static void WriteCsvHeader(std::ostream& out)
   {
-    out << "dataset,cells,image,mapper,mode,threads,first_frame_s,frame_s,pass1_s,pass2_s,"
-           "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
-           "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
-           "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
-           "mesh_s,finalize_s,linear_change,pass2_hidden_share,pass2_hidden_share_unstopped\n";
+    out
+      << "dataset,cells,image,mapper,mode,threads,first_frame_s,frame_s,pass1_s,pass2_s,"
+         "samples,samples_per_s,ratio_to_bunyk,note,setup_s,spacing,cpu_s,"
+         "pass1_ns_per_sample,pass2_ns_per_cached_sample,hidden_share,all_samples,cache_share,"
+         "error_vs_exact,stop_change,stop_change_share,error_vs_exact_unstopped,worse_share,"
+         "mesh_s,finalize_s,linear_change,pass2_hidden_share,pass2_hidden_share_unstopped,"
+         "opaque_absorbance,pass2_samples,psnr_vs_exact,ssim_vs_exact,psnr_vs_exact_unstopped,"
+         "ssim_vs_exact_unstopped,change_from_first,worse_than_first_share,most_worse_than_first\n";
   }
 
   // Rows from index first on; written per data set so that a crash keeps what was measured.
@@ -642,11 +653,16 @@ public:
             << Format(s.StopChangeShare) << ',' << Format(s.ErrorVsExactAll) << ','
             << Format(s.WorseShare) << ',' << Format(s.MeshSeconds) << ','
             << Format(s.FinalizeSeconds) << ',' << Format(s.LinearChange) << ','
-            << Format(s.Pass2HiddenShare) << ',' << Format(s.Pass2HiddenShareUnstopped);
+            << Format(s.Pass2HiddenShare) << ',' << Format(s.Pass2HiddenShareUnstopped) << ','
+            << Format(s.OpaqueAbsorbance, 10) << ',' << s.Pass2Samples << ','
+            << Format(s.PsnrVsExact, 6) << ',' << Format(s.SsimVsExact, 7) << ','
+            << Format(s.PsnrVsExactAll, 6) << ',' << Format(s.SsimVsExactAll, 7) << ','
+            << Format(s.ChangeFromFirst) << ',' << Format(s.WorseThanFirstShare) << ','
+            << Format(s.MostWorseThanFirst);
       }
       else
       {
-        out << ",,,,,,,,,,,,,,";
+        out << ",,,,,,,,,,,,,,,,,,,,,,,";
       }
       out << '\n';
     }
@@ -872,47 +888,84 @@ private:
     this->Rows.push_back(row);
   }
 
-  // The core marcher alone on this scene's mesh, camera and transfer function.
+  // The core marcher alone on this scene's mesh, camera and transfer function: one row, or
+  // one per threshold of --opaque-absorbance.
   void RunSampler(const MapperScene& scene, int threads)
   {
-    Row row =
-      NewRow(scene, scene.Grid->GetNumberOfCells(), "sampler", "mboit", std::to_string(threads));
-    row.BunykThreads = threads;
     Stage stage(scene, this->Opt.Size, this->Opt.TimeCap);
     vtkNew<vtkAPCVolumeMapper> mapper; // only for the camera's placement
     mapper->SetInputData(scene.Grid);
     stage.SetMapper(mapper, scene);
     auto* grid = vtkUnstructuredGrid::SafeDownCast(scene.Grid);
-    const apcbench::SamplerTiming s = apcbench::TimeSampler(grid, stage.Renderer, stage.Property,
-      this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare,
-      this->Opt.LinearTolerance, this->Opt.Stop, this->Opt.EndWeights, this->Opt.Lanes);
-    row.Sampler = s;
-    row.Pass1 = s.Pass1Seconds;
-    row.Pass2 = s.Pass2Seconds;
-    row.Frame = s.Pass1Seconds + s.Pass2Seconds;
-    row.Cpu = s.Pass1Cpu + s.Pass2Cpu;
-    row.Setup = s.ViewSeconds;
-    row.Samples = static_cast<double>(s.Samples);
-    row.Spacing = s.Spacing;
-    row.Note = "core marcher alone: pass 1 + pass 2, CPU ns per sample; setup_s = binning";
-    if (!scene.Note.empty())
+    std::vector<apcbench::SamplerTiming> timings;
+    if (this->Opt.OpaqueAbsorbances.empty())
     {
-      row.Note += "; " + scene.Note;
+      timings.push_back(apcbench::TimeSampler(grid, stage.Renderer, stage.Property, this->Opt.Size,
+        scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare,
+        this->Opt.LinearTolerance, this->Opt.Stop, this->Opt.EndWeights, this->Opt.Lanes));
     }
-    std::cerr << "   sampler threads " << threads << ": pass 1 "
-              << Format(s.Pass1NanosecondsPerSample()) << " ns/sample, pass 2 "
-              << Format(s.Pass2NanosecondsPerSample()) << " ns/sample, " << s.Samples
-              << " samples, hidden " << Format(s.HiddenShare()) << ", cached "
-              << Format(s.CacheShare) << ", error vs exact " << Format(s.ErrorVsExact)
-              << ", stop change " << Format(s.StopChange)
-              << " (pixels over 1/255: " << Format(s.StopChangeShare) << "), unstopped error "
-              << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
-              << ", mesh " << Format(s.MeshSeconds) << " s (finalize " << Format(s.FinalizeSeconds)
-              << " s), bin " << Format(s.ViewSeconds) << " s, linear change "
-              << Format(s.LinearChange) << ", spacing " << Format(s.Spacing) << "\n";
-    std::cerr << "   sampler pass 2: hidden " << Format(s.Pass2HiddenShare) << ", unstopped "
-              << Format(s.Pass2HiddenShareUnstopped) << "\n";
-    this->Rows.push_back(row);
+    else
+    {
+      timings = apcbench::TimeSamplerThresholds(grid, stage.Renderer, stage.Property,
+        this->Opt.Size, scene.SampleDistance, threads, this->Opt.Repeats, this->Opt.Compare,
+        this->Opt.LinearTolerance, this->Opt.OpaqueAbsorbances, this->Opt.EndWeights,
+        this->Opt.Lanes);
+    }
+    for (const apcbench::SamplerTiming& s : timings)
+    {
+      Row row =
+        NewRow(scene, scene.Grid->GetNumberOfCells(), "sampler", "mboit", std::to_string(threads));
+      row.BunykThreads = threads;
+      row.Sampler = s;
+      row.Pass1 = s.Pass1Seconds;
+      row.Pass2 = s.Pass2Seconds;
+      row.Frame = s.Pass1Seconds + s.Pass2Seconds;
+      row.Cpu = s.Pass1Cpu + s.Pass2Cpu;
+      row.Setup = s.ViewSeconds;
+      row.Samples = static_cast<double>(s.Samples);
+      row.Spacing = s.Spacing;
+      row.Note = "core marcher alone: pass 1 + pass 2, CPU ns per sample; setup_s = binning";
+      if (!scene.Note.empty())
+      {
+        row.Note += "; " + scene.Note;
+      }
+      std::cerr << "   sampler threads " << threads << " stop " << Format(s.OpaqueAbsorbance, 6)
+                << ": pass 1 " << Format(s.Pass1NanosecondsPerSample()) << " ns/sample, pass 2 "
+                << Format(s.Pass2NanosecondsPerSample()) << " ns/sample, " << s.Samples
+                << " samples (pass 2 " << s.Pass2Samples << "), hidden " << Format(s.HiddenShare())
+                << ", cached " << Format(s.CacheShare) << ", error vs exact "
+                << Format(s.ErrorVsExact) << ", stop change " << Format(s.StopChange)
+                << " (pixels over 1/255: " << Format(s.StopChangeShare) << "), unstopped error "
+                << Format(s.ErrorVsExactAll) << ", pixels worse by 1/255 " << Format(s.WorseShare)
+                << ", mesh " << Format(s.MeshSeconds) << " s (finalize "
+                << Format(s.FinalizeSeconds) << " s), bin " << Format(s.ViewSeconds)
+                << " s, linear change " << Format(s.LinearChange) << ", spacing "
+                << Format(s.Spacing) << "\n";
+      std::cerr << "   sampler pass 2: hidden " << Format(s.Pass2HiddenShare) << ", unstopped "
+                << Format(s.Pass2HiddenShareUnstopped) << "; vs exact PSNR "
+                << Format(s.PsnrVsExact, 6) << " dB SSIM " << Format(s.SsimVsExact, 7)
+                << " (unstopped " << Format(s.PsnrVsExactAll, 6) << " dB, "
+                << Format(s.SsimVsExactAll, 7) << "); change from the first threshold "
+                << Format(s.ChangeFromFirst) << ", pixels worse than it by 1/255 "
+                << Format(s.WorseThanFirstShare) << " (at most " << Format(s.MostWorseThanFirst)
+                << " farther from exact)\n";
+      // Pictures of each threshold's image (and the exact blend) over ParaView's background.
+      const std::array<double, 3> background = { 0.32, 0.34, 0.43 };
+      if (this->Opt.Images && !s.Image.empty())
+      {
+        apctest::WritePNG(this->Opt.Out + "/" + scene.Name + "_sampler_stop" +
+            Format(s.OpaqueAbsorbance, 6) + ".png",
+          s.Image, this->Opt.Size, this->Opt.Size, background);
+      }
+      if (this->Opt.Images && !s.ExactImage.empty())
+      {
+        apctest::WritePNG(this->Opt.Out + "/" + scene.Name + "_sampler_exact.png", s.ExactImage,
+          this->Opt.Size, this->Opt.Size, background);
+      }
+      row.Sampler.Image = std::vector<float>();
+      row.Sampler.ExactImage = std::vector<float>();
+      this->Rows.push_back(row);
+    }
   }
 
   void RunZSweep(const MapperScene& scene)
@@ -1032,7 +1085,8 @@ void Usage()
                "  [--mappers bunyk,exact,mboit,zsweep,pt]\n"
                "  [--no-images] [--setup benchmark|paraview] [--dolly F] [--no-compare]\n"
                "  [--linear-tolerance BINS] [--no-stop] [--lower60] [--field NAME] "
-               "[--end-weights] [--boundary-weights] [--no-end-weights] [--no-lanes]\n";
+               "[--end-weights] [--boundary-weights] [--no-end-weights] [--no-lanes]\n"
+               "  [--opaque-absorbance A[,B,...]]\n";
 }
 
 } // namespace
@@ -1160,6 +1214,20 @@ int main(int argc, char* argv[])
     else if (arg == "--no-images")
     {
       options.Images = false;
+    }
+    else if (arg == "--opaque-absorbance")
+    {
+      // Checked here, once: every threshold the sampler is given is a positive absorbance.
+      for (const std::string& t : Split(value()))
+      {
+        const double absorbance = std::stod(t);
+        if (!(absorbance > 0))
+        {
+          std::cerr << "error: --opaque-absorbance " << t << ": not a positive absorbance\n";
+          return 2;
+        }
+        options.OpaqueAbsorbances.push_back(absorbance);
+      }
     }
     else
     {

@@ -5,6 +5,7 @@
 #include "apcCellMeshFromVTK.h"
 #include "apcDefaultSpacing.h"
 #include "apcDepthWarp.h"
+#include "apcImageMetrics.h"
 #include "apcRayCamera.h"
 #include "apcResolve.h"
 #include "apcTransferTable.h"
@@ -284,6 +285,19 @@ double ShareWorse(const std::vector<float>& a, const std::vector<float>& b,
   return a.empty() ? 0.0 : static_cast<double>(worse) / (a.size() / 4);
 }
 
+// Largest amount (any channel) by which a is farther from reference than b.
+double MostWorse(
+  const std::vector<float>& a, const std::vector<float>& b, const std::vector<float>& reference)
+{
+  double worst = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+  {
+    worst = std::max(
+      worst, static_cast<double>(std::abs(a[i] - reference[i])) - std::abs(b[i] - reference[i]));
+  }
+  return worst;
+}
+
 // One MBOIT frame's resolved premultiplied RGBA (pass 1, pass 2, resolve); samples: pass 1's.
 std::vector<float> MboitImage(apc::VolumeRayMarcher& marcher, const apc::TransferTable& table,
   const apc::LogDepthWarp& warp, size_t pixels, int64_t& samples)
@@ -298,25 +312,52 @@ std::vector<float> MboitImage(apc::VolumeRayMarcher& marcher, const apc::Transfe
     apc::ResolveMode::Renormalised, pixels, moments.data(), 5, sums.data(), rgba.data());
   return rgba;
 }
+
+// Evaluation's quality measure (docs/evaluation.md): premultiplied RGB over black, range 1.
+apc::ImageComparison CompareOverBlack(
+  const std::vector<float>& rgba, const std::vector<float>& reference, int size)
+{
+  const std::vector<float> a = apc::CompositeOverBackground(rgba.data(), size, size, { 0, 0, 0 });
+  const std::vector<float> b =
+    apc::CompositeOverBackground(reference.data(), size, size, { 0, 0, 0 });
+  return apc::CompareImages(a.data(), b.data(), size, size, 3, 1.0, 1.0 / 255);
+}
 }
 
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
   double linearTolerance, bool withStop, int endWeights, bool lanes)
 {
-  SamplerTiming result;
+  const double stop =
+    withStop ? RecommendedStop<apc::VolumeRayMarcher>() : std::numeric_limits<double>::infinity();
+  return TimeSamplerThresholds(grid, renderer, property, size, spacing, threads, repeats, compare,
+    linearTolerance, { stop }, endWeights, lanes)
+    .front();
+}
+
+std::vector<SamplerTiming> TimeSamplerThresholds(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
+  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
+  double linearTolerance, const std::vector<double>& thresholds, int endWeights, bool lanes)
+{
+  const size_t runs = thresholds.size();
+  std::vector<SamplerTiming> results(runs);
+  if (runs == 0)
+  {
+    return results;
+  }
+  SamplerTiming common;
   apc::CellMesh mesh;
   std::string message;
   double start = WallSeconds();
   if (!apc::CellMeshFromVTK(grid, grid->GetPointData()->GetScalars(), false, mesh, message))
   {
     std::cerr << "   sampler: " << message << "\n";
-    return result;
+    return results;
   }
-  result.MeshSeconds = WallSeconds() - start;
+  common.MeshSeconds = WallSeconds() - start;
   start = WallSeconds();
   mesh.Finalize();
-  result.FinalizeSeconds = WallSeconds() - start;
+  common.FinalizeSeconds = WallSeconds() - start;
   if (endWeights == 2) // Sample End Weights = Boundary: the faces on the mesh's boundary
   {
     start = WallSeconds();
@@ -325,15 +366,15 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
     std::cerr << "   sampler: boundary planes " << WallSeconds() - start << " s wall, "
               << CpuSeconds() - cpu << " s CPU\n";
   }
-  result.Cells = mesh.GetNumberOfCells();
+  common.Cells = mesh.GetNumberOfCells();
   const auto& b = mesh.GetBounds();
   if (!(spacing > 0))
   {
     // What the mapper takes for sample distance 0 with these end weights (one process).
     spacing = apc::DefaultSampleDistance(
-      b.data(), static_cast<double>(result.Cells), mesh.GetCellVolume().Value(), endWeights != 0);
+      b.data(), static_cast<double>(common.Cells), mesh.GetCellVolume().Value(), endWeights != 0);
   }
-  result.Spacing = spacing;
+  common.Spacing = spacing;
   const apc::TransferTable table = MakeTable(property, spacing);
   const apc::RayCamera camera = MakeCamera(renderer, size);
   double tmin = 0;
@@ -344,8 +385,6 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
 
   apc::VolumeRayMarcher marcher;
   marcher.SetNumberOfThreads(threads);
-  SetStop(marcher,
-    withStop ? RecommendedStop<apc::VolumeRayMarcher>() : std::numeric_limits<double>::infinity());
   SetAlone(marcher);
   if (!std::isnan(linearTolerance))
   {
@@ -354,66 +393,104 @@ SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   marcher.SetEndWeightsMode(static_cast<apc::VolumeRayMarcher::EndWeightsMode>(endWeights));
   marcher.SetSampleLanes(lanes);
   marcher.SetMesh(&mesh);
-  std::vector<double> view, pass1, pass2, cpu1, cpu2;
+  std::vector<std::vector<double>> view(runs), pass1(runs), pass2(runs), cpu1(runs), cpu2(runs);
   std::vector<double> moments(pixels * 5);
   std::vector<double> sums(pixels * 4);
   for (int r = 0; r < repeats; ++r)
   {
-    double wall = WallSeconds();
-    marcher.SetView(camera, nullptr);
-    view.push_back(WallSeconds() - wall);
-    std::fill(moments.begin(), moments.end(), 0.0);
-    std::fill(sums.begin(), sums.end(), 0.0);
-    double cpu = CpuSeconds();
-    wall = WallSeconds();
-    marcher.AccumulateMoments<4>(table, warp, moments.data());
-    pass1.push_back(WallSeconds() - wall);
-    cpu1.push_back(CpuSeconds() - cpu);
-    result.Samples = marcher.GetLastSampleCount();
-    cpu = CpuSeconds();
-    wall = WallSeconds();
-    marcher.AccumulateColour<4>(table, warp, moments.data(), apc::MomentSettings<4>(), sums.data());
-    pass2.push_back(WallSeconds() - wall);
-    cpu2.push_back(CpuSeconds() - cpu);
-    result.CacheShare = marcher.GetLastColourCacheShare();
-    result.Pass2Samples = marcher.GetLastSampleCount();
-    result.Pass2HiddenShare = Pass2HiddenShare(marcher);
+    for (size_t i = 0; i < runs; ++i)
+    {
+      SamplerTiming& result = results[i];
+      SetStop(marcher, thresholds[i]);
+      double wall = WallSeconds();
+      marcher.SetView(camera, nullptr);
+      view[i].push_back(WallSeconds() - wall);
+      std::fill(moments.begin(), moments.end(), 0.0);
+      std::fill(sums.begin(), sums.end(), 0.0);
+      double cpu = CpuSeconds();
+      wall = WallSeconds();
+      marcher.AccumulateMoments<4>(table, warp, moments.data());
+      pass1[i].push_back(WallSeconds() - wall);
+      cpu1[i].push_back(CpuSeconds() - cpu);
+      result.Samples = marcher.GetLastSampleCount();
+      cpu = CpuSeconds();
+      wall = WallSeconds();
+      marcher.AccumulateColour<4>(
+        table, warp, moments.data(), apc::MomentSettings<4>(), sums.data());
+      pass2[i].push_back(WallSeconds() - wall);
+      cpu2[i].push_back(CpuSeconds() - cpu);
+      result.CacheShare = marcher.GetLastColourCacheShare();
+      result.Pass2Samples = marcher.GetLastSampleCount();
+      result.Pass2HiddenShare = Pass2HiddenShare(marcher);
+    }
   }
-  result.ViewSeconds = Median(view);
-  result.Pass1Seconds = Median(pass1);
-  result.Pass2Seconds = Median(pass2);
-  result.Pass1Cpu = Median(cpu1);
-  result.Pass2Cpu = Median(cpu2);
-  result.AllSamples = result.Samples;
-  result.Valid = true;
+  for (size_t i = 0; i < runs; ++i)
+  {
+    SamplerTiming& result = results[i];
+    result.Cells = common.Cells;
+    result.MeshSeconds = common.MeshSeconds;
+    result.FinalizeSeconds = common.FinalizeSeconds;
+    result.Spacing = common.Spacing;
+    result.OpaqueAbsorbance = CanStop<apc::VolumeRayMarcher>::value
+      ? thresholds[i]
+      : std::numeric_limits<double>::infinity();
+    result.ViewSeconds = Median(view[i]);
+    result.Pass1Seconds = Median(pass1[i]);
+    result.Pass2Seconds = Median(pass2[i]);
+    result.Pass1Cpu = Median(cpu1[i]);
+    result.Pass2Cpu = Median(cpu2[i]);
+    result.AllSamples = result.Samples;
+    result.Valid = true;
+  }
   if (!compare)
   {
-    return result;
+    return results;
   }
-  int64_t samples = 0;
-  const std::vector<float> stopped = MboitImage(marcher, table, warp, pixels, samples);
   std::vector<float> exact(pixels * 4, 0.0f);
   marcher.RenderExact(table, exact.data());
-  result.ErrorVsExact = MaxDifference(stopped, exact);
   std::vector<float> newton(pixels * 4, 0.0f);
-  result.LinearChange =
+  const double linearChange =
     ExactWithLinearTolerance(marcher, table, 0.0, newton) ? MaxDifference(exact, newton) : 0.0;
-  result.ErrorVsExactAll = result.ErrorVsExact;
-  result.StopChange = 0;
-  result.StopChangeShare = 0;
-  result.WorseShare = 0;
-  const double stop = GetStop(marcher);
-  if (SetStop(marcher, std::numeric_limits<double>::infinity()))
+  newton = std::vector<float>();
+  const bool canStop = SetStop(marcher, std::numeric_limits<double>::infinity());
+  int64_t allSamples = 0;
+  const std::vector<float> all = MboitImage(marcher, table, warp, pixels, allSamples);
+  const double allHidden = Pass2HiddenShare(marcher);
+  const apc::ImageComparison allQuality = CompareOverBlack(all, exact, size);
+  for (size_t i = 0; i < runs; ++i)
   {
-    const std::vector<float> all = MboitImage(marcher, table, warp, pixels, result.AllSamples);
-    result.Pass2HiddenShareUnstopped = Pass2HiddenShare(marcher);
-    result.StopChange = MaxDifference(stopped, all);
-    result.StopChangeShare = ShareOver(stopped, all, 1.0 / 255);
-    result.ErrorVsExactAll = MaxDifference(all, exact);
-    result.WorseShare = ShareWorse(stopped, all, exact, 1.0 / 255);
-    SetStop(marcher, stop);
+    SamplerTiming& result = results[i];
+    SetStop(marcher, thresholds[i]);
+    int64_t samples = 0;
+    result.Image = MboitImage(marcher, table, warp, pixels, samples);
+    const std::vector<float>& stopped = result.Image;
+    result.ErrorVsExact = MaxDifference(stopped, exact);
+    result.LinearChange = linearChange;
+    const apc::ImageComparison quality = CompareOverBlack(stopped, exact, size);
+    result.PsnrVsExact = quality.Psnr;
+    result.SsimVsExact = quality.Ssim;
+    result.PsnrVsExactAll = allQuality.Psnr;
+    result.SsimVsExactAll = allQuality.Ssim;
+    result.ErrorVsExactAll = result.ErrorVsExact;
+    result.StopChange = 0;
+    result.StopChangeShare = 0;
+    result.WorseShare = 0;
+    if (canStop)
+    {
+      result.AllSamples = allSamples;
+      result.Pass2HiddenShareUnstopped = allHidden;
+      result.StopChange = MaxDifference(stopped, all);
+      result.StopChangeShare = ShareOver(stopped, all, 1.0 / 255);
+      result.ErrorVsExactAll = MaxDifference(all, exact);
+      result.WorseShare = ShareWorse(stopped, all, exact, 1.0 / 255);
+    }
+    const std::vector<float>& first = results.front().Image;
+    result.ChangeFromFirst = MaxDifference(stopped, first);
+    result.WorseThanFirstShare = ShareWorse(stopped, first, exact, 1.0 / 255);
+    result.MostWorseThanFirst = MostWorse(stopped, first, exact);
   }
-  return result;
+  results.front().ExactImage = std::move(exact);
+  return results;
 }
 
 } // namespace apcbench

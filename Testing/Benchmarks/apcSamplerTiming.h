@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 class vtkRenderer;
 class vtkUnstructuredGrid;
@@ -55,6 +56,25 @@ struct SamplerTiming
   // one with Newton in every non-affine cell (0 where the marcher has no linear inverse).
   double LinearChange = NAN;
   double Spacing = NAN; // the sample spacing used
+  // The stop's threshold this row was marched with (+inf: no stop).
+  double OpaqueAbsorbance = NAN;
+  // The resolved image against the exact blend as evaluation's quality table compares them
+  // (apc::CompareImages: premultiplied RGB over black, data range 1), with the stop and
+  // marched without it.
+  double PsnrVsExact = NAN;
+  double SsimVsExact = NAN;
+  double PsnrVsExactAll = NAN;
+  double SsimVsExactAll = NAN;
+  // Against the first threshold's image (TimeSamplerThresholds): the largest difference (any
+  // channel) and the share of pixels farther from the exact blend than that image by over
+  // 1/255 (0 and 0 for the first itself).
+  double ChangeFromFirst = NAN;
+  double WorseThanFirstShare = NAN;
+  double MostWorseThanFirst = NAN; // the most any channel is farther from the exact blend
+  // With compare: the resolved premultiplied RGBA (size x size, as the marcher's rows), and
+  // the exact blend's on the first result only (for pictures to look at).
+  std::vector<float> Image;
+  std::vector<float> ExactImage;
 
   double HiddenShare() const
   {
@@ -75,6 +95,14 @@ struct SamplerTiming
 SamplerTiming TimeSampler(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
   vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
   double linearTolerance = NAN, bool withStop = true, int endWeights = 0, bool lanes = true);
+
+// The same for each of several thresholds of the opaque stop (absorbance; +inf: no stop), one
+// result each, in their order. Each repeat times every threshold in turn (A B C A B C ...), so
+// that a machine whose load moves changes them alike; compare renders each threshold's image
+// beside the exact and the unstopped ones, and compares each with the first threshold's.
+std::vector<SamplerTiming> TimeSamplerThresholds(vtkUnstructuredGrid* grid, vtkRenderer* renderer,
+  vtkVolumeProperty* property, int size, double spacing, int threads, int repeats, bool compare,
+  double linearTolerance, const std::vector<double>& thresholds, int endWeights, bool lanes);
 
 } // namespace apcbench
 
