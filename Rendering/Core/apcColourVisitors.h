@@ -186,8 +186,16 @@ struct Colour : NoSegments
     // End weights (apcEndWeights.h): each looked-up absorbance times its sample's weight.
     const float* weights = recorded.Weights.empty() ? nullptr : recorded.Weights.data();
     this->Transmittance.clear();
-    this->Replayed.clear();
-    this->Ranges.clear();
+    // Written field by field: a pushed-back temporary, stored in halves and copied whole,
+    // stalled on the store's forwarding each pixel.
+    const size_t most = static_cast<size_t>(tile.Pixels());
+    if (this->Replayed.size() < most)
+    {
+      this->Replayed.resize(most);
+      this->Ranges.resize(most);
+      this->HiddenFroms.resize(most);
+    }
+    int count = 0;
     // Row by row: the image index without a division a pixel.
     const int columns = tile.Width();
     for (int j = tile.J0, p = 0; j < tile.J1; ++j)
@@ -202,12 +210,17 @@ struct Colour : NoSegments
           continue;
         }
         this->Transmittance.emplace_back(this->GlobalMoments + (N + 1) * (row + i), this->Settings);
-        this->Replayed.push_back({ row + i, begin, end });
-        this->Ranges.push_back({ samples + begin, samples + end });
+        ReplayPixel& pixel = this->Replayed[count];
+        pixel.Image = row + i;
+        pixel.Begin = begin;
+        pixel.End = end;
+        SampleRange& range = this->Ranges[count];
+        range.First = samples + begin;
+        range.Last = samples + end;
+        ++count;
       }
     }
-    const int count = static_cast<int>(this->Replayed.size());
-    this->HiddenFroms.assign(count, std::numeric_limits<double>::infinity());
+    std::fill_n(this->HiddenFroms.begin(), count, std::numeric_limits<double>::infinity());
     if (this->HiddenWeight > 0)
     {
       MomentTransmittance<N>::HiddenDepths(this->Transmittance.data(), this->HiddenWeight,

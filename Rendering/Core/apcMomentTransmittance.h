@@ -526,8 +526,11 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
         const double next = hidden[0] ? at[1] : at[2];
         ((hidden[0] ? hidden[1] : hidden[2]) ? w.Hi : w.Lo) = next;
       };
-      // The walks still bisecting, kept first in walks; their lnLimits and pixels follow them.
-      int open = 0;
+      // The walks still bisecting, by their place in walks (which stay where they are, with
+      // their pixels' constants).
+      double lnOf[kGroup];
+      int open[kGroup];
+      int opened = 0;
       for (int a = 0; a < active; ++a)
       {
         Walk& w = walks[a];
@@ -545,25 +548,21 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
         w.First = samples.first;
         w.Last = samples.second;
         // Step 0, whose points the first batch decided.
-        if (!(w.Last <= w.Lo || w.First >= w.Hi))
-        {
-          step(w, z + 8 * a + 2, d + 2);
-        }
-        else
+        if (w.Last <= w.Lo || w.First >= w.Hi)
         {
           depths[w.Index] = w.Hi;
           continue;
         }
-        walks[open] = w;
-        px[open] = px[a];
-        lnLimits[open] = lnLimits[2 * a];
-        ++open;
+        step(w, z + 8 * a + 2, d + 2);
+        lnOf[a] = lnLimits[2 * a];
+        open[opened++] = a;
       }
-      for (int s = 2; s < 10 && open > 0; s += 2)
+      for (int s = 2; s < 10 && opened > 0; s += 2)
       {
         int jobs = 0;
-        for (int a = 0; a < open; ++a)
+        for (int o = 0; o < opened; ++o)
         {
+          const int a = open[o];
           Walk& w = walks[a];
           if (w.Last <= w.Lo || w.First >= w.Hi)
           {
@@ -573,10 +572,9 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
           const double mid = 0.5 * (w.Lo + w.Hi);
           const double left = 0.5 * (w.Lo + mid);
           const double right = 0.5 * (mid + w.Hi);
-          walks[jobs] = w;
-          px[jobs] = px[a];
-          lnLimits[jobs] = lnLimits[a];
-          jobPixels[jobs] = &px[jobs];
+          open[jobs] = a;
+          lnLimits[jobs] = lnOf[a];
+          jobPixels[jobs] = &px[a];
           double* at = z + 4 * jobs;
           at[0] = mid;
           at[1] = left;
@@ -584,16 +582,16 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
           at[3] = right;
           ++jobs;
         }
-        open = jobs;
+        opened = jobs;
         DecideHiddenJobs(jobPixels, lnLimits, z, decided, jobs);
-        for (int a = 0; a < open; ++a)
+        for (int o = 0; o < opened; ++o)
         {
-          step(walks[a], z + 4 * a, decided + 4 * a);
+          step(walks[open[o]], z + 4 * o, decided + 4 * o);
         }
       }
-      for (int a = 0; a < open; ++a)
+      for (int o = 0; o < opened; ++o)
       {
-        depths[walks[a].Index] = walks[a].Hi; // the bisection's last step taken
+        depths[walks[open[o]].Index] = walks[open[o]].Hi; // the bisection's last step taken
       }
     }
   }
