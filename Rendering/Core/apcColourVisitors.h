@@ -70,28 +70,50 @@ struct Colour : NoSegments
     return this->HiddenWeight > 0 ? t.HiddenDepth(this->HiddenWeight)
                                   : std::numeric_limits<double>::infinity();
   }
-  // The same for a pixel whose samples are known: the bisection ends as soon as no sample
-  // lies between its bounds (the same samples skipped, fewer queries).
-  double HiddenDepth(
-    const MomentTransmittance<N>& t, const CachedSample* first, const CachedSample* last) const
+  // A pixel's cached samples' nearest and farthest depth, for the hidden depth's bisection,
+  // which ends as soon as no sample lies between its bounds (the same samples skipped, fewer
+  // queries).
+  struct SampleRange
   {
-    if (!(this->HiddenWeight > 0))
+    const CachedSample* First;
+    const CachedSample* Last;
+    // Four samples a step into four pairs of bounds, four chains instead of one. The bounds
+    // are those of one pass to the value (a NaN depth is never taken, as std::min and max
+    // skip it); a zero may come out with the other sign, which no comparison tells apart.
+    std::pair<double, double> operator()() const
     {
-      return std::numeric_limits<double>::infinity();
-    }
-    return t.HiddenDepth(this->HiddenWeight,
-      [first, last]
+      constexpr float inf = std::numeric_limits<float>::infinity();
+      float nearest[4] = { inf, inf, inf, inf };
+      float farthest[4] = { -inf, -inf, -inf, -inf };
+      const CachedSample* s = this->First;
+      for (; this->Last - s >= 4; s += 4)
       {
-        float nearest = std::numeric_limits<float>::infinity();
-        float farthest = -nearest;
-        for (const CachedSample* s = first; s != last; ++s)
+        for (int k = 0; k < 4; ++k)
         {
-          nearest = std::min(nearest, s->Z);
-          farthest = std::max(farthest, s->Z);
+          nearest[k] = std::min(nearest[k], s[k].Z);
+          farthest[k] = std::max(farthest[k], s[k].Z);
         }
-        return std::make_pair(static_cast<double>(nearest), static_cast<double>(farthest));
-      });
-  }
+      }
+      for (int k = 0; s != this->Last; ++s, ++k)
+      {
+        nearest[k] = std::min(nearest[k], s->Z);
+        farthest[k] = std::max(farthest[k], s->Z);
+      }
+      return std::make_pair(static_cast<double>(std::min(
+                              std::min(nearest[0], nearest[1]), std::min(nearest[2], nearest[3]))),
+        static_cast<double>(
+          std::max(std::max(farthest[0], farthest[1]), std::max(farthest[2], farthest[3]))));
+    }
+  };
+  // A replayed pixel: its index in the image and its run of cached samples.
+  struct ReplayPixel
+  {
+    int64_t Image;
+    uint32_t Begin, End;
+  };
+  std::vector<ReplayPixel> Replayed;
+  std::vector<SampleRange> Ranges;
+  std::vector<double> HiddenFroms;
   void BeginTile(const TileRect& tile)
   {
     this->Transmittance.clear();
@@ -154,77 +176,126 @@ struct Colour : NoSegments
 
   // Pass 2 of a tile from pass 1's cached samples, grouped by pixel (in the order each pixel
   // took them, so it sums in the order it would marching again): a pixel's reconstruction is
-  // set up once, only for pixels with samples, and its hidden depth found once.
+  // set up once, only for pixels with samples, and its hidden depth found once, the tile's
+  // pixels' bisections together (MomentTransmittance::HiddenDepths).
   void ReplayTile(const TileRect& tile, const CachedTile& recorded, const TransferTable& table)
   {
     this->TileHidden = 0;
     const uint32_t* starts = recorded.Starts.data();
+    const CachedSample* samples = recorded.Samples.data();
     // End weights (apcEndWeights.h): each looked-up absorbance times its sample's weight.
     const float* weights = recorded.Weights.empty() ? nullptr : recorded.Weights.data();
-    for (int p = 0; p < tile.Pixels(); ++p)
+    this->Transmittance.clear();
+    // Written field by field: a pushed-back temporary, stored in halves and copied whole,
+    // stalled on the store's forwarding each pixel.
+    const size_t most = static_cast<size_t>(tile.Pixels());
+    if (this->Replayed.size() < most)
     {
-      const uint32_t begin = starts[p];
-      const uint32_t end = starts[p + 1];
-      if (begin == end)
+      this->Replayed.resize(most);
+      this->Ranges.resize(most);
+      this->HiddenFroms.resize(most);
+    }
+    int count = 0;
+    // Row by row: the image index without a division a pixel.
+    const int columns = tile.Width();
+    for (int j = tile.J0, p = 0; j < tile.J1; ++j)
+    {
+      const int64_t row = static_cast<int64_t>(j) * this->Width + tile.I0;
+      for (int i = 0; i < columns; ++i, ++p)
       {
-        continue;
+        const uint32_t begin = starts[p];
+        const uint32_t end = starts[p + 1];
+        if (begin == end)
+        {
+          continue;
+        }
+        this->Transmittance.emplace_back(this->GlobalMoments + (N + 1) * (row + i), this->Settings);
+        ReplayPixel& pixel = this->Replayed[count];
+        pixel.Image = row + i;
+        pixel.Begin = begin;
+        pixel.End = end;
+        SampleRange& range = this->Ranges[count];
+        range.First = samples + begin;
+        range.Last = samples + end;
+        ++count;
       }
-      const MomentTransmittance<N> transmittance(this->MomentsOf(tile, p), this->Settings);
-      const double hiddenFrom = this->HiddenDepth(
-        transmittance, recorded.Samples.data() + begin, recorded.Samples.data() + end);
+    }
+    std::fill_n(this->HiddenFroms.begin(), count, std::numeric_limits<double>::infinity());
+    if (this->HiddenWeight > 0)
+    {
+      MomentTransmittance<N>::HiddenDepths(this->Transmittance.data(), this->HiddenWeight,
+        this->Ranges.data(), this->HiddenFroms.data(), count);
+    }
+    for (int r = 0; r < count; ++r)
+    {
+      const ReplayPixel& pixel = this->Replayed[r];
+      const MomentTransmittance<N>& transmittance = this->Transmittance[r];
+      const double hiddenFrom = this->HiddenFroms[r];
+      ColourSums sums;
       if constexpr (N == 4)
       {
         // Looked up, weighted and summed 4 samples at a time (apcPixelReplay.h).
-        ColourSums sums;
         if (ReplayFourMomentPixel(transmittance, hiddenFrom, table.GetLayout(),
-              recorded.Samples.data() + begin, static_cast<int>(end - begin), sums.Data(),
-              this->TileHidden, weights ? weights + begin : nullptr))
+              samples + pixel.Begin, static_cast<int>(pixel.End - pixel.Begin), sums.Data(),
+              this->TileHidden, weights ? weights + pixel.Begin : nullptr))
         {
-          this->Write(tile, p, sums);
+          this->WriteAt(pixel.Image, sums);
           continue;
         }
       }
-      // The pixel's visible samples looked up, then weighted all at once (vectorised).
-      const size_t most = end - begin;
-      if (this->Depths.size() < most)
-      {
-        this->Depths.resize(most);
-        this->Absorbances.resize(most);
-        this->Colours.resize(most);
-        this->Weights.resize(most);
-      }
-      int count = 0;
-      for (const CachedSample *sample = recorded.Samples.data() + begin,
-                              *last = recorded.Samples.data() + end;
-           sample != last; ++sample)
-      {
-        if (sample->Z >= hiddenFrom)
-        {
-          continue;
-        }
-        TransferSample s = table.Lookup(sample->Scalar);
-        if (weights)
-        {
-          s.Absorbance *= weights[sample - recorded.Samples.data()];
-        }
-        this->Depths[count] = sample->Z;
-        this->Absorbances[count] = s.Absorbance;
-        this->Colours[count] = s.Colour;
-        ++count;
-      }
-      this->TileHidden += static_cast<int64_t>(most) - count;
-      transmittance.Weights(
-        this->Depths.data(), this->Absorbances.data(), this->Weights.data(), count);
-      ColourSums sums;
-      for (int i = 0; i < count; ++i)
-      {
-        const std::array<float, 3>& c = this->Colours[i];
-        sums.Add(this->Weights[i],
-          { static_cast<double>(c[0]), static_cast<double>(c[1]), static_cast<double>(c[2]) });
-      }
-      this->Write(tile, p, sums);
+      this->ReplayGeneric(transmittance, hiddenFrom, samples + pixel.Begin, samples + pixel.End,
+        weights ? weights + pixel.Begin : nullptr, table, sums);
+      this->WriteAt(pixel.Image, sums);
     }
     this->CountHidden();
+  }
+  void WriteAt(int64_t image, const ColourSums& sums) const
+  {
+    double* out = this->Output + 4 * image;
+    for (int c = 0; c < 4; ++c)
+    {
+      out[c] += sums.Sums[c];
+    }
+  }
+  // The pixel's visible samples looked up, then weighted all at once (vectorised).
+  void ReplayGeneric(const MomentTransmittance<N>& transmittance, double hiddenFrom,
+    const CachedSample* first, const CachedSample* last, const float* weights,
+    const TransferTable& table, ColourSums& sums)
+  {
+    const size_t most = static_cast<size_t>(last - first);
+    if (this->Depths.size() < most)
+    {
+      this->Depths.resize(most);
+      this->Absorbances.resize(most);
+      this->Colours.resize(most);
+      this->Weights.resize(most);
+    }
+    int count = 0;
+    for (const CachedSample* sample = first; sample != last; ++sample)
+    {
+      if (sample->Z >= hiddenFrom)
+      {
+        continue;
+      }
+      TransferSample s = table.Lookup(sample->Scalar);
+      if (weights)
+      {
+        s.Absorbance *= weights[sample - first];
+      }
+      this->Depths[count] = sample->Z;
+      this->Absorbances[count] = s.Absorbance;
+      this->Colours[count] = s.Colour;
+      ++count;
+    }
+    this->TileHidden += static_cast<int64_t>(most) - count;
+    transmittance.Weights(
+      this->Depths.data(), this->Absorbances.data(), this->Weights.data(), count);
+    for (int i = 0; i < count; ++i)
+    {
+      const std::array<float, 3>& c = this->Colours[i];
+      sums.Add(this->Weights[i],
+        { static_cast<double>(c[0]), static_cast<double>(c[1]), static_cast<double>(c[2]) });
+    }
   }
 };
 

@@ -55,6 +55,14 @@ bool HasHiddenKernel(HiddenKernel kernel);
 void DecideHidden(const FourMomentPixel& px, double lnLimit, const double* z, int8_t* decisions,
   int n, HiddenKernel kernel = HiddenKernel::Best);
 
+// DecideHidden for several pixels' depths in one call, four depths a job: job j decides
+// z[4 j, 4 j + 4) for the pixel *px[j] and its lnLimits[j] into decisions[4 j, 4 j + 4), the
+// same answers as DecideHidden(*px[j], lnLimits[j], z + 4 j, decisions + 4 j, 4) gives. The
+// jobs' chains of dependent operations overlap where DecideHidden's calls, each waited on by
+// its pixel's next step, followed one another.
+void DecideHiddenJobs(const FourMomentPixel* const* px, const double* lnLimits, const double* z,
+  int8_t* decisions, int jobs, HiddenKernel kernel = HiddenKernel::Best);
+
 } // namespace apc
 
 #endif

@@ -37,6 +37,7 @@
 #include "apcPolynomialRoots.h"
 #include "apcPowerMoments.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -158,6 +159,13 @@ public:
   // returned. Pass 2 calls it with each pixel's cached samples' nearest and farthest depth.
   template <class Range>
   double HiddenDepth(double maxWeight, const Range& range) const;
+  // HiddenDepth(maxWeight, ranges[i]) of pixels[i], i < count, into depths[i]: the same depths
+  // to the bit. With 4 moments the pixels' bisections go round by round together, each round's
+  // decisions for all of them in one batch: a pixel's rounds wait on each other (the next
+  // depths come from the last answers), other pixels' rounds need not.
+  template <class Range>
+  static void HiddenDepths(const MomentTransmittance* pixels, double maxWeight, const Range* ranges,
+    double* depths, int count);
 
   // For 4 moments and a valid pixel, its constants for kernels that weight many samples at
   // once (pass 2's replay); false otherwise (then query sample by sample).
@@ -180,6 +188,7 @@ public:
 
 private:
   static constexpr int M = N / 2;
+  bool MayHaveHiddenDepth(double maxWeight) const;
   template <class Range>
   double FourMomentHiddenDepth(double limit, const Range& range) const;
   double ChristoffelKernel(double x) const;
@@ -350,16 +359,23 @@ inline double BisectHiddenDepth(const Range& range, const AtEnd& atEnd, const At
   return hi;
 }
 
+// Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
+// pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
+template <int N>
+inline bool MomentTransmittance<N>::MayHaveHiddenDepth(double maxWeight) const
+{
+  return !(this->State != PixelState::Valid || !(maxWeight > 0.0) ||
+    SurelyNoHiddenDepth(this->B0, maxWeight) ||
+    !(SurelyMayHaveHiddenDepth(this->B0, maxWeight) ||
+      std::exp(-this->B0) * this->B0 <= maxWeight));
+}
+
 template <int N>
 template <class Range>
 inline double MomentTransmittance<N>::HiddenDepth(double maxWeight, const Range& range) const
 {
   constexpr double kNone = std::numeric_limits<double>::infinity();
-  // Empty pixels have T = 1; degenerate ones are left alone. T >= exp(-b0) everywhere, so a
-  // pixel whose b0 cannot push T b0 below the bound has no hidden depth (no query needed).
-  if (this->State != PixelState::Valid || !(maxWeight > 0.0) ||
-    SurelyNoHiddenDepth(this->B0, maxWeight) ||
-    !(SurelyMayHaveHiddenDepth(this->B0, maxWeight) || std::exp(-this->B0) * this->B0 <= maxWeight))
+  if (!this->MayHaveHiddenDepth(maxWeight))
   {
     return kNone;
   }
@@ -423,6 +439,162 @@ inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const 
       at[1] = resolve(left, decided[3]);
       at[2] = resolve(right, decided[4]);
     });
+}
+
+// HiddenDepths: FourMomentHiddenDepth's walk for a group of pixels at once, as a state per pixel
+// (its bounds and step) advanced a round at a time: the first batch holds each pixel's 1, -1
+// and first round's three points (two jobs a pixel), each later one the three points of every
+// pixel still bisecting (a job each). Every test is decided as FourMomentHiddenDepth decides
+// it (the same decision for the same pixel, limit and depth, the query where it is undecided),
+// in the same order of steps, so each pixel ends on the same depth.
+template <int N>
+template <class Range>
+inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixels,
+  double maxWeight, const Range* ranges, double* depths, int count)
+{
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  if constexpr (M != 2)
+  {
+    for (int i = 0; i < count; ++i)
+    {
+      depths[i] = pixels[i].HiddenDepth(maxWeight, ranges[i]);
+    }
+  }
+  else
+  {
+    // Enough pixels a group for their rounds to overlap, few enough to stay on the stack.
+    constexpr int kGroup = 8;
+    struct Walk
+    {
+      const MomentTransmittance* T;
+      double Limit, Lo, Hi, First, Last;
+      int Index;
+    };
+    for (int g = 0; g < count; g += kGroup)
+    {
+      const int end = std::min(count, g + kGroup);
+      Walk walks[kGroup];
+      FourMomentPixel px[kGroup];
+      double lnLimits[2 * kGroup];
+      const FourMomentPixel* jobPixels[2 * kGroup];
+      alignas(32) double z[8 * kGroup];
+      int8_t decided[8 * kGroup];
+      int active = 0;
+      for (int i = g; i < end; ++i)
+      {
+        const MomentTransmittance& t = pixels[i];
+        depths[i] = kNone;
+        if (!t.MayHaveHiddenDepth(maxWeight))
+        {
+          continue;
+        }
+        const double limit = maxWeight / t.B0;
+        if (!(limit < 1.0 && limit >= kLowestHiddenLimit))
+        {
+          depths[i] = t.HiddenDepth(maxWeight, ranges[i]);
+          continue;
+        }
+        t.GetFourMomentPixel(px[active]);
+        walks[active] = { &t, limit, -1.0, 1.0, 0.0, 0.0, i };
+        const double lnLimit = std::log(limit);
+        const double first[8] = { 1.0, -1.0, 0.0, -0.5, 0.5, 0.5, 0.5, 0.5 };
+        std::copy(first, first + 8, z + 8 * active);
+        jobPixels[2 * active] = jobPixels[2 * active + 1] = &px[active];
+        lnLimits[2 * active] = lnLimits[2 * active + 1] = lnLimit;
+        ++active;
+      }
+      if (active == 0)
+      {
+        continue;
+      }
+      DecideHiddenJobs(jobPixels, lnLimits, z, decided, 2 * active);
+      auto resolve = [](const Walk& w, double at, int8_t decision)
+      {
+        if (decision == kHiddenUndecided)
+        {
+          const TransmittanceQuery q = w.T->Query(at);
+          return !q.Fallback && q.Transmittance <= w.Limit;
+        }
+        return decision == kHiddenYes;
+      };
+      // A round of BisectHiddenDepth's: the answers at mid, left and right move the bounds.
+      auto step = [&resolve](Walk& w, const double* at, const int8_t* decision)
+      {
+        const bool hidden[3] = { resolve(w, at[0], decision[0]), resolve(w, at[1], decision[1]),
+          resolve(w, at[2], decision[2]) };
+        (hidden[0] ? w.Hi : w.Lo) = at[0];
+        const double next = hidden[0] ? at[1] : at[2];
+        ((hidden[0] ? hidden[1] : hidden[2]) ? w.Hi : w.Lo) = next;
+      };
+      // The walks still bisecting, by their place in walks (which stay where they are, with
+      // their pixels' constants).
+      double lnOf[kGroup];
+      int open[kGroup];
+      int opened = 0;
+      for (int a = 0; a < active; ++a)
+      {
+        Walk& w = walks[a];
+        const int8_t* d = decided + 8 * a;
+        if (!resolve(w, 1.0, d[0]))
+        {
+          continue; // kNone
+        }
+        if (resolve(w, -1.0, d[1]))
+        {
+          depths[w.Index] = -1.0;
+          continue;
+        }
+        const std::pair<double, double> samples = ranges[w.Index]();
+        w.First = samples.first;
+        w.Last = samples.second;
+        // Step 0, whose points the first batch decided.
+        if (w.Last <= w.Lo || w.First >= w.Hi)
+        {
+          depths[w.Index] = w.Hi;
+          continue;
+        }
+        step(w, z + 8 * a + 2, d + 2);
+        lnOf[a] = lnLimits[2 * a];
+        open[opened++] = a;
+      }
+      for (int s = 2; s < 10 && opened > 0; s += 2)
+      {
+        int jobs = 0;
+        for (int o = 0; o < opened; ++o)
+        {
+          const int a = open[o];
+          Walk& w = walks[a];
+          if (w.Last <= w.Lo || w.First >= w.Hi)
+          {
+            depths[w.Index] = w.Hi;
+            continue;
+          }
+          const double mid = 0.5 * (w.Lo + w.Hi);
+          const double left = 0.5 * (w.Lo + mid);
+          const double right = 0.5 * (mid + w.Hi);
+          open[jobs] = a;
+          lnLimits[jobs] = lnOf[a];
+          jobPixels[jobs] = &px[a];
+          double* at = z + 4 * jobs;
+          at[0] = mid;
+          at[1] = left;
+          at[2] = right;
+          at[3] = right;
+          ++jobs;
+        }
+        opened = jobs;
+        DecideHiddenJobs(jobPixels, lnLimits, z, decided, jobs);
+        for (int o = 0; o < opened; ++o)
+        {
+          step(walks[open[o]], z + 4 * o, decided + 4 * o);
+        }
+      }
+      for (int o = 0; o < opened; ++o)
+      {
+        depths[walks[open[o]].Index] = walks[open[o]].Hi; // the bisection's last step taken
+      }
+    }
+  }
 }
 
 extern template class MomentTransmittance<4>;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <random>
@@ -224,6 +225,158 @@ TEST(HiddenDecisions, HiddenDepthIsTheQuerysBisection)
     }
   }
   EXPECT_GT(bisected, 1000);
+}
+
+// The jobs' decisions are each DecideHidden's for the job's pixel, limit and four depths, in
+// both kernels, with the jobs' pixels and limits mixed from job to job.
+TEST(HiddenDecisions, JobsDecideAsEachPixelsCall)
+{
+  std::mt19937_64 rng(77);
+  const std::vector<std::vector<double>> pixels = Pixels(rng);
+  std::vector<apc::FourMomentPixel> valid;
+  for (const std::vector<double>& sums : pixels)
+  {
+    apc::FourMomentPixel px;
+    if (apc::MomentTransmittance<4>(sums.data()).GetFourMomentPixel(px))
+    {
+      valid.push_back(px);
+    }
+  }
+  ASSERT_GT(valid.size(), 1000u);
+  std::uniform_real_distribution<double> logLimit(std::log(1e-12), std::log(0.9));
+  std::uniform_int_distribution<int> grid(-512, 512);
+  std::uniform_int_distribution<size_t> pick(0, valid.size() - 1);
+  int64_t checked = 0;
+  for (int round = 0; round < 400; ++round)
+  {
+    const int jobs = 1 + round % 17;
+    std::vector<const apc::FourMomentPixel*> px(jobs);
+    std::vector<double> lnLimits(jobs);
+    std::vector<double> z(4 * jobs);
+    for (int j = 0; j < jobs; ++j)
+    {
+      px[j] = &valid[pick(rng)];
+      lnLimits[j] = logLimit(rng);
+      for (int k = 0; k < 4; ++k)
+      {
+        z[4 * j + k] = grid(rng) / 512.0;
+      }
+    }
+    for (const apc::HiddenKernel kernel : { apc::HiddenKernel::Scalar, apc::HiddenKernel::Avx2 })
+    {
+      if (!apc::HasHiddenKernel(kernel))
+      {
+        continue;
+      }
+      std::vector<int8_t> together(4 * jobs, 7);
+      apc::DecideHiddenJobs(px.data(), lnLimits.data(), z.data(), together.data(), jobs, kernel);
+      for (int j = 0; j < jobs; ++j)
+      {
+        int8_t alone[4];
+        apc::DecideHidden(*px[j], lnLimits[j], z.data() + 4 * j, alone, 4, kernel);
+        for (int k = 0; k < 4; ++k)
+        {
+          ASSERT_EQ(together[4 * j + k], alone[k]) << "round " << round << " job " << j;
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 10000);
+}
+
+// HiddenDepths (the pixels' bisections round by round together) gives each pixel's HiddenDepth
+// to the bit: groups of 0-40 pixels mixing every kind (empty, degenerate, no hidden depth, a
+// limit of 1 or above, hidden everywhere, bisecting, cut short by the samples' range or not),
+// weights that put the limit on T at a grid depth to the ulp.
+TEST(HiddenDecisions, HiddenDepthsAreEachPixelsHiddenDepth)
+{
+  std::mt19937_64 rng(9090);
+  std::vector<std::vector<double>> pixels = Pixels(rng);
+  pixels.push_back({ 0.0, 0.0, 0.0, 0.0, 0.0 });
+  pixels.push_back({ 1e-5, 0.0, 1e-6, 0.0, 1e-7 });
+  pixels.push_back({ std::numeric_limits<double>::infinity(), 0.0, 0.0, 0.0, 0.0 });
+  pixels.push_back({ 5.0, std::nan(""), 1.0, 0.0, 1.0 });
+  pixels.push_back({ 1e-3 * 2, 1e-3, 1e-3, 1e-3, 1e-3 }); // limit above 1 for w = 1e-2
+  std::shuffle(pixels.begin(), pixels.end(), rng);
+  std::uniform_real_distribution<double> depth(-1.0, 1.0);
+  std::uniform_int_distribution<int> size(0, 40);
+  using Range = std::pair<double, double>;
+  struct Fixed
+  {
+    Range R;
+    Range operator()() const { return this->R; }
+  };
+  int bisected = 0;
+  int differentKinds = 0;
+  for (const double weight : { 1e-4, 1e-2, 1e-6 })
+  {
+    for (size_t at = 0; at < pixels.size();)
+    {
+      const size_t count = std::min(pixels.size() - at, static_cast<size_t>(size(rng)));
+      std::vector<apc::MomentTransmittance<4>> group;
+      std::vector<Fixed> ranges;
+      for (size_t i = 0; i < count; ++i)
+      {
+        group.emplace_back(pixels[at + i].data());
+        const double a = depth(rng);
+        const double b = depth(rng);
+        const double inf = std::numeric_limits<double>::infinity();
+        ranges.push_back(
+          { (at + i) % 5 == 0 ? Range(-inf, inf) : Range(std::min(a, b), std::max(a, b)) });
+      }
+      std::vector<double> together(count, 42.0);
+      apc::MomentTransmittance<4>::HiddenDepths(
+        group.data(), weight, ranges.data(), together.data(), static_cast<int>(count));
+      bool none = false;
+      bool some = false;
+      for (size_t i = 0; i < count; ++i)
+      {
+        const double alone = group[i].HiddenDepth(weight, ranges[i]);
+        ASSERT_EQ(std::memcmp(&together[i], &alone, sizeof(double)), 0)
+          << "pixel " << at + i << " weight " << weight << ": " << together[i] << " against "
+          << alone;
+        bisected += alone > -1.0 && alone < 1.0;
+        none = none || std::isinf(alone);
+        some = some || !std::isinf(alone);
+      }
+      differentKinds += none && some;
+      at += count;
+    }
+  }
+  // At the grid's limits: each pixel's own T at a grid depth times b0 as its weight.
+  for (size_t p = 0; p < pixels.size(); p += 7)
+  {
+    const size_t count = std::min<size_t>(7, pixels.size() - p);
+    for (const double rel : { 0.0, 1e-16, -1e-16, 2e-16, -2e-16 })
+    {
+      for (size_t i = 0; i < count; ++i)
+      {
+        const apc::MomentTransmittance<4> t(pixels[p + i].data());
+        const double gridZ = static_cast<int>((p + i) % 1025) / 512.0 - 1.0;
+        const double weight = t.Query(gridZ).Transmittance * pixels[p + i][0] * (1.0 + rel);
+        // The same weight for the group: its other pixels take it as any weight.
+        std::vector<apc::MomentTransmittance<4>> group;
+        std::vector<Fixed> ranges;
+        for (size_t k = 0; k < count; ++k)
+        {
+          group.emplace_back(pixels[p + k].data());
+          ranges.push_back({ Range(-0.9, 0.9) });
+        }
+        std::vector<double> together(count);
+        apc::MomentTransmittance<4>::HiddenDepths(
+          group.data(), weight, ranges.data(), together.data(), static_cast<int>(count));
+        for (size_t k = 0; k < count; ++k)
+        {
+          const double alone = group[k].HiddenDepth(weight, ranges[k]);
+          ASSERT_EQ(std::memcmp(&together[k], &alone, sizeof(double)), 0)
+            << "pixel " << p + k << " weight " << weight;
+        }
+      }
+    }
+  }
+  EXPECT_GT(bisected, 1000);
+  EXPECT_GT(differentKinds, 10);
 }
 
 } // namespace
