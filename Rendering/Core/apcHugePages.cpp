@@ -1,5 +1,6 @@
 #include "apcHugePages.h"
 
+#include <atomic>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -7,32 +8,28 @@
 
 #if defined(__unix__) || defined(__APPLE__)
 #include <sys/mman.h>
+#include <time.h>
 #define APC_HUGE_MMAP 1
 #endif
 
 namespace apc
 {
 
-bool HugePagesWanted()
+namespace
 {
-  static const bool wanted = []
-  {
-    const char* value = std::getenv("APC_HUGE_PAGES");
-    return !(value && std::strcmp(value, "0") == 0);
-  }();
-  return wanted;
+std::atomic<int> ForcedHugePages{ -1 };
+
+size_t WholeHugePages(size_t bytes)
+{
+  return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
 }
 
-void* AllocateHugeBlock(size_t bytes)
-{
-  if (bytes == 0)
-  {
-    return nullptr;
-  }
 #ifdef APC_HUGE_MMAP
-  // Mapped with a huge page of slack, then trimmed to a 2 MiB-aligned start: mmap itself only
-  // aligns to 4 KiB, and a huge page can only back a 2 MiB-aligned range.
-  const size_t size = (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+// size bytes (whole huge pages) of address space at a 2 MiB-aligned start, or null. Mapped
+// with a huge page of slack, then trimmed: mmap itself only aligns to 4 KiB, and a huge page
+// can only back a 2 MiB-aligned range.
+void* MapAligned(size_t size)
+{
   void* mapped = mmap(nullptr, size + kHugePageBytes, PROT_READ | PROT_WRITE,
     MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
   if (mapped == MAP_FAILED)
@@ -49,12 +46,109 @@ void* AllocateHugeBlock(size_t bytes)
   {
     munmap(reinterpret_cast<void*>(aligned + size), start + kHugePageBytes - aligned);
   }
-  void* block = reinterpret_cast<void*>(aligned);
-#ifdef MADV_HUGEPAGE
-  if (HugePagesWanted())
+  return reinterpret_cast<void*>(aligned);
+}
+
+double ThreadSeconds()
+{
+  timespec t{};
+#ifdef CLOCK_THREAD_CPUTIME_ID
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+#else
+  clock_gettime(CLOCK_MONOTONIC, &t);
+#endif
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// This thread's CPU seconds (the faults' kernel time is the thread's) to first write every
+// 4 KiB page of a fresh mapping of size bytes given advice; -1 if it cannot be mapped.
+double FirstTouchSeconds(size_t size, int advice)
+{
+  void* block = MapAligned(size);
+  if (!block)
   {
-    madvise(block, size, MADV_HUGEPAGE); // a hint: without it, 4 KiB pages
+    return -1;
   }
+  if (advice >= 0)
+  {
+    madvise(block, size, advice);
+  }
+  volatile unsigned char* bytes = static_cast<unsigned char*>(block);
+  const double start = ThreadSeconds();
+  for (size_t i = 0; i < size; i += 4096)
+  {
+    bytes[i] = 1;
+  }
+  const double seconds = ThreadSeconds() - start;
+  munmap(block, size);
+  return seconds;
+}
+#endif
+
+bool ChooseHugePages()
+{
+  const char* value = std::getenv("APC_HUGE_PAGES");
+  if (value && (std::strcmp(value, "0") == 0 || std::strcmp(value, "1") == 0))
+  {
+    return value[0] == '1';
+  }
+  // Huge pages on a tie: fewer TLB entries for the same bytes.
+  const PageTouchCost cost = MeasurePageTouch(kPageProbeBytes);
+  return !(cost.Small < cost.Huge);
+}
+}
+
+PageTouchCost MeasurePageTouch(size_t bytes)
+{
+  PageTouchCost cost;
+#if defined(APC_HUGE_MMAP) && defined(MADV_HUGEPAGE) && defined(MADV_NOHUGEPAGE)
+  const size_t size = WholeHugePages(bytes);
+  // 4 KiB pages first: memory the huge pages' probe freed is not handed to it.
+  const double small = FirstTouchSeconds(size, MADV_NOHUGEPAGE);
+  const double huge = FirstTouchSeconds(size, MADV_HUGEPAGE);
+  if (small >= 0 && huge >= 0)
+  {
+    cost.Small = small;
+    cost.Huge = huge;
+  }
+#else
+  (void)bytes;
+#endif
+  return cost;
+}
+
+bool HugePagesWanted()
+{
+  const int forced = ForcedHugePages.load(std::memory_order_relaxed);
+  if (forced >= 0)
+  {
+    return forced == 1;
+  }
+  static const bool chosen = ChooseHugePages();
+  return chosen;
+}
+
+void SetHugePagesWantedForTesting(int wanted)
+{
+  ForcedHugePages.store(wanted < 0 ? -1 : (wanted > 0 ? 1 : 0), std::memory_order_relaxed);
+}
+
+void* AllocateHugeBlock(size_t bytes)
+{
+  if (bytes == 0)
+  {
+    return nullptr;
+  }
+#ifdef APC_HUGE_MMAP
+  const size_t size = WholeHugePages(bytes);
+  void* block = MapAligned(size);
+  if (!block)
+  {
+    return nullptr;
+  }
+#if defined(MADV_HUGEPAGE) && defined(MADV_NOHUGEPAGE)
+  // A hint either way: 4 KiB pages also where the system gives huge pages unasked.
+  madvise(block, size, HugePagesWanted() ? MADV_HUGEPAGE : MADV_NOHUGEPAGE);
 #endif
   return block;
 #else
@@ -85,7 +179,7 @@ void FreeHugeBlock(void* block, size_t bytes)
     return;
   }
 #ifdef APC_HUGE_MMAP
-  munmap(block, (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes);
+  munmap(block, WholeHugePages(bytes));
 #else
   (void)bytes;
   ::operator delete(block);

@@ -1,8 +1,11 @@
-// Large blocks of memory in transparent huge pages where the system offers them. The first
-// write to a fresh page faults; in 4 KiB pages that is one fault per 4 KiB, which on the
-// virtual machines at hand costs about as much as the set-up's computing (each fault exits to
-// the hypervisor), while a 2 MiB page takes one fault for 512 of them. A block is aligned to
-// 2 MiB so that every whole 2 MiB of it can be a huge page.
+// Large blocks of memory in transparent huge pages where the system offers them and where
+// they are the cheaper to first touch. The first write to a fresh page faults; in 4 KiB pages
+// that is one fault per 4 KiB, which on some virtual machines costs about as much as the
+// set-up's computing (each fault exits to the hypervisor), while a 2 MiB page takes one fault
+// for 512 of them. On others a 4 KiB fault is cheap and a fresh huge page dear (the host backs
+// it anew after the guest reported it free): there the same bytes cost several times more in
+// huge pages. Which holds is measured once per process (HugePagesWanted). A block is aligned
+// to 2 MiB so that every whole 2 MiB of it can be a huge page.
 #ifndef apcHugePages_h
 #define apcHugePages_h
 
@@ -17,8 +20,27 @@ namespace apc
 constexpr size_t kHugePageBytes = size_t(2) << 20;
 constexpr size_t kMinHugeBlockBytes = 2 * kHugePageBytes;
 
-// False if the environment sets APC_HUGE_PAGES=0: every block then in 4 KiB pages.
+// Whether large blocks are asked for in huge pages. APC_HUGE_PAGES=0 or 1 in the environment
+// decides; otherwise the first call measures both page sizes' first touch (MeasurePageTouch)
+// and takes huge pages unless 4 KiB pages were cheaper, for the rest of the process.
 bool HugePagesWanted();
+
+// Overrides HugePagesWanted (tests): 1 huge pages, 0 4 KiB pages, -1 back to its own choice.
+void SetHugePagesWantedForTesting(int wanted);
+
+// The CPU seconds (this thread's, kernel time included) of writing one byte in each 4 KiB page
+// of bytes of fresh memory, advised huge pages and 4 KiB pages (Huge is Small's where the
+// system has no transparent huge pages; both 0 where memory is not mapped by APC).
+struct PageTouchCost
+{
+  double Huge = 0;
+  double Small = 0;
+};
+PageTouchCost MeasurePageTouch(size_t bytes);
+
+// The bytes MeasurePageTouch touches in each page size for HugePagesWanted's choice: two huge
+// pages, a few milliseconds where fresh huge pages are dear.
+constexpr size_t kPageProbeBytes = 2 * kHugePageBytes;
 
 // bytes of address space (committed page by page as it is first written), or null if the
 // system refuses them. Free with FreeHugeBlock and the same bytes.
