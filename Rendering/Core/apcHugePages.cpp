@@ -85,34 +85,50 @@ double FirstTouchSeconds(size_t size, int advice)
 }
 #endif
 
-bool ChooseHugePages()
+bool FromEnvironmentOrProbe()
 {
   const char* value = std::getenv("APC_HUGE_PAGES");
   if (value && (std::strcmp(value, "0") == 0 || std::strcmp(value, "1") == 0))
   {
     return value[0] == '1';
   }
-  // Huge pages on a tie: fewer TLB entries for the same bytes.
-  const PageTouchCost cost = MeasurePageTouch(kPageProbeBytes);
-  return !(cost.Small < cost.Huge);
+  const PageTouchCost cost = MeasurePageTouch(kPageProbeBytes, kCheap4KiBSecondsPerMB);
+  return ChooseHugePages(cost, kPageProbeBytes);
 }
 }
 
-PageTouchCost MeasurePageTouch(size_t bytes)
+bool ChooseHugePages(const PageTouchCost& cost, size_t bytes)
+{
+  const double megabytes = static_cast<double>(WholeHugePages(bytes)) / (1 << 20);
+  if (cost.Small < kCheap4KiBSecondsPerMB * megabytes)
+  {
+    return false;
+  }
+  // Huge pages on a tie: fewer TLB entries for the same bytes.
+  return !(cost.Small < cost.Huge);
+}
+
+PageTouchCost MeasurePageTouch(size_t bytes, double cheapSmallSecondsPerMB)
 {
   PageTouchCost cost;
 #if defined(APC_HUGE_MMAP) && defined(MADV_HUGEPAGE) && defined(MADV_NOHUGEPAGE)
   const size_t size = WholeHugePages(bytes);
   // 4 KiB pages first: memory the huge pages' probe freed is not handed to it.
   const double small = FirstTouchSeconds(size, MADV_NOHUGEPAGE);
-  const double huge = FirstTouchSeconds(size, MADV_HUGEPAGE);
-  if (small >= 0 && huge >= 0)
+  if (small < 0)
   {
-    cost.Small = small;
-    cost.Huge = huge;
+    return cost;
+  }
+  cost.Small = small;
+  cost.Huge = small;
+  if (small >= cheapSmallSecondsPerMB * static_cast<double>(size) / (1 << 20))
+  {
+    const double huge = FirstTouchSeconds(size, MADV_HUGEPAGE);
+    cost.Huge = huge >= 0 ? huge : small;
   }
 #else
   (void)bytes;
+  (void)cheapSmallSecondsPerMB;
 #endif
   return cost;
 }
@@ -124,7 +140,7 @@ bool HugePagesWanted()
   {
     return forced == 1;
   }
-  static const bool chosen = ChooseHugePages();
+  static const bool chosen = FromEnvironmentOrProbe();
   return chosen;
 }
 

@@ -21,25 +21,37 @@ constexpr size_t kHugePageBytes = size_t(2) << 20;
 constexpr size_t kMinHugeBlockBytes = 2 * kHugePageBytes;
 
 // Whether large blocks are asked for in huge pages. APC_HUGE_PAGES=0 or 1 in the environment
-// decides; otherwise the first call measures both page sizes' first touch (MeasurePageTouch)
-// and takes huge pages unless 4 KiB pages were cheaper, for the rest of the process.
+// decides; otherwise the first call measures the first touch of a few MB (MeasurePageTouch)
+// and decides once for the process (ChooseHugePages).
 bool HugePagesWanted();
 
 // Overrides HugePagesWanted (tests): 1 huge pages, 0 4 KiB pages, -1 back to its own choice.
 void SetHugePagesWantedForTesting(int wanted);
 
 // The CPU seconds (this thread's, kernel time included) of writing one byte in each 4 KiB page
-// of bytes of fresh memory, advised huge pages and 4 KiB pages (Huge is Small's where the
-// system has no transparent huge pages; both 0 where memory is not mapped by APC).
+// of bytes of fresh memory, in 4 KiB pages (Small) and advised huge pages (Huge: measured only
+// where Small is at least cheapSmallSecondsPerMB a MB, Small's value otherwise; where the
+// system has no transparent huge pages, Small's cost again). Both 0 where APC maps no memory.
 struct PageTouchCost
 {
   double Huge = 0;
   double Small = 0;
 };
-PageTouchCost MeasurePageTouch(size_t bytes);
+PageTouchCost MeasurePageTouch(size_t bytes, double cheapSmallSecondsPerMB = 0);
 
-// The bytes MeasurePageTouch touches in each page size for HugePagesWanted's choice: two huge
-// pages, a few milliseconds where fresh huge pages are dear.
+// 4 KiB pages where a 4 KiB page costs less than this a MB to first touch (a cheap fault: the
+// guest's own page tables), else whichever page size the probe found cheaper. A small probe
+// cannot price huge pages: it gets the few 2 MiB blocks freed last, still backed by the host
+// (0.08-0.1 ms per MB on a KVM guest with free page reporting), while a frame's hundreds of MB
+// take blocks the guest reported free, which the host backs anew (2.7-3.1 ms per MB there, and
+// 2.7 on a guest whose 4 KiB fault costs 15 us, 3.7 ms per MB). Under half that price a 4 KiB
+// page is the safe choice: at most 0.5 ms per MB dearer than a huge page backed already, and
+// 2 ms per MB cheaper than one the host must back.
+constexpr double kCheap4KiBSecondsPerMB = 1.5e-3;
+bool ChooseHugePages(const PageTouchCost& cost, size_t bytes);
+
+// The bytes MeasurePageTouch touches for HugePagesWanted's choice: 1,024 pages of 4 KiB (about
+// 2 ms on a KVM guest), and where those are dear, two huge pages.
 constexpr size_t kPageProbeBytes = 2 * kHugePageBytes;
 
 // bytes of address space (committed page by page as it is first written), or null if the

@@ -190,3 +190,18 @@ TEST(HugePages, FirstTouchIsMeasuredInBothPageSizes)
   EXPECT_LT(cost.Huge, 1.0);
 #endif
 }
+
+// The rule behind the choice: 4 KiB pages where their first touch is cheap whatever huge pages
+// cost in the probe (a few freed huge pages are cheap, a frame's hundreds of MB are not), else
+// the cheaper of the two, huge pages on a tie.
+TEST(HugePages, ChoiceFollowsThe4KiBPagesPrice)
+{
+  const size_t bytes = apc::kPageProbeBytes; // 4 MB
+  const double cheap = 0.9 * apc::kCheap4KiBSecondsPerMB * 4;
+  const double dear = 2.0 * apc::kCheap4KiBSecondsPerMB * 4;
+  EXPECT_FALSE(apc::ChooseHugePages({ cheap / 10, cheap }, bytes)); // huge cheaper: still 4 KiB
+  EXPECT_FALSE(apc::ChooseHugePages({ 2 * cheap, cheap }, bytes));
+  EXPECT_TRUE(apc::ChooseHugePages({ dear / 2, dear }, bytes));
+  EXPECT_TRUE(apc::ChooseHugePages({ dear, dear }, bytes));
+  EXPECT_FALSE(apc::ChooseHugePages({ 2 * dear, dear }, bytes));
+}
