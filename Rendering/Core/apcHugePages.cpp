@@ -188,7 +188,8 @@ void AdviseHugePages(void* memory, size_t bytes)
   const uintptr_t start = reinterpret_cast<uintptr_t>(memory);
   const uintptr_t first = (start + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
   const uintptr_t last = (start + bytes) / kHugePageBytes * kHugePageBytes;
-  if (memory && last > first && HugePagesWanted())
+  const char* value = std::getenv("APC_HUGE_PAGES");
+  if (memory && last > first && !(value && std::strcmp(value, "0") == 0))
   {
     madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
   }
@@ -196,6 +197,14 @@ void AdviseHugePages(void* memory, size_t bytes)
   (void)memory;
   (void)bytes;
 #endif
+}
+
+void AdviseFrameHugePages(void* memory, size_t bytes)
+{
+  if (HugePagesWanted())
+  {
+    AdviseHugePages(memory, bytes);
+  }
 }
 
 void FreeHugeBlock(void* block, size_t bytes)

@@ -61,7 +61,14 @@ void FreeHugeBlock(void* block, size_t bytes);
 
 // Asks for huge pages in the whole 2 MiB pages inside [memory, memory + bytes) (a heap
 // block: the allocator keeps owning it, so that its own reuse of freed memory is unchanged).
+// For arrays read in no order every frame (the mesh's, the bins'): huge pages whatever
+// HugePagesWanted says (only APC_HUGE_PAGES=0 leaves them out), since 4 KiB pages would cost
+// every later frame its TLB misses.
 void AdviseHugePages(void* memory, size_t bytes);
+
+// AdviseHugePages where HugePagesWanted: for buffers a frame writes and reads in order (its
+// moments, sums, wire buffers, image), whose first touch is their cost.
+void AdviseFrameHugePages(void* memory, size_t bytes);
 
 // Room for n elements in v, its contents kept: a block it must allocate afresh is advised huge
 // pages before anything touches it. For the large buffers a frame fills (moments, colour
@@ -81,7 +88,7 @@ void ReserveInHugePages(Vector& v, size_t n)
   fresh.reserve(room);
   if (room * sizeof(typename Vector::value_type) >= kMinHugeBlockBytes)
   {
-    AdviseHugePages(fresh.data(), room * sizeof(typename Vector::value_type));
+    AdviseFrameHugePages(fresh.data(), room * sizeof(typename Vector::value_type));
   }
   fresh.assign(v.begin(), v.end());
   v.swap(fresh);
