@@ -4,8 +4,9 @@
 // set-up's computing (each fault exits to the hypervisor), while a 2 MiB page takes one fault
 // for 512 of them. On others a 4 KiB fault is cheap and a fresh huge page dear (the host backs
 // it anew after the guest reported it free): there the same bytes cost several times more in
-// huge pages. Which holds is measured once per process (HugePagesWanted). A block is aligned
-// to 2 MiB so that every whole 2 MiB of it can be a huge page.
+// huge pages. Which holds is measured once per process (HugePagesWanted), for the blocks a
+// frame writes and reads in order; arrays read in no order every frame keep huge pages (TLB
+// misses). A block is aligned to 2 MiB so that every whole 2 MiB of it can be a huge page.
 #ifndef apcHugePages_h
 #define apcHugePages_h
 
