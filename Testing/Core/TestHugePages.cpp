@@ -37,6 +37,16 @@ bool HugePagesOffered()
   std::getline(file, line);
   return line.find("[always]") != std::string::npos || line.find("[madvise]") != std::string::npos;
 }
+
+// The page size forced for one test (the process's own choice is measured and may be either).
+class PageSizeForced
+{
+public:
+  explicit PageSizeForced(bool huge) { apc::SetHugePagesWantedForTesting(huge ? 1 : 0); }
+  ~PageSizeForced() { apc::SetHugePagesWantedForTesting(-1); }
+  PageSizeForced(const PageSizeForced&) = delete;
+  PageSizeForced& operator=(const PageSizeForced&) = delete;
+};
 }
 
 TEST(HugePages, BlocksAreAlignedAndUsable)
@@ -92,6 +102,7 @@ TEST(HugePages, FillingABlockTakesFewPageFaults)
   {
     GTEST_SKIP() << "the system offers no transparent huge pages";
   }
+  const PageSizeForced huge(true);
   const size_t bytes = 8 * apc::kHugePageBytes; // 4096 pages of 4 KiB
   auto* block = static_cast<unsigned char*>(apc::AllocateHugeBlock(bytes));
   ASSERT_NE(block, nullptr);
@@ -123,6 +134,7 @@ TEST(HugePages, ReservedVectorsKeepTheirValuesAndTakeFewFaults)
   {
     GTEST_SKIP() << "the system offers no transparent huge pages";
   }
+  const PageSizeForced huge(true);
   const size_t bytes = 9 * apc::kHugePageBytes; // 4608 pages of 4 KiB, at least 8 huge ones
   std::vector<unsigned char> buffer;
   apc::ReserveInHugePages(buffer, bytes);
@@ -130,4 +142,66 @@ TEST(HugePages, ReservedVectorsKeepTheirValuesAndTakeFewFaults)
   buffer.assign(bytes, 1); // what a frame does with its buffers
   EXPECT_LT(MinorFaults() - before, 2048);
 #endif
+}
+
+// Where 4 KiB pages are chosen (cheaper to first touch on the host), a block APC maps takes them
+// even where the system would give huge pages unasked, and advised heap blocks are left alone.
+TEST(HugePages, BlocksIn4KiBPagesWhenChosen)
+{
+#if !defined(__linux__)
+  GTEST_SKIP() << "page faults are counted on Linux only";
+#else
+  const PageSizeForced small(false);
+  EXPECT_FALSE(apc::HugePagesWanted());
+  const size_t bytes = 8 * apc::kHugePageBytes; // 4096 pages of 4 KiB
+  auto* block = static_cast<unsigned char*>(apc::AllocateHugeBlock(bytes));
+  ASSERT_NE(block, nullptr);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(block) % apc::kHugePageBytes, 0u);
+  EXPECT_GE(FaultsToFill(block, bytes), 4000);
+  EXPECT_EQ(block[bytes - 4096], 1);
+  apc::FreeHugeBlock(block, bytes);
+#endif
+}
+
+TEST(HugePages, ForcedChoiceIsUndone)
+{
+  {
+    const PageSizeForced huge(true);
+    EXPECT_TRUE(apc::HugePagesWanted());
+  }
+  {
+    const PageSizeForced small(false);
+    EXPECT_FALSE(apc::HugePagesWanted());
+  }
+  const bool chosen = apc::HugePagesWanted(); // the process's own, measured once
+  EXPECT_EQ(apc::HugePagesWanted(), chosen);
+}
+
+// The probe behind the choice: both page sizes' first touch timed, in the thread's CPU time.
+TEST(HugePages, FirstTouchIsMeasuredInBothPageSizes)
+{
+  const apc::PageTouchCost cost = apc::MeasurePageTouch(apc::kPageProbeBytes);
+  EXPECT_GE(cost.Huge, 0.0);
+  EXPECT_GE(cost.Small, 0.0);
+#if defined(__linux__)
+  // 1024 faults of 4 KiB take measurable time anywhere; each probe well under a second.
+  EXPECT_GT(cost.Small, 0.0);
+  EXPECT_LT(cost.Small, 1.0);
+  EXPECT_LT(cost.Huge, 1.0);
+#endif
+}
+
+// The rule behind the choice: 4 KiB pages where their first touch is cheap whatever huge pages
+// cost in the probe (a few freed huge pages are cheap, a frame's hundreds of MB are not), else
+// the cheaper of the two, huge pages on a tie.
+TEST(HugePages, ChoiceFollowsThe4KiBPagesPrice)
+{
+  const size_t bytes = apc::kPageProbeBytes; // 4 MB
+  const double cheap = 0.9 * apc::kCheap4KiBSecondsPerMB * 4;
+  const double dear = 2.0 * apc::kCheap4KiBSecondsPerMB * 4;
+  EXPECT_FALSE(apc::ChooseHugePages({ cheap / 10, cheap }, bytes)); // huge cheaper: still 4 KiB
+  EXPECT_FALSE(apc::ChooseHugePages({ 2 * cheap, cheap }, bytes));
+  EXPECT_TRUE(apc::ChooseHugePages({ dear / 2, dear }, bytes));
+  EXPECT_TRUE(apc::ChooseHugePages({ dear, dear }, bytes));
+  EXPECT_FALSE(apc::ChooseHugePages({ 2 * dear, dear }, bytes));
 }
