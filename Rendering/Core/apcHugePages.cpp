@@ -86,12 +86,23 @@ double FirstTouchSeconds(size_t size, int advice)
 }
 #endif
 
-bool FromEnvironmentOrProbe()
+// APC_HUGE_PAGES as set: 0 or 1, else -1 (not set, or another value).
+int FromEnvironment()
 {
   const char* value = std::getenv("APC_HUGE_PAGES");
   if (value && (std::strcmp(value, "0") == 0 || std::strcmp(value, "1") == 0))
   {
-    return value[0] == '1';
+    return value[0] == '1' ? 1 : 0;
+  }
+  return -1;
+}
+
+bool FromEnvironmentOrProbe()
+{
+  const int forced = FromEnvironment();
+  if (forced >= 0)
+  {
+    return forced == 1;
   }
   const PageTouchCost cost = MeasurePageTouch(kPageProbeBytes, kCheap4KiBSecondsPerMB);
   return ChooseHugePages(cost, kPageProbeBytes);
@@ -188,8 +199,7 @@ void AdviseHugePages(void* memory, size_t bytes)
   const uintptr_t start = reinterpret_cast<uintptr_t>(memory);
   const uintptr_t first = (start + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
   const uintptr_t last = (start + bytes) / kHugePageBytes * kHugePageBytes;
-  const char* value = std::getenv("APC_HUGE_PAGES");
-  if (memory && last > first && !(value && std::strcmp(value, "0") == 0))
+  if (memory && last > first && FromEnvironment() != 0)
   {
     madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
   }
