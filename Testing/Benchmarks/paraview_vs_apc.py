@@ -139,8 +139,8 @@ COLUMNS = (["case", "representation", "mapper", "ranks", "distance", "image", "f
             "covered_pixels", "bytes_per_covered_pixel", "pass1_samples",
             "pass2_cached_share", "pass2_hidden_share", "pass2_samples", "opaque_stop_skipped", "opaque_unstopped_tiles",
             "opaque_stop_redone", "opaque_predicted_unresolved", "opaque_predicted_redone",
-            "avg_segments_per_pixel", "max_segments_per_pixel", "cells_per_rank_before",
-            "cells_per_rank_after"] +
+            "avg_segments_per_pixel", "max_segments_per_pixel", "render_imbalance",
+            "render_max_s", "render_mean_s", "cells_per_rank_before", "cells_per_rank_after"] +
            # The first frame's own (APC mode): its stages, wire bytes and opaque-stop counts.
            ["first_" + s + "_s" for s in FIRST_STAGES] +
            ["first_" + c for c in FIRST_COUNTS] + ["note"])
@@ -486,6 +486,14 @@ def main(args):
             row["bytes_display_rank"] = "%d" % statistics.median(t["bytes_sent"] for t in same)
             row["pixels_composited"] = "%d" % statistics.median(
                 t["composited_pixels"] for t in same)
+            # How evenly the ranks share the frame's work: the slowest rank's render seconds
+            # (pass 1 + pass 2) over the ranks' mean, median over the later frames (1 = even;
+            # the display rank's frame waits for the slowest).
+            if "render_imbalance" in same[0]:
+                row["render_imbalance"] = "%.2f" % statistics.median(
+                    t["render_imbalance"] for t in same)
+                row["render_max_s"] = "%.4f" % statistics.median(t["render_max"] for t in same)
+                row["render_mean_s"] = "%.4f" % statistics.median(t["render_mean"] for t in same)
             row["cells_per_rank_before"] = "/".join(str(s["cells"]) for s in before)
             after = apcparaview.rank_summaries(reader)
             row["cells_per_rank_after"] = "/".join(str(s["cells"]) for s in after)

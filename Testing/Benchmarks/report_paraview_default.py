@@ -60,18 +60,22 @@ def main(out, docs):
         "memory costs the process's first APC frame; **No stop again**: the same with Stop Where "
         "Opaque off, run after APC again (parts run before it have none): the stop's first frame "
         "against the stop-off one, neither the process's first; **sys**: that first frame's system CPU "
-        "seconds (mostly memory first touched; this machine is a virtual machine).",
+        "seconds (mostly memory first touched; this machine is a virtual machine); **render "
+        "imbalance**: the slowest rank's render seconds (pass 1 + pass 2, median of the later "
+        "frames) over the ranks' mean, 1 = even (the display rank's frame waits for the "
+        "slowest). Columns of cases a run left out are not shown.",
         "",
-        "| opacity | ranks | size | camera | APC first s | APC later s | No stop first s | No stop later s "
-        "| Auto first s | Auto later s | PT first s | PT later s | APC/PT first | APC/PT later "
-        "| No stop/PT first | No stop/PT later | Auto/PT later "
-        "| APC first sys s | APC again first s | APC first/later | APC again/later "
-        "| No stop again first s | No stop again/later | load |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
+    header = ["opacity", "ranks", "size", "camera", "APC first s", "APC later s",
+              "No stop first s", "No stop later s", "Auto first s", "Auto later s", "PT first s",
+              "PT later s", "APC/PT first", "APC/PT later", "No stop/PT first", "No stop/PT later",
+              "Auto/PT later", "APC render imbalance", "APC first sys s", "APC again first s",
+              "APC first/later", "APC again/later", "No stop again first s",
+              "No stop again/later", "load"]
+    table = []
 
     def cell(row, column):
-        return row[column] if row else "–"
+        return (row or {}).get(column) or "–"
 
     def ratio(a, b, column):
         if not a or not b or not float(b[column]):
@@ -87,16 +91,22 @@ def main(out, docs):
         apc, stop, auto, pt, again, stop_again = (by.get(k + (c,)) for c in (
             "apc-default", "apc-nostop", "auto", "pt", "apc-again", "apc-nostop-again"))
         load = "/".join(r["load_average"] for r in (apc, stop, auto, pt, again, stop_again) if r)
-        lines.append("| " + " | ".join([
+        table.append([
             k[4], k[0], "%s×%s" % (k[1], k[2]), k[3], cell(apc, "first_frame_s"),
             cell(apc, "frame_s"), cell(stop, "first_frame_s"), cell(stop, "frame_s"),
             cell(auto, "first_frame_s"), cell(auto, "frame_s"), cell(pt, "first_frame_s"),
             cell(pt, "frame_s"), ratio(apc, pt, "first_frame_s"), ratio(apc, pt, "frame_s"),
             ratio(stop, pt, "first_frame_s"), ratio(stop, pt, "frame_s"),
-            ratio(auto, pt, "frame_s"), (apc or {}).get("first_frame_sys_s") or "–",
-            cell(again, "first_frame_s"), ratio_of(apc, "first_frame_s", "frame_s"), ratio_of(again, "first_frame_s", "frame_s"),
+            ratio(auto, pt, "frame_s"), cell(apc, "render_imbalance"),
+            cell(apc, "first_frame_sys_s"), cell(again, "first_frame_s"),
+            ratio_of(apc, "first_frame_s", "frame_s"), ratio_of(again, "first_frame_s", "frame_s"),
             cell(stop_again, "first_frame_s"), ratio_of(stop_again, "first_frame_s", "frame_s"),
-            load]) + " |")
+            load])
+    # Columns of cases this run left out (all "–") are dropped from the table, not the CSV.
+    keep = [c for c in range(len(header)) if any(row[c] != "–" for row in table)]
+    lines += ["| " + " | ".join(header[c] for c in keep) + " |",
+              "|" + "---|" * len(keep)]
+    lines += ["| " + " | ".join(row[c] for c in keep) + " |" for row in table]
     missing = [(r, s) for r in ("1", "2", "4") for s in ("1024x1024", "1920x1080")
                if not any(k[0] == r and k[4] == "ramp" and "%sx%s" % (k[1], k[2]) == s
                            for k in keys)]
