@@ -63,13 +63,15 @@ def main(out, docs):
         "seconds (mostly memory first touched; this machine is a virtual machine); **render "
         "imbalance**: the slowest rank's render seconds (pass 1 + pass 2, median of the later "
         "frames) over the ranks' mean, 1 = even (the display rank's frame waits for the "
-        "slowest). Columns of cases a run left out are not shown.",
+        "slowest); **later if even**: the later frame less its slowest rank's render seconds "
+        "beyond the ranks' mean, an estimate of the frame with the ranks' work split evenly. "
+        "Columns of cases a run left out are not shown.",
         "",
     ]
     header = ["opacity", "ranks", "size", "camera", "APC first s", "APC later s",
               "No stop first s", "No stop later s", "Auto first s", "Auto later s", "PT first s",
               "PT later s", "APC/PT first", "APC/PT later", "No stop/PT first", "No stop/PT later",
-              "Auto/PT later", "APC render imbalance", "APC first sys s", "APC again first s",
+              "Auto/PT later", "APC render imbalance", "APC later if even s", "APC first sys s", "APC again first s",
               "APC first/later", "APC again/later", "No stop again first s",
               "No stop again/later", "load"]
     table = []
@@ -87,6 +89,14 @@ def main(out, docs):
             return "–"
         return "%.2f" % (float(row[a]) / float(row[b]))
 
+    def even(row):
+        # The later frame less what its slowest rank rendered beyond the ranks' mean: about
+        # what the frame would take were the ranks' work split evenly (an estimate).
+        if not row or not row.get("render_max_s") or not row.get("render_mean_s"):
+            return "–"
+        return "%.3f" % (float(row["frame_s"]) - float(row["render_max_s"]) +
+                         float(row["render_mean_s"]))
+
     for k in keys:
         apc, stop, auto, pt, again, stop_again = (by.get(k + (c,)) for c in (
             "apc-default", "apc-nostop", "auto", "pt", "apc-again", "apc-nostop-again"))
@@ -97,7 +107,7 @@ def main(out, docs):
             cell(auto, "first_frame_s"), cell(auto, "frame_s"), cell(pt, "first_frame_s"),
             cell(pt, "frame_s"), ratio(apc, pt, "first_frame_s"), ratio(apc, pt, "frame_s"),
             ratio(stop, pt, "first_frame_s"), ratio(stop, pt, "frame_s"),
-            ratio(auto, pt, "frame_s"), cell(apc, "render_imbalance"),
+            ratio(auto, pt, "frame_s"), cell(apc, "render_imbalance"), even(apc),
             cell(apc, "first_frame_sys_s"), cell(again, "first_frame_s"),
             ratio_of(apc, "first_frame_s", "frame_s"), ratio_of(again, "first_frame_s", "frame_s"),
             cell(stop_again, "first_frame_s"), ratio_of(stop_again, "first_frame_s", "frame_s"),
