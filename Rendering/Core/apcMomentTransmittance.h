@@ -188,6 +188,7 @@ public:
 
 private:
   static constexpr int M = N / 2;
+  bool SetUpFourMoments(const double* sums, double eps, const double* biasVector, double* moments);
   bool MayHaveHiddenDepth(double maxWeight) const;
   template <class Range>
   double FourMomentHiddenDepth(double limit, const Range& range) const;
