@@ -97,6 +97,29 @@ struct Constants4
     , High(_mm256_set1_pd(high))
   {
   }
+
+  // Lane i of every constant from *px[i] and lnLimits[i].
+  APC_HIDDEN_AVX2_INLINE Constants4(const FourMomentPixel* const* px, const double* lnLimits)
+    : L3(Gather(px, &FourMomentPixel::L3))
+    , L4(Gather(px, &FourMomentPixel::L4))
+    , L6(Gather(px, &FourMomentPixel::L6))
+    , L7(Gather(px, &FourMomentPixel::L7))
+    , L8(Gather(px, &FourMomentPixel::L8))
+    , D0(Gather(px, &FourMomentPixel::D0))
+    , D1(Gather(px, &FourMomentPixel::D1))
+    , D2(Gather(px, &FourMomentPixel::D2))
+    , Beta(Gather(px, &FourMomentPixel::Beta))
+    , NegB0(_mm256_xor_pd(Gather(px, &FourMomentPixel::B0), _mm256_set1_pd(-0.0)))
+    , Low(_mm256_sub_pd(_mm256_loadu_pd(lnLimits), _mm256_set1_pd(kHiddenMargin)))
+    , High(_mm256_add_pd(_mm256_loadu_pd(lnLimits), _mm256_set1_pd(kHiddenMargin)))
+  {
+  }
+
+  static APC_HIDDEN_AVX2_INLINE __m256d Gather(
+    const FourMomentPixel* const* px, double FourMomentPixel::*field)
+  {
+    return _mm256_set_pd(px[3]->*field, px[2]->*field, px[1]->*field, px[0]->*field);
+  }
 };
 
 // DecideLane for four depths: the same operations lane by lane, both arms of each branch
@@ -191,6 +214,22 @@ __attribute__((target("avx2"))) void DecideHiddenJobsAvx2(const FourMomentPixel*
   }
 }
 
+__attribute__((target("avx2"))) void DecideHiddenLanesAvx2(const FourMomentPixel* const* px,
+  const double* lnLimits, const double* z, int8_t* decisions, int n)
+{
+  int i = 0;
+  for (; i + 4 <= n; i += 4)
+  {
+    const Constants4 k(px + i, lnLimits + i);
+    DecideFour(k, z + i, decisions + i);
+  }
+  for (; i < n; ++i)
+  {
+    decisions[i] =
+      DecideLane(*px[i], lnLimits[i] - kHiddenMargin, lnLimits[i] + kHiddenMargin, z[i]);
+  }
+}
+
 bool CpuHasAvx2()
 {
   static const bool has = __builtin_cpu_supports("avx2");
@@ -249,6 +288,24 @@ void DecideHiddenJobs(const FourMomentPixel* const* px, const double* lnLimits, 
   {
     DecideHiddenScalar(*px[j], lnLimits[j] - kHiddenMargin, lnLimits[j] + kHiddenMargin, z + 4 * j,
       decisions + 4 * j, 4);
+  }
+}
+
+void DecideHiddenLanes(const FourMomentPixel* const* px, const double* lnLimits, const double* z,
+  int8_t* decisions, int n, HiddenKernel kernel)
+{
+#ifdef APC_HAVE_AVX2_HIDDEN
+  if (kernel != HiddenKernel::Scalar && CpuHasAvx2())
+  {
+    DecideHiddenLanesAvx2(px, lnLimits, z, decisions, n);
+    return;
+  }
+#endif
+  (void)kernel;
+  for (int i = 0; i < n; ++i)
+  {
+    decisions[i] =
+      DecideLane(*px[i], lnLimits[i] - kHiddenMargin, lnLimits[i] + kHiddenMargin, z[i]);
   }
 }
 
