@@ -105,13 +105,8 @@ struct Colour : NoSegments
           std::max(std::max(farthest[0], farthest[1]), std::max(farthest[2], farthest[3]))));
     }
   };
-  // A replayed pixel: its index in the image and its run of cached samples.
-  struct ReplayPixel
-  {
-    int64_t Image;
-    uint32_t Begin, End;
-  };
-  std::vector<ReplayPixel> Replayed;
+  // The replayed pixels' indices in the image, and their runs of cached samples.
+  std::vector<int64_t> Replayed;
   std::vector<SampleRange> Ranges;
   std::vector<double> HiddenFroms;
   void BeginTile(const TileRect& tile)
@@ -210,10 +205,7 @@ struct Colour : NoSegments
           continue;
         }
         this->Transmittance.emplace_back(this->GlobalMoments + (N + 1) * (row + i), this->Settings);
-        ReplayPixel& pixel = this->Replayed[count];
-        pixel.Image = row + i;
-        pixel.Begin = begin;
-        pixel.End = end;
+        this->Replayed[count] = row + i;
         SampleRange& range = this->Ranges[count];
         range.First = samples + begin;
         range.Last = samples + end;
@@ -228,24 +220,26 @@ struct Colour : NoSegments
     }
     for (int r = 0; r < count; ++r)
     {
-      const ReplayPixel& pixel = this->Replayed[r];
+      const int64_t image = this->Replayed[r];
+      const SampleRange& range = this->Ranges[r];
+      const ptrdiff_t begin = range.First - samples;
       const MomentTransmittance<N>& transmittance = this->Transmittance[r];
       const double hiddenFrom = this->HiddenFroms[r];
       ColourSums sums;
       if constexpr (N == 4)
       {
         // Looked up, weighted and summed 4 samples at a time (apcPixelReplay.h).
-        if (ReplayFourMomentPixel(transmittance, hiddenFrom, table.GetLayout(),
-              samples + pixel.Begin, static_cast<int>(pixel.End - pixel.Begin), sums.Data(),
-              this->TileHidden, weights ? weights + pixel.Begin : nullptr))
+        if (ReplayFourMomentPixel(transmittance, hiddenFrom, table.GetLayout(), range.First,
+              static_cast<int>(range.Last - range.First), sums.Data(), this->TileHidden,
+              weights ? weights + begin : nullptr))
         {
-          this->WriteAt(pixel.Image, sums);
+          this->WriteAt(image, sums);
           continue;
         }
       }
-      this->ReplayGeneric(transmittance, hiddenFrom, samples + pixel.Begin, samples + pixel.End,
-        weights ? weights + pixel.Begin : nullptr, table, sums);
-      this->WriteAt(pixel.Image, sums);
+      this->ReplayGeneric(transmittance, hiddenFrom, range.First, range.Last,
+        weights ? weights + begin : nullptr, table, sums);
+      this->WriteAt(image, sums);
     }
     this->CountHidden();
   }

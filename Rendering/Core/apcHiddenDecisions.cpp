@@ -8,6 +8,7 @@
 #include <limits>
 
 #if defined(__GNUC__) && defined(__x86_64__)
+#include "apcFourMomentLanes.h"
 #include <immintrin.h>
 #define APC_HAVE_AVX2_HIDDEN 1
 #endif
@@ -77,24 +78,25 @@ void DecideHiddenScalar(
 #ifdef APC_HAVE_AVX2_HIDDEN
 #define APC_HIDDEN_AVX2_INLINE inline __attribute__((always_inline, target("avx2")))
 
-// A pixel's constants in every lane.
-struct Constants4
+// A pixel's constants and limits in every lane, or each lane's own pixel's.
+struct Constants4 : FourMomentLanes
 {
-  __m256d L3, L4, L6, L7, L8, D0, D1, D2, Beta, NegB0, Low, High;
+  __m256d NegB0, Low, High;
 
   APC_HIDDEN_AVX2_INLINE Constants4(const FourMomentPixel& px, double low, double high)
-    : L3(_mm256_set1_pd(px.L3))
-    , L4(_mm256_set1_pd(px.L4))
-    , L6(_mm256_set1_pd(px.L6))
-    , L7(_mm256_set1_pd(px.L7))
-    , L8(_mm256_set1_pd(px.L8))
-    , D0(_mm256_set1_pd(px.D0))
-    , D1(_mm256_set1_pd(px.D1))
-    , D2(_mm256_set1_pd(px.D2))
-    , Beta(_mm256_set1_pd(px.Beta))
+    : FourMomentLanes(px)
     , NegB0(_mm256_set1_pd(-px.B0))
     , Low(_mm256_set1_pd(low))
     , High(_mm256_set1_pd(high))
+  {
+  }
+
+  // Lane i from *px[i] and lnLimits[i].
+  APC_HIDDEN_AVX2_INLINE Constants4(const FourMomentPixel* const* px, const double* lnLimits)
+    : FourMomentLanes(px)
+    , NegB0(_mm256_xor_pd(this->B0, _mm256_set1_pd(-0.0)))
+    , Low(_mm256_sub_pd(_mm256_loadu_pd(lnLimits), _mm256_set1_pd(kHiddenMargin)))
+    , High(_mm256_add_pd(_mm256_loadu_pd(lnLimits), _mm256_set1_pd(kHiddenMargin)))
   {
   }
 };
@@ -112,7 +114,7 @@ APC_HIDDEN_AVX2_INLINE void DecideFour(const Constants4& k, const double* z, int
   const __m256d largest = _mm256_set1_pd(std::numeric_limits<double>::max());
   const __m256d l3 = k.L3, l4 = k.L4, l6 = k.L6, l7 = k.L7, l8 = k.L8;
   const __m256d d0 = k.D0, d1 = k.D1, d2 = k.D2, beta = k.Beta;
-  const __m256d oneMinusBeta = _mm256_sub_pd(one, beta);
+  const __m256d oneMinusBeta = k.OneMinusBeta;
   const __m256d zv = _mm256_loadu_pd(z);
   const __m256d y1 = _mm256_add_pd(_mm256_mul_pd(l4, zv), l3);
   const __m256d y2 = _mm256_add_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(l8, zv), l7), zv), l6);
@@ -191,6 +193,22 @@ __attribute__((target("avx2"))) void DecideHiddenJobsAvx2(const FourMomentPixel*
   }
 }
 
+__attribute__((target("avx2"))) void DecideHiddenLanesAvx2(const FourMomentPixel* const* px,
+  const double* lnLimits, const double* z, int8_t* decisions, int n)
+{
+  int i = 0;
+  for (; i + 4 <= n; i += 4)
+  {
+    const Constants4 k(px + i, lnLimits + i);
+    DecideFour(k, z + i, decisions + i);
+  }
+  for (; i < n; ++i)
+  {
+    decisions[i] =
+      DecideLane(*px[i], lnLimits[i] - kHiddenMargin, lnLimits[i] + kHiddenMargin, z[i]);
+  }
+}
+
 bool CpuHasAvx2()
 {
   static const bool has = __builtin_cpu_supports("avx2");
@@ -249,6 +267,24 @@ void DecideHiddenJobs(const FourMomentPixel* const* px, const double* lnLimits, 
   {
     DecideHiddenScalar(*px[j], lnLimits[j] - kHiddenMargin, lnLimits[j] + kHiddenMargin, z + 4 * j,
       decisions + 4 * j, 4);
+  }
+}
+
+void DecideHiddenLanes(const FourMomentPixel* const* px, const double* lnLimits, const double* z,
+  int8_t* decisions, int n, HiddenKernel kernel)
+{
+#ifdef APC_HAVE_AVX2_HIDDEN
+  if (kernel != HiddenKernel::Scalar && CpuHasAvx2())
+  {
+    DecideHiddenLanesAvx2(px, lnLimits, z, decisions, n);
+    return;
+  }
+#endif
+  (void)kernel;
+  for (int i = 0; i < n; ++i)
+  {
+    decisions[i] =
+      DecideLane(*px[i], lnLimits[i] - kHiddenMargin, lnLimits[i] + kHiddenMargin, z[i]);
   }
 }
 

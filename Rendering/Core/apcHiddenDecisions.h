@@ -63,6 +63,13 @@ void DecideHidden(const FourMomentPixel& px, double lnLimit, const double* z, in
 void DecideHiddenJobs(const FourMomentPixel* const* px, const double* lnLimits, const double* z,
   int8_t* decisions, int jobs, HiddenKernel kernel = HiddenKernel::Best);
 
+// DecideHidden for depths each of its own pixel: z[i] for *px[i] and lnLimits[i] into
+// decisions[i], i < n, the same answers as DecideHidden(*px[i], lnLimits[i], z + i,
+// decisions + i, 1) gives. For the one point of many pixels that would otherwise each take a
+// job of four lanes.
+void DecideHiddenLanes(const FourMomentPixel* const* px, const double* lnLimits, const double* z,
+  int8_t* decisions, int n, HiddenKernel kernel = HiddenKernel::Best);
+
 } // namespace apc
 
 #endif

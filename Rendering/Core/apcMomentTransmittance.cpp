@@ -252,6 +252,14 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
 
   std::array<double, N + 1> moments; // normalised and biased, moments[0] = 1
   moments[0] = 1.0;
+  if constexpr (M == 2)
+  {
+    if (!this->SetUpFourMoments(sums, eps, settings.BiasVector.data(), moments.data()))
+    {
+      this->State = PixelState::Degenerate;
+    }
+    return;
+  }
   for (int k = 1; k <= N; ++k)
   {
     const double normalised = sums[k] / this->B0;
@@ -311,6 +319,84 @@ MomentTransmittance<N>::MomentTransmittance(const double* sums, const MomentSett
       this->LInv[i * (M + 1) + j] = sum;
     }
   }
+}
+
+// The constructor's normalisation and factorisation for 4 moments, written out: the same
+// operations on the same values as the general loops (a product by d0 = 1 and a quotient by it
+// are exact, so leaving them out changes no bit), but its seven divisions in three vector ones
+// and a scalar one. The divisions were a chain on the divider that pass 2 waits on once a
+// pixel; a vector division rounds each lane as the scalar one does. False where the general
+// code finds the pixel degenerate. Called for 4 moments only (instantiated for all N).
+template <int N>
+bool MomentTransmittance<N>::SetUpFourMoments(
+  const double* sums, double eps, const double* biasVector, double* moments)
+{
+  const double b0 = this->B0;
+  double normalised[4];
+#if defined(__GNUC__)
+  typedef double Pair __attribute__((vector_size(16)));
+  const Pair b0s = { b0, b0 };
+  const Pair n12 = Pair{ sums[1], sums[2] } / b0s;
+  const Pair n34 = Pair{ sums[3], sums[4] } / b0s;
+  normalised[0] = n12[0];
+  normalised[1] = n12[1];
+  normalised[2] = n34[0];
+  normalised[3] = n34[1];
+#else
+  for (int k = 0; k < 4; ++k)
+  {
+    normalised[k] = sums[k + 1] / b0;
+  }
+#endif
+  for (int k = 0; k < 4; ++k)
+  {
+    if (!std::isfinite(normalised[k]))
+    {
+      return false;
+    }
+    moments[k + 1] = (1.0 - eps) * normalised[k] + eps * biasVector[k];
+  }
+  // LDL^T as the general loop forms it, with d0 = moments[0] = 1.
+  const double l10 = moments[1];
+  const double l20 = moments[2];
+  const double d1 = moments[2] - l10 * l10;
+  if (!(d1 > 0.0) || !std::isfinite(d1))
+  {
+    return false;
+  }
+  const double l21Numerator = moments[3] - l20 * l10;
+  double l21, invD1;
+#if defined(__GNUC__)
+  const Pair q = Pair{ l21Numerator, 1.0 } / Pair{ d1, d1 };
+  l21 = q[0];
+  invD1 = q[1];
+#else
+  l21 = l21Numerator / d1;
+  invD1 = 1.0 / d1;
+#endif
+  double d2 = moments[4];
+  d2 -= l20 * l20;
+  d2 -= l21 * l21 * d1;
+  if (!(d2 > 0.0) || !std::isfinite(d2))
+  {
+    return false;
+  }
+  this->InvD[0] = 1.0;
+  this->InvD[1] = invD1;
+  this->InvD[2] = 1.0 / d2;
+  // L^-1 by the general loop's forward substitution: row 1 is 0 - l10 1, row 2's entries
+  // 0 - l20 1 - l21 (0 - l10 1) and 0 - l21 1.
+  double* inv = this->LInv.data();
+  inv[0] = 1.0;
+  inv[3] = 0.0 - l10 * 1.0;
+  inv[4] = 1.0;
+  double sum = 0.0;
+  sum -= l20 * 1.0;
+  sum -= l21 * inv[3];
+  inv[6] = sum;
+  inv[7] = 0.0 - l21 * 1.0;
+  inv[8] = 1.0;
+  return true;
 }
 
 // exp(-beta b0) computed where a query falls back, not kept per pixel: pass 2 sets up a

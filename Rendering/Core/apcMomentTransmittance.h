@@ -188,6 +188,7 @@ public:
 
 private:
   static constexpr int M = N / 2;
+  bool SetUpFourMoments(const double* sums, double eps, const double* biasVector, double* moments);
   bool MayHaveHiddenDepth(double maxWeight) const;
   template <class Range>
   double FourMomentHiddenDepth(double limit, const Range& range) const;
@@ -443,8 +444,9 @@ inline double MomentTransmittance<N>::FourMomentHiddenDepth(double limit, const 
 
 // HiddenDepths: FourMomentHiddenDepth's walk for a group of pixels at once, as a state per pixel
 // (its bounds and step) advanced a round at a time: the first batch holds each pixel's 1, -1
-// and first round's three points (two jobs a pixel), each later one the three points of every
-// pixel still bisecting (a job each). Every test is decided as FourMomentHiddenDepth decides
+// and first round's three points (a job a pixel for 1, -1, 0 and -0.5, and 0.5 in a lane of a
+// job shared by four pixels), each later one the three points of every pixel still bisecting
+// (a job each). Every test is decided as FourMomentHiddenDepth decides
 // it (the same decision for the same pixel, limit and depth, the query where it is undecided),
 // in the same order of steps, so each pixel ends on the same depth.
 template <int N>
@@ -475,10 +477,13 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
       const int end = std::min(count, g + kGroup);
       Walk walks[kGroup];
       FourMomentPixel px[kGroup];
-      double lnLimits[2 * kGroup];
-      const FourMomentPixel* jobPixels[2 * kGroup];
-      alignas(32) double z[8 * kGroup];
-      int8_t decided[8 * kGroup];
+      double lnLimits[kGroup];
+      const FourMomentPixel* jobPixels[kGroup];
+      alignas(32) double z[4 * kGroup];
+      int8_t decided[4 * kGroup];
+      // The first round's right point, 0.5, of each pixel: a lane each.
+      double halves[kGroup];
+      int8_t decidedHalves[kGroup];
       int active = 0;
       for (int i = g; i < end; ++i)
       {
@@ -496,18 +501,27 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
         }
         t.GetFourMomentPixel(px[active]);
         walks[active] = { &t, limit, -1.0, 1.0, 0.0, 0.0, i };
-        const double lnLimit = std::log(limit);
-        const double first[8] = { 1.0, -1.0, 0.0, -0.5, 0.5, 0.5, 0.5, 0.5 };
-        std::copy(first, first + 8, z + 8 * active);
-        jobPixels[2 * active] = jobPixels[2 * active + 1] = &px[active];
-        lnLimits[2 * active] = lnLimits[2 * active + 1] = lnLimit;
+        const double first[4] = { 1.0, -1.0, 0.0, -0.5 };
+        std::copy(first, first + 4, z + 4 * active);
+        halves[active] = 0.5;
+        jobPixels[active] = &px[active];
+        lnLimits[active] = std::log(limit);
         ++active;
       }
       if (active == 0)
       {
         continue;
       }
-      DecideHiddenJobs(jobPixels, lnLimits, z, decided, 2 * active);
+      DecideHiddenJobs(jobPixels, lnLimits, z, decided, active);
+      // Padded to whole vectors with the last pixel's lane again.
+      const int lanes = (active + 3) & ~3;
+      for (int a = active; a < lanes; ++a)
+      {
+        halves[a] = 0.5;
+        jobPixels[a] = jobPixels[active - 1];
+        lnLimits[a] = lnLimits[active - 1];
+      }
+      DecideHiddenLanes(jobPixels, lnLimits, halves, decidedHalves, lanes);
       auto resolve = [](const Walk& w, double at, int8_t decision)
       {
         if (decision == kHiddenUndecided)
@@ -534,7 +548,7 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
       for (int a = 0; a < active; ++a)
       {
         Walk& w = walks[a];
-        const int8_t* d = decided + 8 * a;
+        const int8_t* d = decided + 4 * a;
         if (!resolve(w, 1.0, d[0]))
         {
           continue; // kNone
@@ -553,8 +567,10 @@ inline void MomentTransmittance<N>::HiddenDepths(const MomentTransmittance* pixe
           depths[w.Index] = w.Hi;
           continue;
         }
-        step(w, z + 8 * a + 2, d + 2);
-        lnOf[a] = lnLimits[2 * a];
+        const double at[3] = { 0.0, -0.5, 0.5 };
+        const int8_t decision[3] = { d[2], d[3], decidedHalves[a] };
+        step(w, at, decision);
+        lnOf[a] = lnLimits[a];
         open[opened++] = a;
       }
       for (int s = 2; s < 10 && opened > 0; s += 2)

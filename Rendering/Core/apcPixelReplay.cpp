@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #if defined(__GNUC__) && defined(__x86_64__)
+#include "apcFourMomentLanes.h"
 #include <immintrin.h>
 #define APC_HAVE_AVX2_REPLAY 1
 #define APC_AVX2 __attribute__((target("avx2,fma")))
@@ -217,27 +218,7 @@ struct Lanes
   V Fallback; // lanes the vector arithmetic cannot answer (Query's full path)
 };
 
-// A pixel's constants in every lane, set once a pixel: set in each group, they were loaded,
-// broadcast and spilled again in every group (the loop has more live vectors than registers).
-struct Pixel4
-{
-  __m256d L3, L4, L6, L7, L8, D0, D1, D2, Beta, OneMinusBeta, B0;
-
-  APC_AVX2_INLINE explicit Pixel4(const FourMomentPixel& px)
-    : L3(_mm256_set1_pd(px.L3))
-    , L4(_mm256_set1_pd(px.L4))
-    , L6(_mm256_set1_pd(px.L6))
-    , L7(_mm256_set1_pd(px.L7))
-    , L8(_mm256_set1_pd(px.L8))
-    , D0(_mm256_set1_pd(px.D0))
-    , D1(_mm256_set1_pd(px.D1))
-    , D2(_mm256_set1_pd(px.D2))
-    , Beta(_mm256_set1_pd(px.Beta))
-    , OneMinusBeta(_mm256_sub_pd(_mm256_set1_pd(1.0), this->Beta))
-    , B0(_mm256_set1_pd(px.B0))
-  {
-  }
-};
+using Pixel4 = FourMomentLanes;
 
 // alpha T(z) of 4 samples, FourMomentWeightsBody's arithmetic. Where every visible lane has
 // c2 > 0 (the sample outside its support points) the nearer root and its kernel (a square root

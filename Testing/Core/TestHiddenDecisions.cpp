@@ -285,6 +285,63 @@ TEST(HiddenDecisions, JobsDecideAsEachPixelsCall)
   EXPECT_GT(checked, 10000);
 }
 
+// DecideHiddenLanes (a pixel and limit per lane, the constants set lane by lane) decides each
+// lane as DecideHidden decides it for its pixel alone: 400 batches of 1-17 lanes (whole vectors
+// and tails) of mixed pixels and limits, both kernels.
+TEST(HiddenDecisions, LanesDecideAsEachPixelsCall)
+{
+  std::mt19937_64 rng(78);
+  const std::vector<std::vector<double>> pixels = Pixels(rng);
+  std::vector<apc::FourMomentPixel> valid;
+  for (const std::vector<double>& sums : pixels)
+  {
+    apc::FourMomentPixel px;
+    if (apc::MomentTransmittance<4>(sums.data()).GetFourMomentPixel(px))
+    {
+      valid.push_back(px);
+    }
+  }
+  ASSERT_GT(valid.size(), 1000u);
+  std::uniform_real_distribution<double> logLimit(std::log(1e-12), std::log(0.9));
+  std::uniform_int_distribution<int> grid(-512, 512);
+  std::uniform_int_distribution<size_t> pick(0, valid.size() - 1);
+  int64_t checked = 0;
+  int64_t decidedBoth[2] = { 0, 0 };
+  for (int round = 0; round < 400; ++round)
+  {
+    const int n = 1 + round % 17;
+    std::vector<const apc::FourMomentPixel*> px(n);
+    std::vector<double> lnLimits(n);
+    std::vector<double> z(n);
+    for (int i = 0; i < n; ++i)
+    {
+      px[i] = &valid[pick(rng)];
+      lnLimits[i] = logLimit(rng);
+      z[i] = grid(rng) / 512.0;
+    }
+    for (const apc::HiddenKernel kernel : { apc::HiddenKernel::Scalar, apc::HiddenKernel::Avx2 })
+    {
+      if (!apc::HasHiddenKernel(kernel))
+      {
+        continue;
+      }
+      std::vector<int8_t> lanes(n, 7);
+      apc::DecideHiddenLanes(px.data(), lnLimits.data(), z.data(), lanes.data(), n, kernel);
+      for (int i = 0; i < n; ++i)
+      {
+        int8_t alone;
+        apc::DecideHidden(*px[i], lnLimits[i], &z[i], &alone, 1, kernel);
+        ASSERT_EQ(lanes[i], alone) << "round " << round << " lane " << i;
+        ++decidedBoth[lanes[i] == apc::kHiddenYes ? 1 : 0];
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 3000);
+  EXPECT_GT(decidedBoth[0], 100);
+  EXPECT_GT(decidedBoth[1], 100);
+}
+
 // HiddenDepths (the pixels' bisections round by round together) gives each pixel's HiddenDepth
 // to the bit: groups of 0-40 pixels mixing every kind (empty, degenerate, no hidden depth, a
 // limit of 1 or above, hidden everywhere, bisecting, cut short by the samples' range or not),

@@ -12,6 +12,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <iostream>
 #include <limits>
 #include <random>
@@ -443,6 +445,177 @@ TEST(MomentTransmittance, SettingsAreSanitised)
   EXPECT_EQ(apc::DefaultMomentBias<4>(), 5e-7);
   EXPECT_EQ(apc::DefaultMomentBias<6>(), 5e-6);
   EXPECT_EQ(apc::DefaultMomentBias<8>(), 5e-5);
+}
+
+// The general set-up's normalisation and LDL^T (as the constructor runs them for 6 and 8
+// moments), for 4 moments: the reference the written-out 4-moment set-up must match to the bit.
+struct GeneralSetUp
+{
+  bool Degenerate = false;
+  std::array<double, 9> LInv{};
+  std::array<double, 3> InvD{};
+};
+
+GeneralSetUp GeneralFourMomentSetUp(
+  const double* sums, double eps, const std::array<double, 4>& bias)
+{
+  constexpr int M = 2;
+  GeneralSetUp out;
+  const double b0 = sums[0];
+  std::array<double, 5> moments;
+  moments[0] = 1.0;
+  for (int k = 1; k <= 4; ++k)
+  {
+    const double normalised = sums[k] / b0;
+    if (!std::isfinite(normalised))
+    {
+      out.Degenerate = true;
+      return out;
+    }
+    moments[k] = (1.0 - eps) * normalised + eps * bias[k - 1];
+  }
+  std::array<double, M + 1> d;
+  std::array<double, (M + 1) * (M + 1)> l{};
+  for (int j = 0; j <= M; ++j)
+  {
+    double dj = moments[2 * j];
+    for (int k = 0; k < j; ++k)
+    {
+      dj -= l[j * (M + 1) + k] * l[j * (M + 1) + k] * d[k];
+    }
+    if (!(dj > 0.0) || !std::isfinite(dj))
+    {
+      out.Degenerate = true;
+      return out;
+    }
+    d[j] = dj;
+    l[j * (M + 1) + j] = 1.0;
+    for (int i = j + 1; i <= M; ++i)
+    {
+      double lij = moments[i + j];
+      for (int k = 0; k < j; ++k)
+      {
+        lij -= l[i * (M + 1) + k] * l[j * (M + 1) + k] * d[k];
+      }
+      l[i * (M + 1) + j] = lij / dj;
+    }
+  }
+  for (int j = 0; j <= M; ++j)
+  {
+    out.InvD[j] = 1.0 / d[j];
+  }
+  for (int i = 0; i <= M; ++i)
+  {
+    out.LInv[i * (M + 1) + i] = 1.0;
+    for (int j = 0; j < i; ++j)
+    {
+      double sum = 0.0;
+      for (int k = j; k < i; ++k)
+      {
+        sum -= l[i * (M + 1) + k] * out.LInv[k * (M + 1) + j];
+      }
+      out.LInv[i * (M + 1) + j] = sum;
+    }
+  }
+  return out;
+}
+
+uint64_t BitsOf(double x)
+{
+  uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  return bits;
+}
+
+// The 4-moment set-up's seven divisions are done as three vector ones and one scalar; every
+// constant must come out as the general loops compute it, and a pixel be degenerate exactly where
+// they find it so: sums of real rays, random sums (many not positive definite), pivots about 0,
+// non-finite and overflowing sums, biases 0 to 1 and other bias vectors.
+TEST(MomentTransmittance, FourMomentSetUpIsTheGeneralOnesToTheBit)
+{
+  std::mt19937_64 rng(20261129);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double epss[] = { apc::DefaultMomentBias<4>(), 0.0, 1.0, 0.3, 1e-12 };
+  int valid = 0, degenerate = 0;
+  for (int trial = 0; trial < 40000; ++trial)
+  {
+    std::array<double, 5> sums;
+    const int kind = trial % 5;
+    if (kind == 0 || kind == 1)
+    {
+      // A ray's samples: a few about one depth (pivots near 0) or spread.
+      std::vector<Sample> samples;
+      const int n = 1 + static_cast<int>(rng() % 12);
+      const double centre = unit(rng);
+      for (int i = 0; i < n; ++i)
+      {
+        const double z = kind == 0 ? centre + 1e-7 * unit(rng) : unit(rng);
+        samples.push_back({ z, 0.5 + 0.49 * unit(rng), {} });
+      }
+      const apc::PowerMoments<4> m = MomentsOf<4>(samples);
+      std::copy(m.Data(), m.Data() + 5, sums.begin());
+    }
+    else
+    {
+      const double scale = std::ldexp(1.0, static_cast<int>(rng() % 40) - 20);
+      for (double& s : sums)
+      {
+        s = scale * unit(rng);
+      }
+      sums[0] = std::abs(sums[0]) + 1e-3;
+      if (kind == 3)
+      {
+        // The square moments close to the first's squares: d1 about 0, either sign.
+        sums[2] = sums[1] * sums[1] / sums[0] * (1.0 + 1e-15 * unit(rng));
+      }
+      if (kind == 4)
+      {
+        const double odd[] = { nan, inf, -inf, 1e308, -1e308, 0.0, -0.0 };
+        sums[1 + rng() % 4] = odd[rng() % 7];
+        if (rng() % 4 == 0)
+        {
+          sums[0] = rng() % 2 ? 1e-300 : 5e-324; // quotients overflow
+        }
+      }
+    }
+    apc::MomentSettings<4> settings;
+    settings.Bias = epss[trial % 5 == 2 ? rng() % 5 : 0];
+    if (trial % 7 == 0)
+    {
+      for (double& b : settings.BiasVector)
+      {
+        b = unit(rng);
+      }
+    }
+    const apc::MomentTransmittance<4> t(sums.data(), settings);
+    if (t.IsEmpty())
+    {
+      continue;
+    }
+    const double eps = settings.Bias;
+    const GeneralSetUp ref = GeneralFourMomentSetUp(sums.data(), eps, settings.BiasVector);
+    apc::FourMomentPixel px;
+    const bool isValid = t.GetFourMomentPixel(px);
+    ASSERT_EQ(isValid, !ref.Degenerate) << "trial " << trial;
+    if (!isValid)
+    {
+      EXPECT_TRUE(t.IsDegenerate());
+      ++degenerate;
+      continue;
+    }
+    ++valid;
+    const double got[] = { px.L3, px.L4, px.L6, px.L7, px.L8, px.D0, px.D1, px.D2 };
+    const double want[] = { ref.LInv[3], ref.LInv[4], ref.LInv[6], ref.LInv[7], ref.LInv[8],
+      ref.InvD[0], ref.InvD[1], ref.InvD[2] };
+    for (int i = 0; i < 8; ++i)
+    {
+      ASSERT_EQ(BitsOf(got[i]), BitsOf(want[i])) << "trial " << trial << " constant " << i;
+    }
+  }
+  EXPECT_GT(valid, 10000);
+  EXPECT_GT(degenerate, 1000);
 }
 
 } // namespace
