@@ -160,6 +160,23 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   walker.EndWeights = this->SampleEndWeights != EndWeightsMode::Off;
   walker.BoundaryWeights = this->SampleEndWeights == EndWeightsMode::Boundary;
   walker.Lanes = walker.Lanes && this->SampleLanes;
+  if (!Visitor::WantsSegments && !Visitor::WantsTransparentSamples && this->DropClearCells)
+  {
+    // Once per march, not per (cell, tile) entry: with much of the range clear, most of a
+    // tile's cells are (the lower-60 % view: six entries in ten).
+    const int64_t cells = this->Mesh->GetNumberOfCells();
+    this->VisibleCells.resize(static_cast<size_t>(cells));
+    ParallelFor(this->Threads, cells, 16384,
+      [&](int64_t begin, int64_t end)
+      {
+        for (int64_t c = begin; c < end; ++c)
+        {
+          const auto& range = this->Mesh->GetScalarRange(c);
+          this->VisibleCells[c] = table.MayBeVisible(range[0], range[1]) ? 1 : 0;
+        }
+      });
+    walker.VisibleCells = this->VisibleCells.data();
+  }
   if (walker.Opaque && this->CutSet)
   {
     walker.Cut = this->Cut.data();

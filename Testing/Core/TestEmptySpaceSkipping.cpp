@@ -1,6 +1,9 @@
 // What empty-space skipping rests on: a cell's scalar range (CellMesh) and the transfer
 // table's answer to "can any scalar of this range be seen?", checked against looking every
-// scalar up, and the test that tells a wrong Newton root from a point in the cell.
+// scalar up, the test that tells a wrong Newton root from a point in the cell, and the marcher
+// that drops the hidden cells from its tiles' lists once per march.
+#include "apcTestBlock.h"
+
 #include "apcCellInterpolation.h"
 #include "apcCellMesh.h"
 #include "apcTransferTable.h"
@@ -8,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -145,4 +149,90 @@ TEST(EmptySpaceSkipping, InsideReferenceCell)
   EXPECT_FALSE(apc::InsideReferenceCell(CellShape::Wedge, offDiagonal, 1e-3));
   EXPECT_TRUE(apc::InsideReferenceCell(CellShape::Hexahedron, offDiagonal, 1e-3));
   EXPECT_TRUE(apc::InsideReferenceCell(CellShape::Pyramid, offDiagonal, 1e-3));
+}
+
+namespace
+{
+template <class T>
+bool SameBits(const std::vector<T>& a, const std::vector<T>& b)
+{
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+}
+
+TEST(EmptySpaceSkipping, MarcherDropsClearCellsWithTheSameSamples)
+{
+  // Pass 1 and pass 2 with the hidden cells left out of each tile's list once per march
+  // against each (cell, tile) entry tested as it comes: the same samples, moments, profile
+  // and colour, bit for bit, with the lanes and the scalar loops, with and without the stop
+  // and the boundary's end weights. The tables hide whole cells (the lower 60 % clear, the
+  // upper four fifths clear, clear but for islands), and leave others straddling
+  // a clear edge.
+  std::mt19937 rng(17);
+  const std::vector<std::array<float, 3>> colours(10, { 0.8f, 0.5f, 0.2f });
+  std::vector<double> lower60(10, 0.0);
+  std::vector<double> islands(10, 0.0);
+  for (int i = 6; i < 10; ++i)
+  {
+    lower60[i] = 0.3 + 0.07 * i;
+  }
+  islands[2] = 0.9;
+  islands[7] = 0.6;
+  std::vector<double> lowest(10, 0.0); // only the lowest fifth seen
+  lowest[0] = 0.5;
+  lowest[1] = 0.8;
+  const apc::RayCamera camera(
+    { 0.3, 0.9, 4.0 }, { 0.0, 0.4, 0.0 }, { 0, 1, 0 }, 40.0, false, 1.0, 48, 48, 0.1, 20.0);
+  int hiddenCells = 0;
+  int cells = 0;
+  int compared = 0;
+  for (int mesh = 0; mesh < 2; ++mesh)
+  {
+    const apc::CellMesh block = apctest::DistortedBlock(rng);
+    for (const std::vector<double>* opacities : { &lower60, &islands, &lowest })
+    {
+      const apc::TransferTable table(0.0, 1.0, colours, *opacities, 0.08, 1.0);
+      for (int64_t c = 0; c < block.GetNumberOfCells(); ++c)
+      {
+        const auto& range = block.GetScalarRange(c);
+        hiddenCells += table.MayBeVisible(range[0], range[1]) ? 0 : 1;
+        ++cells;
+      }
+      for (bool lanes : { true, false })
+      {
+        for (bool stop : { false, true })
+        {
+          for (apc::VolumeRayMarcher::EndWeightsMode mode :
+            { apc::VolumeRayMarcher::EndWeightsMode::Off,
+              apc::VolumeRayMarcher::EndWeightsMode::Boundary })
+          {
+            const auto render = [&](bool drop)
+            {
+              return apctest::RenderBlockFrame(block, table, camera, 48 * 48, stop,
+                [&](apc::VolumeRayMarcher& marcher)
+                {
+                  marcher.SetSampleLanes(lanes);
+                  marcher.SetEndWeightsMode(mode);
+                  marcher.SetDropClearCells(drop);
+                });
+            };
+            const apctest::BlockFrame dropped = render(true);
+            const apctest::BlockFrame tested = render(false);
+            EXPECT_GT(dropped.Pass1Samples, 200);
+            EXPECT_EQ(dropped.Pass1Samples, tested.Pass1Samples);
+            EXPECT_EQ(dropped.Pass2Samples, tested.Pass2Samples);
+            EXPECT_TRUE(SameBits(dropped.Moments, tested.Moments))
+              << "mesh " << mesh << " lanes " << lanes << " stop " << stop;
+            EXPECT_TRUE(SameBits(dropped.Profile, tested.Profile));
+            EXPECT_TRUE(SameBits(dropped.Colour, tested.Colour));
+            ++compared;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_EQ(compared, 48);
+  // Both kinds of cell, in numbers.
+  EXPECT_GT(hiddenCells, cells / 20);
+  EXPECT_LT(hiddenCells, cells * 4 / 5);
 }
