@@ -169,11 +169,8 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
     ParallelFor(this->Threads, cells, 16384,
       [&](int64_t begin, int64_t end)
       {
-        for (int64_t c = begin; c < end; ++c)
-        {
-          const auto& range = this->Mesh->GetScalarRange(c);
-          this->VisibleCells[c] = table.MayBeVisible(range[0], range[1]) ? 1 : 0;
-        }
+        table.MarkVisible(
+          &this->Mesh->GetScalarRange(begin), end - begin, this->VisibleCells.data() + begin);
       });
     walker.VisibleCells = this->VisibleCells.data();
   }

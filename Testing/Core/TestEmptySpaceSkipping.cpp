@@ -103,6 +103,60 @@ TEST(EmptySpaceSkipping, TableEdgesAndSpecialRanges)
   EXPECT_FALSE(transparent.MayBeVisible(-inf, inf));
 }
 
+TEST(EmptySpaceSkipping, MarkVisibleIsMayBeVisible)
+{
+  // The march's marking of every cell against the one range's test: random ranges, ranges
+  // ending on and one float either side of the entries' edges, out of the table, NaN, empty
+  // and infinite ones, and a table that hides everything.
+  const apc::TransferTable table = IslandTable(64);
+  const apc::TransferTable transparent(
+    0.0, 1.0, { { 1.f, 1.f, 1.f }, { 1.f, 1.f, 1.f } }, { 0.0, 0.0 }, 0.1, 1.0);
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> u(-3.f, 4.f);
+  const float step = 5.f / 64.f;
+  std::vector<std::array<float, 2>> ranges;
+  for (int trial = 0; trial < 20000; ++trial)
+  {
+    const float a = u(rng);
+    const float b = trial % 3 == 0 ? a + 0.2f * step * u(rng) : u(rng);
+    ranges.push_back({ std::min(a, b), std::max(a, b) });
+  }
+  for (int i = -2; i <= 66; ++i)
+  {
+    const float edge = -2.f + static_cast<float>(i) * step;
+    for (float lo : { std::nextafter(edge, -10.f), edge, std::nextafter(edge, 10.f) })
+    {
+      for (int j = 0; j < 3; ++j)
+      {
+        ranges.push_back({ lo, lo + static_cast<float>(j) * step });
+      }
+    }
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (const std::array<float, 2> special :
+    std::vector<std::array<float, 2>>{ { nan, nan }, { nan, 1.f }, { 1.f, nan }, { 1.f, 0.f },
+      { -inf, inf }, { -inf, -inf }, { inf, inf }, { -20.f, -19.f }, { 10.f, 20.f } })
+  {
+    ranges.push_back(special);
+  }
+  int visible = 0;
+  for (const apc::TransferTable* t : { &table, &transparent })
+  {
+    std::vector<uint8_t> marks(ranges.size(), 7);
+    t->MarkVisible(ranges.data(), static_cast<int64_t>(ranges.size()), marks.data());
+    for (size_t r = 0; r < ranges.size(); ++r)
+    {
+      const bool expected = t->MayBeVisible(ranges[r][0], ranges[r][1]);
+      ASSERT_EQ(marks[r], expected ? 1 : 0) << "[" << ranges[r][0] << ", " << ranges[r][1] << "]";
+      visible += expected ? 1 : 0;
+    }
+  }
+  // Both answers, many times.
+  EXPECT_GT(visible, 2000);
+  EXPECT_LT(visible, static_cast<int>(ranges.size()) - 2000);
+}
+
 TEST(EmptySpaceSkipping, CellScalarRanges)
 {
   apc::CellMesh mesh;
