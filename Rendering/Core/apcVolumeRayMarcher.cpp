@@ -160,6 +160,20 @@ void VolumeRayMarcher::March(Visitor& prototype, const TransferTable& table,
   walker.EndWeights = this->SampleEndWeights != EndWeightsMode::Off;
   walker.BoundaryWeights = this->SampleEndWeights == EndWeightsMode::Boundary;
   walker.Lanes = walker.Lanes && this->SampleLanes;
+  if (!Visitor::WantsSegments && !Visitor::WantsTransparentSamples && this->DropClearCells)
+  {
+    // Once per march, not per (cell, tile) entry: with much of the range clear, most of a
+    // tile's cells are (the lower-60 % view: six entries in ten).
+    const int64_t cells = this->Mesh->GetNumberOfCells();
+    this->VisibleCells.resize(static_cast<size_t>(cells));
+    ParallelFor(this->Threads, cells, 16384,
+      [&](int64_t begin, int64_t end)
+      {
+        table.MarkVisible(
+          &this->Mesh->GetScalarRange(begin), end - begin, this->VisibleCells.data() + begin);
+      });
+    walker.VisibleCells = this->VisibleCells.data();
+  }
   if (walker.Opaque && this->CutSet)
   {
     walker.Cut = this->Cut.data();

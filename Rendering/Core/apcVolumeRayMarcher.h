@@ -118,6 +118,11 @@ public:
   // the same samples (tests compare the two).
   void SetSampleLanes(bool lanes) { this->SampleLanes = lanes; }
   bool GetSampleLanes() const { return this->SampleLanes; }
+  // Whether a march that skips the cells its transfer table hides finds them once per march
+  // and leaves them out of each tile's list (on, the default), or tests each (cell, tile)
+  // entry as it comes (off: the form the tests compare it with). The same samples either way.
+  void SetDropClearCells(bool drop) { this->DropClearCells = drop; }
+  bool GetDropClearCells() const { return this->DropClearCells; }
 
   // The MBOIT passes may stop a ray once the absorbance of its samples on this mesh reaches
   // this (the tiles' cells are visited nearest first, so that happens early): a later sample
@@ -290,6 +295,9 @@ private:
   std::unique_ptr<RayCamera> Camera;
   std::vector<float> RayEnds;
   std::unique_ptr<TileBins> Bins;
+  // Per cell, for the march in progress: whether its transfer table may show it
+  // (Walker::VisibleCells).
+  std::vector<uint8_t> VisibleCells;
   std::unique_ptr<SampleCache> Cache;
   // This mesh's own moments from the last pass 1 that kept them (Hybrid), and their order
   // (0: none kept).
@@ -302,6 +310,7 @@ private:
   bool LatticeJitter = false;
   EndWeightsMode SampleEndWeights = EndWeightsMode::Off;
   bool SampleLanes = true;
+  bool DropClearCells = true;
   double OpaqueAbsorbance = std::numeric_limits<double>::infinity();
   double LinearTolerance = kDefaultLinearTolerance;
   // The opaque stop's bins of the last pass 1 (inactive without a stop), its own profile

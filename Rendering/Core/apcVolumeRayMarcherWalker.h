@@ -112,6 +112,12 @@ struct VolumeRayMarcher::Walker
   // A cell without a boundary plane takes the plain lattice's path; one with takes the
   // scalar weighted loop, which finds each pair's ends by CellPlanes::ClipEnds.
   bool BoundaryWeights = false;
+  // Per cell: 1 if Table.MayBeVisible of its scalar range, 0 if every sample of it is clear;
+  // or null. Only for visitors that skip clear cells (not WantsSegments nor
+  // WantsTransparentSamples): Tile then drops the clear cells from its list before the loop,
+  // which would otherwise call Cell for each (a read of its range and a table test) and
+  // prefetch its planes and corners for nothing.
+  const uint8_t* VisibleCells = nullptr;
 
   // A cell's scalars: its own (or none needed), linear along the ray (a nearly affine pyramid
   // in its own coordinates, LinearPyramid), a twisted pyramid's closed-form inverse, or by
@@ -180,7 +186,7 @@ struct VolumeRayMarcher::Walker
     state.Hi = range[1];
     // A cell whose scalars all map to zero opacity adds nothing: skip it, unless the visitor
     // needs its extent (segment runs go on through transparent cells).
-    const bool visible = this->Table.MayBeVisible(state.Lo, state.Hi);
+    const bool visible = this->VisibleCells || this->Table.MayBeVisible(state.Lo, state.Hi);
     if (!visible && !keepsTransparent)
     {
       return false;
@@ -1170,11 +1176,29 @@ struct VolumeRayMarcher::Walker
       walk::SetUpLaneTile(shared, state.Vectors);
     }
     visitor.BeginTile(inBand);
-    const int64_t end = this->Bins.Start[tile.Index + 1];
-    for (int64_t b = this->Bins.Start[tile.Index]; b < end; ++b)
+    const int64_t begin = this->Bins.Start[tile.Index];
+    const int64_t* cells = this->Bins.Cells.data() + begin;
+    int64_t count = this->Bins.Start[tile.Index + 1] - begin;
+    if (this->VisibleCells)
     {
-      this->Prefetch(b, end);
-      samples += this->Cell(this->Bins.Cells[b], rays, packed, tile, visitor, state, progress);
+      // The tile's cells that may be visible, in the bins' order. Written whatever the test
+      // says and counted by it: no branch on a cell's visibility, which follows no pattern.
+      static thread_local std::vector<int64_t> visible;
+      visible.resize(static_cast<size_t>(count));
+      int64_t kept = 0;
+      for (int64_t b = 0; b < count; ++b)
+      {
+        const int64_t cell = cells[b];
+        visible[kept] = cell;
+        kept += this->VisibleCells[cell];
+      }
+      cells = visible.data();
+      count = kept;
+    }
+    for (int64_t b = 0; b < count; ++b)
+    {
+      this->Prefetch(cells, b, count);
+      samples += this->Cell(cells[b], rays, packed, tile, visitor, state, progress);
     }
     visitor.EndTile(inBand);
     if (progress.Bins && this->ProfileOut)
@@ -1195,12 +1219,12 @@ struct VolumeRayMarcher::Walker
   // these are requested a few cells ahead (the planes and corner ids later, once their offsets
   // have arrived, and the corners' points later still). Forced inline: called as a function
   // of its own, which only reads memory, GCC 12 dropped the call and left no prefetch at all.
-  [[gnu::always_inline]] void Prefetch(int64_t b, int64_t end) const
+  [[gnu::always_inline]] void Prefetch(const int64_t* cells, int64_t b, int64_t end) const
   {
     constexpr int64_t kAhead = 16;
     if (b + kAhead < end)
     {
-      const int64_t cell = this->Bins.Cells[b + kAhead];
+      const int64_t cell = cells[b + kAhead];
       __builtin_prefetch(&this->Bins.Near[cell]);
       __builtin_prefetch(&this->Bins.Rects[cell]);
       __builtin_prefetch(&this->Mesh.GetScalarRange(cell));
@@ -1209,19 +1233,19 @@ struct VolumeRayMarcher::Walker
     if (b + kAhead / 2 < end)
     {
       int count = 0;
-      const char* planes = reinterpret_cast<const char*>(
-        this->Mesh.GetPlanes(this->Bins.Cells[b + kAhead / 2], count));
+      const char* planes =
+        reinterpret_cast<const char*>(this->Mesh.GetPlanes(cells[b + kAhead / 2], count));
       const int bytes = count * static_cast<int>(sizeof(FacePlane));
       for (int at = 0; at < bytes; at += 64)
       {
         __builtin_prefetch(planes + at);
       }
       __builtin_prefetch(planes + bytes - 1);
-      __builtin_prefetch(this->Mesh.GetCellPoints(this->Bins.Cells[b + kAhead / 2]));
+      __builtin_prefetch(this->Mesh.GetCellPoints(cells[b + kAhead / 2]));
     }
     if (b + kAhead / 4 < end)
     {
-      this->Mesh.PrefetchCorners(this->Bins.Cells[b + kAhead / 4]);
+      this->Mesh.PrefetchCorners(cells[b + kAhead / 4]);
     }
   }
 
