@@ -16,17 +16,21 @@
 namespace apc
 {
 
-template <class T>
+// InOrder: for temporaries written and read once, in about their order (the matching's
+// buckets): huge pages only where HugePagesWanted chose them for such blocks
+// (AdviseFrameHugePages), since no later frame reads them; otherwise huge pages always
+// (AdviseHugePages: arrays read in no order every frame).
+template <class T, bool InOrder = false>
 struct UninitializedAllocator : std::allocator<T>
 {
   template <class U>
   struct rebind
   {
-    using other = UninitializedAllocator<U>;
+    using other = UninitializedAllocator<U, InOrder>;
   };
   UninitializedAllocator() = default;
   template <class U>
-  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept
+  UninitializedAllocator(const UninitializedAllocator<U, InOrder>&) noexcept
   {
   }
   T* allocate(size_t n)
@@ -36,7 +40,14 @@ struct UninitializedAllocator : std::allocator<T>
     {
       // From the heap as any vector (its reuse of freed memory stays the allocator's), but
       // in huge pages where the block has whole ones.
-      AdviseHugePages(memory, n * sizeof(T));
+      if (InOrder)
+      {
+        AdviseFrameHugePages(memory, n * sizeof(T));
+      }
+      else
+      {
+        AdviseHugePages(memory, n * sizeof(T));
+      }
     }
     return memory;
   }
@@ -55,6 +66,9 @@ struct UninitializedAllocator : std::allocator<T>
 
 template <class T>
 using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
+
+template <class T>
+using InOrderUninitializedVector = std::vector<T, UninitializedAllocator<T, true>>;
 
 } // namespace apc
 
