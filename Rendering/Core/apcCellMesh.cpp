@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <type_traits>
 #include <utility>
 
 namespace apc
@@ -423,8 +422,7 @@ struct BucketedFace
   {
     return this->Ids[0] != o.Ids[0] ? this->Ids[0] < o.Ids[0]
       : this->Ids[1] != o.Ids[1]    ? this->Ids[1] < o.Ids[1]
-      : this->Ids[2] != o.Ids[2]    ? this->Ids[2] < o.Ids[2]
-                                    : this->Slot < o.Slot;
+                                    : this->Ids[2] < o.Ids[2];
   }
   Index SlotOf() const { return this->Slot; }
 };
@@ -641,116 +639,68 @@ void CellMesh::MatchFaces(uint8_t* shared) const
       }
     }
   };
-  // A cell's corners' representatives, looked up once for all its faces (a hexahedron's 24
-  // face corners are its 8 corners).
-  const auto cornerRepresentatives = [&](int64_t cell, Index* reps)
-  {
-    const int64_t* ids = this->GetCellPoints(cell);
-    for (int i = 0; i < static_cast<int>(this->Shapes[cell]); ++i)
-    {
-      reps[i] = representatives[ids[i]];
-    }
-  };
-  // Both passes over the cells in parallel where the process has threads: a bucket's count and
-  // its next free place are then taken atomically, so a bucket's faces land in any order, but
-  // each bucket is sorted by ids and slot below (a total order: slots are unique), so the
-  // marks are the same whatever the threads. One thread runs the plain increments.
-  const bool threaded = ConcurrencyFor(0) > 1;
-  constexpr int64_t kCellGrain = 8192;
-  const auto overCells = [&](auto visitCell)
-  {
-    if (!threaded)
-    {
-      for (int64_t cell = 0; cell < numCells; ++cell)
-      {
-        visitCell(cell, std::false_type());
-      }
-      return;
-    }
-    ParallelFor(0, numCells, kCellGrain,
-      [&](int64_t begin, int64_t end)
-      {
-        for (int64_t cell = begin; cell < end; ++cell)
-        {
-          visitCell(cell, std::true_type());
-        }
-      });
-  };
-  // The old value of *at, incremented (atomically where Atomic).
-  const auto takeNext = [](Index* at, auto atomic) -> Index
-  {
-    if (decltype(atomic)::value)
-    {
-      return __atomic_fetch_add(at, Index(1), __ATOMIC_RELAXED);
-    }
-    return (*at)++;
-  };
   UninitializedVector<Index> starts(static_cast<size_t>(numPoints) + 1);
   std::fill(starts.begin(), starts.end(), Index(0));
-  overCells(
-    [&](int64_t cell, auto atomic)
-    {
-      Index reps[8];
-      cornerRepresentatives(cell, reps);
-      forEachKeptFace(cell,
-        [&](const CellFaces& shapeFaces, int f, int)
+  for (int64_t cell = 0; cell < numCells; ++cell)
+  {
+    const int64_t* ids = this->GetCellPoints(cell);
+    forEachKeptFace(cell,
+      [&](const CellFaces& shapeFaces, int f, int)
+      {
+        Index smallest = representatives[ids[shapeFaces.Corner[f][0]]];
+        for (int i = 1; i < shapeFaces.Size[f]; ++i)
         {
-          Index smallest = reps[shapeFaces.Corner[f][0]];
-          for (int i = 1; i < shapeFaces.Size[f]; ++i)
-          {
-            smallest = std::min(smallest, reps[shapeFaces.Corner[f][i]]);
-          }
-          takeNext(&starts[smallest + 1], atomic);
-        });
-    });
+          smallest = std::min(smallest, representatives[ids[shapeFaces.Corner[f][i]]]);
+        }
+        ++starts[smallest + 1];
+      });
+  }
   for (int64_t p = 0; p < numPoints; ++p)
   {
     starts[p + 1] += starts[p];
   }
-  // Written and sorted once: in the page size chosen for such blocks (apcUninitialized.h).
+  // Written and sorted once, in about its order, and read by no later frame: in the page size
+  // chosen for such blocks (apcUninitialized.h), not in huge pages whatever the host.
   InOrderUninitializedVector<BucketedFace<Index>> byBucket(static_cast<size_t>(starts[numPoints]));
   {
     UninitializedVector<Index> next(starts.begin(), starts.end() - 1);
-    overCells(
-      [&](int64_t cell, auto atomic)
-      {
-        Index reps[8];
-        cornerRepresentatives(cell, reps);
-        forEachKeptFace(cell,
-          [&](const CellFaces& shapeFaces, int f, int n)
+    for (int64_t cell = 0; cell < numCells; ++cell)
+    {
+      const int64_t* ids = this->GetCellPoints(cell);
+      forEachKeptFace(cell,
+        [&](const CellFaces& shapeFaces, int f, int n)
+        {
+          // The face's distinct representatives, ascending, padded with kNone: insertion into
+          // the sorted distinct ids so far.
+          Index face[4];
+          int count = 0;
+          for (int i = 0; i < shapeFaces.Size[f]; ++i)
           {
-            // The face's distinct representatives, ascending, padded with kNone: insertion
-            // into the sorted distinct ids so far.
-            Index face[4];
-            int count = 0;
-            for (int i = 0; i < shapeFaces.Size[f]; ++i)
+            const Index id = representatives[ids[shapeFaces.Corner[f][i]]];
+            int at = count;
+            while (at > 0 && face[at - 1] > id)
             {
-              const Index id = reps[shapeFaces.Corner[f][i]];
-              int at = count;
-              while (at > 0 && face[at - 1] > id)
-              {
-                --at;
-              }
-              if (at > 0 && face[at - 1] == id)
-              {
-                continue;
-              }
-              for (int k = count; k > at; --k)
-              {
-                face[k] = face[k - 1];
-              }
-              face[at] = id;
-              ++count;
+              --at;
             }
-            for (int k = count; k < 4; ++k)
+            if (at > 0 && face[at - 1] == id)
             {
-              face[k] = kNone;
+              continue;
             }
-            const int64_t slot = this->PlaneOffsets[cell] + n;
-            byBucket[takeNext(&next[face[0]], atomic)] = { { face[1], face[2], face[3] },
-              static_cast<Index>(slot) };
-          });
-      });
+            for (int k = count; k > at; --k)
+            {
+              face[k] = face[k - 1];
+            }
+            face[at] = id;
+            ++count;
+          }
+          for (int k = count; k < 4; ++k)
+          {
+            face[k] = kNone;
+          }
+          const int64_t slot = this->PlaneOffsets[cell] + n;
+          byBucket[next[face[0]]++] = { { face[1], face[2], face[3] }, static_cast<Index>(slot) };
+        });
+    }
   }
   ParallelFor(0, numPoints, 16384,
     [&](int64_t begin, int64_t end)
