@@ -659,9 +659,7 @@ void CellMesh::MatchFaces(uint8_t* shared) const
   {
     starts[p + 1] += starts[p];
   }
-  // Written and sorted once, in about its order, and read by no later frame: in the page size
-  // chosen for such blocks (apcUninitialized.h), not in huge pages whatever the host.
-  InOrderUninitializedVector<BucketedFace<Index>> byBucket(static_cast<size_t>(starts[numPoints]));
+  UninitializedVector<BucketedFace<Index>> byBucket(static_cast<size_t>(starts[numPoints]));
   {
     UninitializedVector<Index> next(starts.begin(), starts.end() - 1);
     for (int64_t cell = 0; cell < numCells; ++cell)

@@ -16,21 +16,17 @@
 namespace apc
 {
 
-// InOrder: for temporaries written and read once, in about their order (the matching's
-// buckets): huge pages only where HugePagesWanted chose them for such blocks
-// (AdviseFrameHugePages), since no later frame reads them; otherwise huge pages always
-// (AdviseHugePages: arrays read in no order every frame).
-template <class T, bool InOrder = false>
+template <class T>
 struct UninitializedAllocator : std::allocator<T>
 {
   template <class U>
   struct rebind
   {
-    using other = UninitializedAllocator<U, InOrder>;
+    using other = UninitializedAllocator<U>;
   };
   UninitializedAllocator() = default;
   template <class U>
-  UninitializedAllocator(const UninitializedAllocator<U, InOrder>&) noexcept
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept
   {
   }
   T* allocate(size_t n)
@@ -40,14 +36,7 @@ struct UninitializedAllocator : std::allocator<T>
     {
       // From the heap as any vector (its reuse of freed memory stays the allocator's), but
       // in huge pages where the block has whole ones.
-      if (InOrder)
-      {
-        AdviseFrameHugePages(memory, n * sizeof(T));
-      }
-      else
-      {
-        AdviseHugePages(memory, n * sizeof(T));
-      }
+      AdviseHugePages(memory, n * sizeof(T));
     }
     return memory;
   }
@@ -66,9 +55,6 @@ struct UninitializedAllocator : std::allocator<T>
 
 template <class T>
 using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
-
-template <class T>
-using InOrderUninitializedVector = std::vector<T, UninitializedAllocator<T, true>>;
 
 } // namespace apc
 

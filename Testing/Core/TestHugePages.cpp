@@ -163,37 +163,6 @@ TEST(HugePages, BlocksIn4KiBPagesWhenChosen)
 #endif
 }
 
-// A temporary written and read once (the matching's buckets) follows the choice for such
-// blocks: huge pages where they were chosen, 4 KiB pages otherwise, while the mesh's arrays
-// (read in no order every frame) stay in huge pages either way.
-TEST(HugePages, InOrderVectorsFollowTheChoice)
-{
-#if !defined(__linux__)
-  GTEST_SKIP() << "page faults are counted on Linux only";
-#else
-  std::ifstream file("/sys/kernel/mm/transparent_hugepage/enabled");
-  std::string mode;
-  std::getline(file, mode);
-  if (mode.find("[madvise]") == std::string::npos)
-  {
-    GTEST_SKIP() << "huge pages are not given on advice alone (" << mode << ")";
-  }
-  const size_t bytes = 9 * apc::kHugePageBytes; // 4608 pages of 4 KiB, at least 8 huge ones
-  {
-    const PageSizeForced small(false);
-    apc::InOrderUninitializedVector<unsigned char> buckets(bytes);
-    EXPECT_GE(FaultsToFill(buckets.data(), bytes), 4000);
-    apc::UninitializedVector<unsigned char> meshArray(bytes);
-    EXPECT_LT(FaultsToFill(meshArray.data(), bytes), 2048);
-  }
-  {
-    const PageSizeForced huge(true);
-    apc::InOrderUninitializedVector<unsigned char> buckets(bytes);
-    EXPECT_LT(FaultsToFill(buckets.data(), bytes), 2048);
-  }
-#endif
-}
-
 TEST(HugePages, ForcedChoiceIsUndone)
 {
   {
