@@ -210,7 +210,9 @@ namespace
 template <class T>
 bool SameBits(const std::vector<T>& a, const std::vector<T>& b)
 {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+  // An empty vector's data() may be null, which memcmp must not be given even for no bytes.
+  return a.size() == b.size() &&
+    (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 }
 
