@@ -407,8 +407,10 @@ UninitializedVector<Index> PointRepresentatives(const std::vector<std::array<dou
   return representatives;
 }
 
-// A face in its bucket (its smallest id, Ids[0], is the bucket's): the other ids and its slot,
-// side by side, so that a bucket is sorted and compared in place.
+// A face in its bucket (the bucket is its smallest id): its other three ids and its slot, side
+// by side, so that a bucket is sorted and compared in place. Ordered by ids, then slot: each
+// run of equal faces in slot order, as BucketKey orders them with 32-bit ids, so that the same
+// copy of a crowded face is marked whichever width the ids take.
 template <class Index>
 struct BucketedFace
 {
@@ -422,7 +424,8 @@ struct BucketedFace
   {
     return this->Ids[0] != o.Ids[0] ? this->Ids[0] < o.Ids[0]
       : this->Ids[1] != o.Ids[1]    ? this->Ids[1] < o.Ids[1]
-                                    : this->Ids[2] < o.Ids[2];
+      : this->Ids[2] != o.Ids[2]    ? this->Ids[2] < o.Ids[2]
+                                    : this->Slot < o.Slot;
   }
   Index SlotOf() const { return this->Slot; }
 };
