@@ -227,14 +227,11 @@ TEST(HiddenDecisions, HiddenDepthIsTheQuerysBisection)
   EXPECT_GT(bisected, 1000);
 }
 
-// The jobs' decisions are each DecideHidden's for the job's pixel, limit and four depths, in
-// both kernels, with the jobs' pixels and limits mixed from job to job.
-TEST(HiddenDecisions, JobsDecideAsEachPixelsCall)
+// The valid 4-moment pixels of Pixels(rng), as the kernels take them.
+std::vector<apc::FourMomentPixel> ValidPixels(std::mt19937_64& rng)
 {
-  std::mt19937_64 rng(77);
-  const std::vector<std::vector<double>> pixels = Pixels(rng);
   std::vector<apc::FourMomentPixel> valid;
-  for (const std::vector<double>& sums : pixels)
+  for (const std::vector<double>& sums : Pixels(rng))
   {
     apc::FourMomentPixel px;
     if (apc::MomentTransmittance<4>(sums.data()).GetFourMomentPixel(px))
@@ -242,6 +239,15 @@ TEST(HiddenDecisions, JobsDecideAsEachPixelsCall)
       valid.push_back(px);
     }
   }
+  return valid;
+}
+
+// The jobs' decisions are each DecideHidden's for the job's pixel, limit and four depths, in
+// both kernels, with the jobs' pixels and limits mixed from job to job.
+TEST(HiddenDecisions, JobsDecideAsEachPixelsCall)
+{
+  std::mt19937_64 rng(77);
+  const std::vector<apc::FourMomentPixel> valid = ValidPixels(rng);
   ASSERT_GT(valid.size(), 1000u);
   std::uniform_real_distribution<double> logLimit(std::log(1e-12), std::log(0.9));
   std::uniform_int_distribution<int> grid(-512, 512);
@@ -291,16 +297,7 @@ TEST(HiddenDecisions, JobsDecideAsEachPixelsCall)
 TEST(HiddenDecisions, LanesDecideAsEachPixelsCall)
 {
   std::mt19937_64 rng(78);
-  const std::vector<std::vector<double>> pixels = Pixels(rng);
-  std::vector<apc::FourMomentPixel> valid;
-  for (const std::vector<double>& sums : pixels)
-  {
-    apc::FourMomentPixel px;
-    if (apc::MomentTransmittance<4>(sums.data()).GetFourMomentPixel(px))
-    {
-      valid.push_back(px);
-    }
-  }
+  const std::vector<apc::FourMomentPixel> valid = ValidPixels(rng);
   ASSERT_GT(valid.size(), 1000u);
   std::uniform_real_distribution<double> logLimit(std::log(1e-12), std::log(0.9));
   std::uniform_int_distribution<int> grid(-512, 512);
